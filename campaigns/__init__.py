@@ -1,0 +1,32 @@
+"""Monte Carlo campaign runner: spec, sampling, execution, storage, analysis.
+
+Entry points (the ``twin campaign`` CLI calls these):
+
+* :func:`load_spec` — read and validate a campaign spec (TOML);
+* :func:`run_campaign` — run or resume it on dask, write ``results.nc``;
+* :func:`analyze` — correlations, separation and observability, write ``analysis.nc``.
+
+See ``docs/campaigns.md``. The names are imported on first use so that a
+sandbox process (:mod:`campaigns.sandbox`), which needs only
+:mod:`campaigns.runs` and the run function, does not pay for dask and scipy.
+"""
+
+import importlib
+
+_EXPORTS = {
+    "analyze": "campaigns.analysis",
+    "run_campaign": "campaigns.execution",
+    "load_spec": "campaigns.spec",
+    "CampaignSpec": "campaigns.spec",
+    "SpecError": "campaigns.spec",
+    "HALF_RANGE_SIGMAS": "campaigns.spec",
+    "CampaignError": "campaigns.storage",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'campaigns' has no attribute {name!r}")
+    return getattr(importlib.import_module(_EXPORTS[name]), name)

@@ -1,0 +1,97 @@
+"""What a model offers to a campaign: targets with nominal values, scenes, features.
+
+The spec is validated against a catalog and its relative ranges are resolved
+with the catalog's nominal values. :class:`campaigns.bench.BenchCatalog` is the
+bench twin's catalog; :data:`campaigns.testing.SYNTHETIC_CATALOG` is the fast
+synthetic model's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping, Protocol, Sequence
+
+#: Scene conditions a data set may override (``scene.with_conditions`` keys) and their SI units.
+CONDITION_UNITS: dict[str, str] = {
+    "backlash": "m",
+    "preload": "N",
+    "external_force": "N",
+    "room_temperature": "K",
+    "supply_pressure": "Pa",
+}
+
+#: Prefix of uncertainty targets that are scene conditions rather than parameters.
+SCENE_PREFIX = "scene."
+
+
+class Catalog(Protocol):
+    """Interface the spec validation needs from a model.
+
+    Attributes
+    ----------
+    parameter_names : sequence of str
+        Names accepted by ``ParameterSet.with_values``.
+    scene_names : sequence of str
+        Scenes a data set may start from.
+    condition_names : sequence of str
+        Conditions ``scene.with_conditions`` accepts.
+    feature_units : mapping of str to (unit, long_name), or None
+        Features the run function computes; ``None`` accepts any name.
+    """
+
+    parameter_names: Sequence[str]
+    scene_names: Sequence[str]
+    condition_names: Sequence[str]
+    feature_units: Mapping[str, tuple[str, str]] | None
+
+    def nominal(self, target: str) -> tuple[float, str]:
+        """Nominal value and SI unit of a parameter or ``scene.<condition>``; KeyError if unknown."""
+
+
+@dataclass(frozen=True)
+class StaticCatalog:
+    """A catalog given as plain data (used by the synthetic test model).
+
+    Parameters
+    ----------
+    parameters : mapping of str to (value, unit)
+        Parameter nominal values and units.
+    conditions : mapping of str to float
+        Nominal scene conditions (SI units of :data:`CONDITION_UNITS`); their
+        names are the accepted conditions.
+    scene_names : sequence of str
+    feature_units : mapping of str to (unit, long_name), or None
+    """
+
+    parameters: Mapping[str, tuple[float, str]]
+    conditions: Mapping[str, float]
+    scene_names: Sequence[str]
+    feature_units: Mapping[str, tuple[str, str]] | None = field(default=None)
+
+    @property
+    def parameter_names(self) -> list[str]:
+        return list(self.parameters)
+
+    @property
+    def condition_names(self) -> list[str]:
+        return list(self.conditions)
+
+    def nominal(self, target: str) -> tuple[float, str]:
+        return lookup_nominal(target, self.parameters, self.conditions)
+
+
+def lookup_nominal(
+    target: str, parameters: Mapping[str, tuple[float, str]], conditions: Mapping[str, float]
+) -> tuple[float, str]:
+    """Shared target lookup of the catalogs; the KeyError message names what is known."""
+    if target.startswith(SCENE_PREFIX):
+        key = target.removeprefix(SCENE_PREFIX)
+        if key not in conditions:
+            raise KeyError(f"unknown scene condition {target!r}; known: {', '.join(SCENE_PREFIX + c for c in conditions)}")
+        return float(conditions[key]), CONDITION_UNITS[key]
+    if target not in parameters:
+        group = target.split(".")[0]
+        siblings = [n for n in parameters if n.startswith(group + ".")]
+        hint = f"known in '{group}': {', '.join(siblings)}" if siblings else f"known groups: {', '.join(sorted({n.split('.')[0] for n in parameters}))}"
+        raise KeyError(f"unknown parameter {target!r}; {hint}")
+    return parameters[target]

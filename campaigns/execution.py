@@ -1,0 +1,234 @@
+"""Running a campaign on dask.distributed.
+
+Runs are grouped into chunks (one dask task each, all from one data set). The
+driver keeps ``2 x`` the number of worker threads of chunks in flight, writes
+each finished chunk (:mod:`campaigns.storage`) and submits the next one.
+
+Chunk size rule
+---------------
+Unless the spec fixes ``execution.chunk_size``, the first chunks hold one run
+each (the pilot); afterwards the median measured run time ``T`` sets
+
+``c = ceil(TASK_OVERHEAD / (OVERHEAD_TARGET * T))``
+
+so that the per-task overhead (scheduling, transfer of the chunk, the driver's
+chunk write; ``TASK_OVERHEAD`` is a measured upper value, see
+``benchmarks/campaign_throughput.py``) stays below 5 % of the compute. ``c`` is
+capped so that (i) every worker thread still gets ``BALANCE_CHUNKS`` chunks of
+what remains (load balance, progress granularity) and (ii) a chunk holds at most
+``MAX_CHUNK_SECONDS`` of work (what a killed driver loses). Chunking never
+changes results: every run is stateless (:mod:`campaigns.sampling`).
+
+Failure semantics
+-----------------
+A run that raises, diverges, returns NaN or exceeds its wall-clock budget is a
+record with a status and a reason (:mod:`campaigns.runs`, :mod:`campaigns.sandbox`);
+the campaign goes on. Only infrastructure failures — a lost worker
+(``KilledWorker``) or a broken connection (``CommClosedError``/``OSError`` from
+the comm layer) — are retried, ``MAX_RETRIES`` times; a chunk still failing
+after that is recorded with status ``"lost"``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import statistics
+from collections import deque
+from pathlib import Path
+
+from distributed import Client, LocalCluster, as_completed
+from distributed.comm.core import CommClosedError
+from distributed.scheduler import KilledWorker
+from tqdm.auto import tqdm
+
+from campaigns.catalog import SCENE_PREFIX, Catalog
+from campaigns.runs import RunFunction, RunRequest, execute, record
+from campaigns.sampling import sample
+from campaigns.sandbox import run_isolated
+from campaigns.spec import CampaignSpec, load_spec
+from campaigns.storage import ChunkStore
+
+#: Upper value of the per-task overhead [s] (dask round trip + chunk write), measured by the benchmark.
+TASK_OVERHEAD = 0.05
+#: Largest fraction of the compute time the per-task overhead may take.
+OVERHEAD_TARGET = 0.05
+#: Chunks per worker thread kept available for load balancing.
+BALANCE_CHUNKS = 4
+#: Most work [s] put in one chunk.
+MAX_CHUNK_SECONDS = 60.0
+#: Resubmissions of a chunk after an infrastructure failure.
+MAX_RETRIES = 2
+INFRASTRUCTURE_ERRORS = (KilledWorker, CommClosedError, OSError)
+
+
+def chunk_size(run_time: float | None, remaining: int, slots: int) -> int:
+    """Number of runs in the next chunk (see the module docstring).
+
+    Parameters
+    ----------
+    run_time : float or None
+        Median wall time of one run so far [s]; ``None`` before any is known (pilot: 1).
+    remaining : int
+        Runs not yet submitted.
+    slots : int
+        Worker threads.
+    """
+    if run_time is None:
+        return 1
+    per_run = max(run_time, 1e-9)
+    overhead_bound = math.ceil(TASK_OVERHEAD / (OVERHEAD_TARGET * per_run))
+    balance_bound = math.ceil(remaining / (BALANCE_CHUNKS * slots))
+    duration_bound = math.floor(MAX_CHUNK_SECONDS / per_run)
+    return max(1, min(overhead_bound, balance_bound, duration_bound))
+
+
+def run_chunk(run_function: RunFunction, requests: list[RunRequest], isolation: str) -> list[dict]:
+    """Dask task: execute the runs of one chunk and return their records."""
+    run = run_isolated if isolation == "process" else execute
+    return [run(run_function, r) for r in requests]
+
+
+def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int) -> RunRequest:
+    """The request of run ``run_index`` of data set ``dataset_index``."""
+    dataset = spec.datasets[dataset_index]
+    conditions = dict(dataset.conditions)
+    parameter_values = {}
+    for dist, value in zip(spec.distributions(), samples[dataset_index, run_index]):
+        if dist.target.startswith(SCENE_PREFIX):
+            conditions[dist.target.removeprefix(SCENE_PREFIX)] = float(value)
+        else:
+            parameter_values[dist.target] = float(value)
+    traced = run_index < spec.traces.runs_per_dataset
+    return RunRequest(
+        dataset=dataset.name,
+        dataset_index=dataset_index,
+        run_index=run_index,
+        scene=dataset.scene or spec.base.scene,
+        parameters=spec.base.parameters,
+        conditions=conditions,
+        parameter_values=parameter_values,
+        root_seed=spec.root_seed,
+        solver=spec.solver.model_dump(),
+        features=tuple(spec.features),
+        trace_variables=tuple(spec.traces.variables) if traced else (),
+        trace_decimation=spec.traces.decimation,
+        wall_time_limit=spec.execution.timeout,
+    )
+
+
+@contextlib.contextmanager
+def _client(workers: int, scheduler: str | None):
+    if scheduler is not None:
+        with Client(scheduler) as client:
+            yield client
+        return
+    with LocalCluster(
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster, Client(cluster) as client:
+        yield client
+
+
+def run_campaign(
+    spec: CampaignSpec | str | Path,
+    out_dir: str | Path,
+    *,
+    workers: int = 2,
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    run_function: RunFunction | None = None,
+    catalog: Catalog | None = None,
+) -> Path:
+    """Run (or resume) a campaign and write ``results.nc``.
+
+    Parameters
+    ----------
+    spec : CampaignSpec or path
+        A validated spec, or a spec file (validated first; nothing runs if it is invalid).
+    out_dir : str or Path
+        Output directory (layout in :mod:`campaigns.storage`).
+    workers : int, default 2
+        Worker processes of the local cluster (one thread each); ignored with ``scheduler``.
+    scheduler : str, optional
+        Address of an existing dask scheduler to use instead of a local cluster.
+    resume : bool, default False
+        Continue an interrupted campaign in ``out_dir``: finished chunks are kept,
+        only missing runs execute. Refused if ``out_dir`` holds another spec's results.
+    progress : bool, default True
+        Show a progress bar.
+    run_function : callable, optional
+        ``run_function(RunRequest) -> dict`` (contract in :mod:`campaigns.runs`);
+        default :func:`campaigns.bench.simulate_run`.
+    catalog : Catalog, optional
+        Used only when ``spec`` is a path (see :func:`campaigns.load_spec`).
+
+    Returns
+    -------
+    Path
+        The ``results.nc`` file.
+
+    Raises
+    ------
+    SpecError
+        If ``spec`` is a path to an invalid spec.
+    CampaignError
+        If ``out_dir`` holds results that may not be mixed with this campaign's.
+    """
+    if not isinstance(spec, CampaignSpec):
+        spec = load_spec(spec, catalog=catalog)
+    if run_function is None:
+        from campaigns.bench import simulate_run as run_function
+    store = ChunkStore(out_dir, spec, resume=resume)
+    samples = sample(spec)
+    pending = deque(
+        (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
+    )
+    if pending:
+        with _client(workers, scheduler) as client, tqdm(
+            total=len(pending), disable=not progress, unit="run", desc=spec.name
+        ) as bar:
+            _execute(client, spec, samples, pending, run_function, store, bar)
+    return store.assemble(samples)
+
+
+def _execute(client: Client, spec, samples, pending: deque, run_function, store: ChunkStore, bar) -> None:
+    slots = max(1, sum(client.nthreads().values()))
+    run_times: list[float] = []
+    in_flight: dict = {}
+    completed = as_completed()
+
+    def submit(chunk: list[RunRequest], attempt: int) -> None:
+        future = client.submit(run_chunk, run_function, chunk, spec.execution.isolation, pure=False)
+        in_flight[future] = (chunk, attempt)
+        completed.add(future)
+
+    def next_chunk() -> list[RunRequest]:
+        size = spec.execution.chunk_size or chunk_size(
+            statistics.median(run_times) if run_times else None, len(pending), slots
+        )
+        d = pending[0][0]
+        chunk = []
+        while pending and len(chunk) < size and pending[0][0] == d:
+            chunk.append(build_request(spec, samples, *pending.popleft()))
+        return chunk
+
+    def refill() -> None:
+        while pending and len(in_flight) < 2 * slots:
+            submit(next_chunk(), 0)
+
+    refill()
+    for future in completed:
+        chunk, attempt = in_flight.pop(future)
+        try:
+            records = future.result()
+        except INFRASTRUCTURE_ERRORS as exc:
+            if attempt < MAX_RETRIES:
+                submit(chunk, attempt + 1)
+                continue
+            reason = f"infrastructure failure after {MAX_RETRIES} retries: {type(exc).__name__}: {exc}"
+            records = [record(r, "lost", reason, math.nan, math.nan) for r in chunk]
+        store.write_chunk(records)
+        run_times.extend(r["wall_time"] for r in records if r["status"] == "ok")
+        bar.update(len(records))
+        refill()

@@ -1,0 +1,84 @@
+"""Sampling of the uncertainty table: stateless, per-run random streams.
+
+Run ``i`` of data set ``d`` (both zero-based, in spec order) owns the seed
+sequence ``SeedSequence(root_seed, spawn_key=(d, i))``. Its two children
+(``.spawn(2)``) feed
+
+* child 0: the uncertain values, drawn in the order of the uncertainty table;
+* child 1: the run's sensor-noise :class:`numpy.random.Generator`.
+
+No state is carried from run to run, so any run can be replayed alone
+(:func:`sample_run` and :func:`noise_generator` with its indices), and the
+values do not depend on how runs are grouped into chunks or spread over workers.
+Sampling happens in the driver before anything is submitted (the samples are
+stored next to the results); analysis is a separate module.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
+
+if TYPE_CHECKING:  # sandbox processes import this module for noise_generator only: keep it light
+    from campaigns.spec import CampaignSpec, Distribution
+
+#: Index of each child of a run's seed sequence.
+PARAMETER_STREAM, NOISE_STREAM = 0, 1
+
+
+def run_seed_sequence(root_seed: int, dataset_index: int, run_index: int) -> np.random.SeedSequence:
+    """The seed sequence of one run (see the module docstring)."""
+    return np.random.SeedSequence(root_seed, spawn_key=(dataset_index, run_index))
+
+
+def _stream(root_seed: int, dataset_index: int, run_index: int, which: int) -> np.random.Generator:
+    return np.random.default_rng(run_seed_sequence(root_seed, dataset_index, run_index).spawn(2)[which])
+
+
+def noise_generator(root_seed: int, dataset_index: int, run_index: int) -> np.random.Generator:
+    """The sensor-noise generator of one run (child 1 of its seed sequence)."""
+    return _stream(root_seed, dataset_index, run_index, NOISE_STREAM)
+
+
+def draw(distribution: Distribution, rng: np.random.Generator) -> float:
+    """Draw one value of ``distribution`` (SI units) from ``rng``."""
+    d = distribution
+    if d.kind == "constant":
+        return d.value
+    if d.kind == "uniform":
+        return float(rng.uniform(d.low, d.high))
+    if d.kind == "gaussian":
+        return float(rng.normal(d.mean, d.sigma))
+    if d.kind == "lognormal":
+        return float(d.mean * np.exp(rng.normal(0.0, d.sigma)))
+    if d.kind == "truncated_gaussian":
+        if d.sigma == 0.0:
+            return d.mean
+        from scipy import stats  # heavy; only the driver samples
+
+        a, b = (d.low - d.mean) / d.sigma, (d.high - d.mean) / d.sigma
+        return float(stats.truncnorm.rvs(a, b, loc=d.mean, scale=d.sigma, random_state=rng))
+    raise ValueError(f"unknown distribution kind {d.kind!r}")
+
+
+def sample_run(distributions: Sequence[Distribution], root_seed: int, dataset_index: int, run_index: int) -> np.ndarray:
+    """The uncertain values of one run, in table order (replays that run alone)."""
+    rng = _stream(root_seed, dataset_index, run_index, PARAMETER_STREAM)
+    return np.array([draw(d, rng) for d in distributions], dtype=float)
+
+
+def sample(spec: CampaignSpec) -> np.ndarray:
+    """All sampled values of a campaign.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(n_datasets, runs_per_dataset, n_uncertainties)``, SI units.
+    """
+    distributions = spec.distributions()
+    out = np.empty((len(spec.datasets), spec.runs_per_dataset, len(distributions)))
+    for d in range(len(spec.datasets)):
+        for i in range(spec.runs_per_dataset):
+            out[d, i] = sample_run(distributions, spec.root_seed, d, i)
+    return out

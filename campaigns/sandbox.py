@@ -1,0 +1,141 @@
+"""Worker-level wall-clock fallback: run each simulation in a killable child process.
+
+The run function is asked to respect ``request.wall_time_limit`` itself. That
+cannot be relied on: a compiled (numba) loop does not return to the interpreter,
+so neither a signal handler nor a thread can interrupt it. The only reliable way
+to stop it is to kill the process running it. A :class:`Sandbox` is therefore a
+long-lived child Python process (one per worker thread) that executes requests
+one at a time; the parent waits at most ``wall_time_limit + KILL_GRACE``
+seconds for each answer and otherwise kills the child, records a ``"timeout"``
+and starts a fresh child for the next run. A child that dies (segfault, out of
+memory) yields an ``"error"`` record instead of taking the dask worker down.
+
+The child is a plain ``subprocess`` (dask worker processes are daemonic and may
+not use :mod:`multiprocessing` children). Requests and records travel over
+dedicated pipes, so whatever the simulation prints cannot corrupt them. The
+child exits when the parent's pipe closes and, on Linux, is also killed if the
+parent dies while the child is stuck.
+"""
+
+from __future__ import annotations
+
+import atexit
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from multiprocessing.connection import Connection
+
+from campaigns.runs import RunFunction, RunRequest, execute, record
+
+#: Seconds a run may overrun its wall-clock budget before its process is killed.
+KILL_GRACE = 1.0
+#: Seconds a fresh child may take to import what a request needs (not counted in the run's budget).
+STARTUP_TIMEOUT = 300.0
+
+_local = threading.local()
+
+
+class Sandbox:
+    """A child process executing run requests, killed when one overruns."""
+
+    def __init__(self):
+        self._proc: subprocess.Popen | None = None
+        self._to_child: Connection | None = None
+        self._from_child: Connection | None = None
+
+    def _start(self) -> None:
+        child_in, parent_out = os.pipe()
+        parent_in, child_out = os.pipe()
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+        self._proc = subprocess.Popen(
+            [sys.executable, "-c", f"from campaigns.sandbox import serve; serve({child_in}, {child_out})"],
+            pass_fds=(child_in, child_out),
+            stdin=subprocess.DEVNULL,
+            env=env,
+        )
+        os.close(child_in)
+        os.close(child_out)
+        self._to_child = Connection(parent_out, readable=False)
+        self._from_child = Connection(parent_in, writable=False)
+
+    def close(self) -> None:
+        """Stop the child (kill it if it does not exit on its own)."""
+        if self._proc is None:
+            return
+        self._to_child.close()
+        self._from_child.close()
+        try:
+            self._proc.wait(timeout=2.0)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+            self._proc.wait()
+        self._proc = None
+
+    def _kill(self) -> None:
+        self._proc.kill()
+        self.close()
+
+    def run(self, run_function: RunFunction, request: RunRequest) -> dict:
+        """Execute one request in the child; return its record (never raises for run failures)."""
+        if self._proc is None or self._proc.poll() is not None:
+            self.close()
+            self._start()
+        self._to_child.send((run_function, request))
+        # The clock starts once the child has unpickled the request (imports of a
+        # fresh child are not the run's time).
+        if not self._from_child.poll(STARTUP_TIMEOUT):
+            self._kill()
+            return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"), float("nan"))
+        start = time.perf_counter()
+        try:
+            self._from_child.recv()
+        except EOFError:
+            return self._died(request, start)
+        if not self._from_child.poll(request.wall_time_limit + KILL_GRACE):
+            self._kill()
+            elapsed = time.perf_counter() - start
+            reason = f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {KILL_GRACE:g} s grace)"
+            return record(request, "timeout", reason, float("nan"), elapsed)
+        try:
+            return self._from_child.recv()
+        except EOFError:
+            return self._died(request, start)
+
+    def _died(self, request: RunRequest, start: float) -> dict:
+        code = self._proc.wait()
+        self.close()
+        return record(request, "error", f"run process died (exit code {code})", float("nan"), time.perf_counter() - start)
+
+
+def run_isolated(run_function: RunFunction, request: RunRequest) -> dict:
+    """Execute ``request`` in this thread's :class:`Sandbox` (created on first use)."""
+    sandbox = getattr(_local, "sandbox", None)
+    if sandbox is None:
+        sandbox = _local.sandbox = Sandbox()
+        atexit.register(sandbox.close)  # the worker's exit ends its sandbox cleanly
+    return sandbox.run(run_function, request)
+
+
+def _die_with_parent() -> None:
+    """Ask Linux to SIGKILL this process when its parent dies (best effort elsewhere)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def serve(read_fd: int, write_fd: int) -> None:
+    """Child side: execute requests from ``read_fd`` and send records to ``write_fd`` until EOF."""
+    _die_with_parent()
+    requests, records = Connection(read_fd, writable=False), Connection(write_fd, readable=False)
+    while True:
+        try:
+            run_function, request = requests.recv()
+        except EOFError:
+            return
+        records.send("started")
+        records.send(execute(run_function, request))

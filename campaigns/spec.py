@@ -1,0 +1,522 @@
+"""Campaign specification: the TOML file, its validation and its canonical form.
+
+A spec is validated completely before anything runs. Structural problems
+(types, signs, ``min > max``, NaN) and problems found against the model's
+:class:`~campaigns.catalog.Catalog` (unknown parameter, unknown scene,
+incompatible unit) are collected together and raised as one
+:class:`SpecError` listing every problem with its field path.
+
+The uncertainty table is *resolved* during validation: each row becomes a
+:class:`Distribution` with absolute parameters in the target's SI unit, using
+the nominal value from the parameter set (relative rows, ``%Nom`` in Table 9.5)
+and the unit table below (absolute rows).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Annotated, Literal
+
+import pydantic
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
+
+from campaigns.catalog import CONDITION_UNITS, Catalog
+from twin.errors import InputError
+
+#: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
+#: Datasheets quote tolerance bands that practically every unit meets; ±3 sigma
+#: covers 99.73 % of a normal population, which is the usual convention for such
+#: limits (and the one that keeps the sampled values inside the band almost
+#: always). This is the only place the factor is defined.
+HALF_RANGE_SIGMAS = 3.0
+
+DistributionKind = Literal["gaussian", "truncated_gaussian", "uniform", "constant", "lognormal"]
+
+#: Spec unit -> (SI unit, scale, offset): ``si = value * scale + offset``.
+#: Offsets apply to absolute values only, never to half ranges or sigmas.
+UNITS: dict[str, tuple[str, float, float]] = {
+    "m": ("m", 1.0, 0.0),
+    "mm": ("m", 1e-3, 0.0),
+    "um": ("m", 1e-6, 0.0),
+    "µm": ("m", 1e-6, 0.0),
+    "rad": ("rad", 1.0, 0.0),
+    "deg": ("rad", math.pi / 180.0, 0.0),
+    "arcmin": ("rad", math.pi / 10800.0, 0.0),
+    "K": ("K", 1.0, 0.0),
+    "degC": ("K", 1.0, 273.15),
+    "Pa": ("Pa", 1.0, 0.0),
+    "bar": ("Pa", 1e5, 0.0),
+    "N": ("N", 1.0, 0.0),
+    "kN": ("N", 1e3, 0.0),
+    "1": ("1", 1.0, 0.0),
+    "%": ("1", 1e-2, 0.0),
+    "1/K": ("1/K", 1.0, 0.0),
+    "%/K": ("1/K", 1e-2, 0.0),
+}
+
+
+class SpecError(InputError):
+    """A campaign spec is invalid; ``problems`` lists every problem with its field path."""
+
+    def __init__(self, problems: list[str]):
+        super().__init__("campaign spec", problems)
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One resolved uncertainty: absolute parameters in the target's SI unit.
+
+    Attributes
+    ----------
+    target : str
+        Parameter name or ``scene.<condition>``.
+    kind : str
+        One of :data:`DistributionKind`.
+    unit : str
+        SI unit of the sampled value (the parameter set's unit).
+    nominal : float
+        Nominal value of the target.
+    mean, sigma : float
+        Gaussian / truncated-Gaussian location and scale; for ``lognormal``
+        ``mean`` is the median and ``sigma`` the standard deviation of the log.
+    low, high : float
+        Uniform bounds, truncation bounds; NaN when unused.
+    value : float
+        The ``constant`` value; NaN otherwise.
+    source : str
+        Where the row comes from (e.g. the Table 9.5 row).
+    """
+
+    target: str
+    kind: str
+    unit: str
+    nominal: float
+    mean: float = math.nan
+    sigma: float = math.nan
+    low: float = math.nan
+    high: float = math.nan
+    value: float = math.nan
+    source: str = ""
+
+    def as_dict(self) -> dict:
+        """JSON-ready dictionary (NaN fields omitted)."""
+        return {k: v for k, v in asdict(self).items() if not (isinstance(v, float) and math.isnan(v))}
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class Base(_Strict):
+    """The base scene and parameter set every run starts from."""
+
+    scene: str = "nominal"
+    parameters: str = "bench"
+
+    @field_validator("scene")
+    @classmethod
+    def _known_scene(cls, scene: str, info: ValidationInfo) -> str:
+        catalog = _catalog(info)
+        if catalog is not None and scene not in catalog.scene_names:
+            raise ValueError(f"unknown scene {scene!r}; known: {', '.join(catalog.scene_names)}")
+        return scene
+
+
+class Solver(_Strict):
+    """Options passed to the simulation (``twin.simulate``)."""
+
+    integrator: str = "rk4"
+    dt: float | None = Field(default=None, gt=0)
+    output_dt: float | None = Field(default=None, gt=0)
+
+
+class Execution(_Strict):
+    """Per-run limits and isolation.
+
+    ``timeout`` is the wall-clock budget of one run in seconds; the run function
+    receives it as ``wall_time_limit`` and, with ``isolation = "process"``, a
+    run still busy ``KILL_GRACE`` seconds later is killed (see
+    :mod:`campaigns.sandbox`). ``chunk_size`` fixes the number of runs per task;
+    by default it adapts to the measured run time (see :mod:`campaigns.execution`).
+    """
+
+    timeout: float = Field(default=600.0, gt=0)
+    isolation: Literal["process", "none"] = "process"
+    chunk_size: int | None = Field(default=None, ge=1)
+
+
+class Traces(_Strict):
+    """Decimated time series kept for the first ``runs_per_dataset`` runs of each data set."""
+
+    runs_per_dataset: int = Field(default=0, ge=0)
+    variables: list[str] = ["position_demand", "nut1_position", "screw_equivalent_position", "motor_current"]
+    decimation: int = Field(default=10, ge=1)
+
+
+def _known_condition(name: str, info: ValidationInfo) -> str:
+    catalog = _catalog(info)
+    known = [c for c in (catalog.condition_names if catalog is not None else CONDITION_UNITS) if c in CONDITION_UNITS]
+    if name not in known:
+        raise ValueError(f"unknown condition {name}; the model's scenes accept: {', '.join(known)}")
+    return name
+
+
+# Condition names are validated as dictionary keys so that a bad value and a bad name are both reported.
+ConditionName = Annotated[str, AfterValidator(_known_condition)]
+
+
+class Dataset(_Strict):
+    """A named set of condition overrides applied to a scene (Table 9.4)."""
+
+    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
+    scene: str | None = None
+    description: str = ""
+    conditions: dict[ConditionName, float] = {}
+
+    @field_validator("scene")
+    @classmethod
+    def _known_scene(cls, scene: str | None, info: ValidationInfo) -> str | None:
+        return Base._known_scene(scene, info) if scene is not None else None
+
+
+
+class Observability(_Strict):
+    """The backlash sweep analysed for the minimum detectable backlash (Table 9.3).
+
+    ``sweep`` names data sets that differ only in their backlash (each sets
+    ``conditions.backlash``); the one with zero backlash is the reference.
+    """
+
+    sweep: list[str] = []
+
+
+class Uncertainty(_Strict):
+    """One row of the uncertainty table (Table 9.5).
+
+    The range is given either as ``half_range`` (± around the nominal), as
+    ``low``/``high`` (absolute values, or percent deviations from nominal when
+    ``relative``), or as ``sigma`` (optionally with ``mean``). ``relative = true``
+    marks the ``%Nom`` rows: numbers are percent of the nominal value.
+    """
+
+    target: str
+    distribution: DistributionKind
+    relative: bool = False
+    unit: str | None = None
+    half_range: float | None = Field(default=None, ge=0)
+    low: float | None = None
+    high: float | None = None
+    sigma: float | None = Field(default=None, ge=0)
+    mean: float | None = None
+    value: float | None = None
+    source: str = ""
+
+    _distribution: Distribution | None = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _resolve(self, info: ValidationInfo) -> "Uncertainty":
+        problems = self._shape_problems()
+        catalog = _catalog(info)
+        nominal = unit = None
+        if catalog is not None:
+            try:
+                nominal, unit = catalog.nominal(self.target)
+            except KeyError as exc:
+                problems.append(str(exc.args[0]))
+        if problems:
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
+        if catalog is not None:
+            self._distribution = self._resolved(nominal, unit)
+        return self
+
+    @property
+    def distribution_resolved(self) -> Distribution:
+        """The resolved :class:`Distribution` (set when validated with a catalog)."""
+        if self._distribution is None:
+            raise RuntimeError(f"uncertainty {self.target!r} was validated without a catalog; use load_spec")
+        return self._distribution
+
+    def _shape_problems(self) -> list[str]:
+        kind = self.distribution
+        given = {k for k in ("half_range", "low", "high", "sigma", "value") if getattr(self, k) is not None}
+        problems = []
+        if self.low is not None and self.high is not None and self.low > self.high:
+            problems.append(f"low ({self.low:g}) > high ({self.high:g})")
+        if ("low" in given) != ("high" in given):
+            problems.append("give both low and high")
+        if "half_range" in given and {"low", "high"} & given:
+            problems.append("give either half_range or low/high, not both")
+        if self.relative and self.unit not in (None, "%"):
+            problems.append(f"relative rows are in percent of nominal; unit must be '%' or omitted, got {self.unit!r}")
+        if not self.relative and self.unit is not None and self.unit not in UNITS:
+            problems.append(f"unknown unit {self.unit!r}; known: {', '.join(UNITS)}")
+        has_range = bool({"half_range", "low"} & given)
+        if kind == "constant":
+            if given - {"value"}:
+                problems.append("a constant takes only 'value' (or nothing: the nominal)")
+        elif "value" in given:
+            problems.append(f"'value' is only for constant distributions, not {kind}")
+        if kind == "uniform" and not has_range:
+            problems.append("a uniform distribution needs half_range or low/high")
+        if kind == "gaussian" and not (has_range or "sigma" in given):
+            problems.append("a gaussian needs half_range, low/high or sigma")
+        if kind == "truncated_gaussian" and not has_range:
+            problems.append("a truncated gaussian needs half_range or low/high (the truncation bounds)")
+        if kind == "lognormal" and not (self.relative and "half_range" in given):
+            problems.append("a lognormal needs relative = true and half_range (percent of the median)")
+        if "sigma" in given and kind not in ("gaussian", "truncated_gaussian"):
+            problems.append(f"'sigma' is only for gaussian distributions, not {kind}")
+        if "mean" in given and "sigma" not in given:
+            problems.append("'mean' goes with 'sigma'")
+        return problems
+
+    def _resolved(self, nominal: float, unit: str) -> Distribution:
+        """Convert the row to absolute SI parameters (raises ValueError on unit problems)."""
+        if self.relative:
+            if nominal == 0.0:
+                raise ValueError(f"relative range on {self.target} whose nominal value is 0")
+
+            def absolute(p: float) -> float:
+                return nominal * (1.0 + p / 100.0)
+
+            def delta(d: float) -> float:
+                return abs(nominal) * d / 100.0
+
+        else:
+            spec_unit = self.unit or unit
+            if spec_unit == unit:
+                scale, offset = 1.0, 0.0
+            else:
+                si_unit, scale, offset = UNITS[spec_unit]
+                if si_unit != unit:
+                    raise ValueError(f"unit {spec_unit!r} converts to {si_unit!r} but {self.target} is in {unit!r}")
+
+            def absolute(p: float) -> float:
+                return p * scale + offset
+
+            def delta(d: float) -> float:
+                return d * scale
+
+        low = high = math.nan
+        if self.half_range is not None:
+            low, high = nominal - delta(self.half_range), nominal + delta(self.half_range)
+        elif self.low is not None:
+            low, high = sorted((absolute(self.low), absolute(self.high)))
+        common = dict(target=self.target, kind=self.distribution, unit=unit, nominal=nominal, source=self.source)
+        if self.distribution == "constant":
+            return Distribution(**common, value=nominal if self.value is None else absolute(self.value))
+        if self.distribution == "uniform":
+            return Distribution(**common, low=low, high=high)
+        if self.distribution == "lognormal":
+            sigma_log = math.log1p(self.half_range / 100.0) / HALF_RANGE_SIGMAS
+            return Distribution(**common, mean=nominal, sigma=sigma_log)
+        if self.sigma is not None:
+            mean = nominal if self.mean is None else absolute(self.mean)
+            sigma = delta(self.sigma)
+        else:
+            mean, sigma = 0.5 * (low + high), 0.5 * (high - low) / HALF_RANGE_SIGMAS
+        if self.distribution == "truncated_gaussian":
+            return Distribution(**common, mean=mean, sigma=sigma, low=low, high=high)
+        return Distribution(**common, mean=mean, sigma=sigma)
+
+
+class CampaignSpec(_Strict):
+    """A validated Monte Carlo campaign. Build it with :func:`load_spec`."""
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    root_seed: int = Field(ge=0)
+    runs_per_dataset: int = Field(ge=1)
+    features: list[str] = Field(min_length=1)
+    base: Base = Base()
+    solver: Solver = Solver()
+    execution: Execution = Execution()
+    traces: Traces = Traces()
+    datasets: list[Dataset] = Field(min_length=1)
+    uncertainties: list[Uncertainty] = []
+    observability: Observability = Observability()
+
+    _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
+
+    @field_validator("features")
+    @classmethod
+    def _known_features(cls, features: list[str], info: ValidationInfo) -> list[str]:
+        catalog = _catalog(info)
+        known = catalog.feature_units if catalog is not None else None
+        unknown = [f for f in features if known is not None and f not in known]
+        if unknown:
+            raise ValueError(f"unknown feature(s) {', '.join(unknown)}; known: {', '.join(known)}")
+        if len(set(features)) != len(features):
+            raise ValueError("duplicate features")
+        return features
+
+    @model_validator(mode="after")
+    def _consistent(self, info: ValidationInfo) -> "CampaignSpec":
+        catalog = _catalog(info)
+        if catalog is not None and catalog.feature_units is not None:
+            self._feature_units = {f: tuple(catalog.feature_units[f]) for f in self.features}
+        problems = []
+        names = [d.name for d in self.datasets]
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            problems.append(f"datasets: duplicate name(s) {', '.join(duplicates)}")
+        targets = [u.target for u in self.uncertainties]
+        duplicates = sorted({t for t in targets if targets.count(t) > 1})
+        if duplicates:
+            problems.append(f"uncertainties: target(s) listed twice: {', '.join(duplicates)}")
+        sampled = {t.removeprefix("scene.") for t in targets if t.startswith("scene.")}
+        for k, dataset in enumerate(self.datasets):
+            clash = sorted(sampled & set(dataset.conditions))
+            if clash:
+                problems.append(f"datasets[{k}].conditions: {', '.join(clash)} also sampled in uncertainties")
+        problems += self._sweep_problems()
+        if problems:
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
+        return self
+
+    def _sweep_problems(self) -> list[str]:
+        sweep = self.observability.sweep
+        if not sweep:
+            return []
+        by_name = {d.name: d for d in self.datasets}
+        unknown = [n for n in sweep if n not in by_name]
+        if unknown:
+            return [f"observability.sweep: unknown data set(s) {', '.join(unknown)}"]
+        problems = [f"observability.sweep: data set {n} does not set conditions.backlash" for n in sweep if "backlash" not in by_name[n].conditions]
+        zeros = [n for n in sweep if by_name[n].conditions.get("backlash") == 0.0]
+        if not problems and len(zeros) != 1:
+            problems.append(f"observability.sweep: needs exactly one zero-backlash reference, found {len(zeros)}")
+        if len(sweep) < 2:
+            problems.append("observability.sweep: needs the reference and at least one backlash level")
+        return problems
+
+    def feature_meta(self, feature: str) -> tuple[str, str]:
+        """Unit and long name of a feature, as the catalog declared them (``("1", name)`` if it did not)."""
+        return self._feature_units.get(feature, ("1", feature))
+
+    def distributions(self) -> list[Distribution]:
+        """The resolved uncertainty table, in spec order (the sampling order)."""
+        return [u.distribution_resolved for u in self.uncertainties]
+
+    def canonical(self) -> dict:
+        """The spec with its resolved distributions, as plain JSON-ready data."""
+        return {"spec": self.model_dump(mode="json"), "resolved": [d.as_dict() for d in self.distributions()]}
+
+    def to_json(self) -> str:
+        """Canonical JSON text (sorted keys): what the spec hash is computed on."""
+        return json.dumps(self.canonical(), sort_keys=True, separators=(",", ":"))
+
+    def spec_hash(self) -> str:
+        """SHA-256 of :meth:`to_json`; keys the chunk store so results of different specs never mix."""
+        return hashlib.sha256(self.to_json().encode()).hexdigest()
+
+
+def _catalog(info: ValidationInfo) -> Catalog | None:
+    return (info.context or {}).get("catalog")
+
+
+def _path(loc: tuple) -> str:
+    out = ""
+    for part in loc:
+        if part == "[key]":
+            continue
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
+    """Validate spec data (a parsed TOML document) against ``catalog``.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed spec.
+    catalog : Catalog or None
+        What the model offers (parameter names and nominals, scenes, features).
+        ``None`` checks the structure only; the result then cannot be sampled.
+
+    Raises
+    ------
+    SpecError
+        Listing every problem, each prefixed by its field path.
+    """
+    try:
+        return CampaignSpec.model_validate(data, context={"catalog": catalog})
+    except pydantic.ValidationError as exc:
+        problems = []
+        for err in exc.errors():
+            path = _path(err["loc"])
+            if err["type"] != "value_error":
+                problems.append(f"{path}: {err['msg']} (got {err['input']!r})")
+                continue
+            for line in err["msg"].removeprefix("Value error, ").splitlines():
+                problems.append(f"{path}: {line}" if path else line)
+        raise SpecError(problems) from None
+
+
+def _read(path: Path, seen: tuple[Path, ...]) -> dict:
+    """Parse a spec file, applying ``extends`` (tables merged key by key, other fields replaced)."""
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise SpecError([f"{path}: {exc}"]) from None
+    parent = data.pop("extends", None)
+    if parent is None:
+        return data
+    parent_path = (path.parent / parent).resolve()
+    if parent_path in seen:
+        raise SpecError([f"{path}: extends: cycle through {parent_path}"])
+    merged = _read(parent_path, seen + (parent_path,))
+    for key, value in data.items():
+        both_tables = isinstance(value, dict) and isinstance(merged.get(key), dict)
+        merged[key] = {**merged[key], **value} if both_tables else value
+    return merged
+
+
+def load_spec(path: str | Path, runs: int | None = None, *, catalog: Catalog | None = None) -> CampaignSpec:
+    """Read and validate a campaign spec (TOML).
+
+    Parameters
+    ----------
+    path : str or Path
+        The spec file. ``extends = "other.toml"`` inherits every field of
+        another spec (path relative to this file); tables are merged key by
+        key, other fields replaced.
+    runs : int, optional
+        Override ``runs_per_dataset`` (the CLI's ``--runs``).
+    catalog : Catalog, optional
+        The model's catalog. Default: :class:`campaigns.bench.BenchCatalog` for
+        the spec's ``base.parameters`` and ``base.scene``.
+
+    Returns
+    -------
+    CampaignSpec
+        Validated, with the uncertainty table resolved.
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed, or listing every validation problem.
+    """
+    data = _read(Path(path), ())
+    if runs is not None:
+        data["runs_per_dataset"] = runs
+    if catalog is None:
+        from campaigns.bench import BenchCatalog
+
+        base = data.get("base", {}) if isinstance(data.get("base"), dict) else {}
+        try:
+            catalog = BenchCatalog(base.get("parameters", "bench"), base.get("scene", "nominal"))
+        except InputError as exc:
+            structural = []
+            try:
+                validate_spec(data, None)
+            except SpecError as inner:
+                structural = inner.problems
+            raise SpecError([f"base: {p}" for p in exc.problems] + structural) from None
+    return validate_spec(data, catalog)

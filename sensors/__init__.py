@@ -1,0 +1,12 @@
+"""Measurement models of the bench sensors (Sec. 9.3, Table 9.5, Appendix B).
+
+Compiled (numba) functions work on floats and small float64 parameter/state
+arrays whose layouts are documented in each module; plain-Python builders
+validate the ``sensors`` parameter group and pack those arrays.
+
+Modules: :mod:`sensors.encoder` (linear and torque-meter encoders),
+:mod:`sensors.analog` (shared force/torque channel), :mod:`sensors.torque_meter`,
+:mod:`sensors.load_cell`, :mod:`sensors.resolver`, :mod:`sensors.hall`,
+:mod:`sensors.acquisition` (converters, noise, uncertainty convention),
+:mod:`sensors.parameters`. Conventions: ``docs/sensors.md``.
+"""

@@ -1,0 +1,184 @@
+"""Signal-chain primitives shared by every sensor model.
+
+A/D and D/A conversion (one mid-tread quantiser), the first-order lag used by
+the Hall current sensor and the preload conditioner, the uniform electrical
+noise of Table 9.5 and the convention that turns a Table 9.5 "± range,
+Gaussian" row into a standard deviation.
+
+Sources: Sec. 9.3 ("the force/torque signal ... has been digitalised ... to
+simulate the measurement noise and the sensor characteristics effect on the
+read signal resolution"), Sec. 9.4 and Table 9.5 (electrical noise ±2.5 %FS,
+uniform), Table B.3 (drive analog input 11 bits + sign, ±10 V), Table B.5
+(torque-meter 16-bit D/A). Conventions are documented in ``docs/sensors.md``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+#: A Table 9.5 Gaussian "± range" is read as ± this many standard deviations.
+RANGE_SIGMAS = 3.0
+
+
+@numba.njit(cache=True)
+def quantize(value, lsb):
+    """Mid-tread quantisation of ``value`` to a multiple of ``lsb``.
+
+    Mid-tread (zero is a reconstruction level) is the transfer function of
+    bipolar converters and resolver-to-digital converters: a zero input reads
+    exactly zero and the error is bounded by ±lsb/2. Ties round up
+    (``floor(x + 1/2)``) rather than to even, as a comparator ladder does.
+
+    Parameters
+    ----------
+    value : float
+        Input in any unit.
+    lsb : float
+        Quantisation step, > 0, same unit.
+
+    Returns
+    -------
+    float
+        ``lsb * floor(value / lsb + 1/2)``.
+    """
+    return lsb * math.floor(value / lsb + 0.5)
+
+
+@numba.njit(cache=True)
+def convert(value, full_scale, bits):
+    """Bipolar A/D or D/A conversion: saturation then mid-tread quantisation.
+
+    A two's-complement converter of ``bits`` bits (sign included) over
+    ±``full_scale`` has ``lsb = full_scale / 2**(bits - 1)`` and codes
+    ``-2**(bits-1) .. 2**(bits-1) - 1``; inputs beyond the range saturate at
+    the extreme codes. Table B.3's "11 bits + sign" is ``bits = 12``; the
+    torque meter's 16-bit D/A (Table B.5) is ``bits = 16``.
+
+    Parameters
+    ----------
+    value : float
+        Input [V] (or any unit consistent with ``full_scale``).
+    full_scale : float
+        Half range of the converter, > 0 (10 V for every channel of the bench).
+    bits : float
+        Word length including the sign bit, integer-valued, >= 2.
+
+    Returns
+    -------
+    float
+        The reconstructed (converted) value.
+    """
+    lsb = full_scale / 2.0 ** (bits - 1.0)
+    return min(max(quantize(value, lsb), -full_scale), full_scale - lsb)
+
+
+@numba.njit(cache=True)
+def first_order_lag(y0, u0, u1, dt, tau):
+    """Exact discretisation of ``tau dy/dt + y = u`` over one step.
+
+    The input is taken linear between its step-end values ``u0`` and ``u1``
+    (first-order hold), which is exact for the piecewise-linear input the
+    integrator produces and keeps the correct ramp lag ``tau du/dt`` even
+    when ``dt >> tau``:
+
+        y1 = u1 + a (y0 - u0) - (u1 - u0) (tau / dt) (1 - a),  a = exp(-dt / tau)
+
+    Used for the Hall current sensor (Sec. 9.3, "a simple first order transfer
+    function") and the preload conditioner (Table B.8, 10 kHz cut-off).
+
+    Parameters
+    ----------
+    y0 : float
+        Output at the start of the step.
+    u0, u1 : float
+        Input at the start and end of the step.
+    dt : float
+        Step [s]; ``dt <= 0`` returns ``y0`` unchanged.
+    tau : float
+        Time constant [s], > 0.
+
+    Returns
+    -------
+    float
+        Output at the end of the step.
+    """
+    if dt <= 0.0:
+        return y0
+    one_minus_a = -math.expm1(-dt / tau)  # accurate for dt << tau
+    return u1 + (1.0 - one_minus_a) * (y0 - u0) - (u1 - u0) * (tau / dt) * one_minus_a
+
+
+def validate_converter(name: str, full_scale: float, bits: float) -> None:
+    """Check a converter's range and word length.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` if ``full_scale <= 0`` or ``bits`` is not an integer >= 2.
+    """
+    if not full_scale > 0.0:
+        raise ValueError(f"{name}: full scale must be > 0 V, got {full_scale!r}")
+    if not (float(bits).is_integer() and bits >= 2):
+        raise ValueError(f"{name}: bits must be an integer >= 2 (sign included), got {bits!r}")
+
+
+def draw_uniform_noise(rng: np.random.Generator, n: int, half_width: float) -> np.ndarray:
+    """Pre-draw ``n`` samples of uniform electrical noise in ±``half_width``.
+
+    Table 9.5 ("Electrical noise ±2.5 %FS, U"): for a ±10 V channel
+    ``half_width = 0.025 * 10 V``. The compiled loop consumes one sample per
+    reading; drawing from the caller's Generator makes a run reproducible from
+    its seed.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of randomness, owned by the caller.
+    n : int
+        Number of samples, >= 0.
+    half_width : float
+        Half width of the support, >= 0 (same unit as the signal, e.g. V).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 array of shape ``(n,)``.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng: expected numpy.random.Generator, got {type(rng).__name__}")
+    if int(n) != n or n < 0:
+        raise ValueError(f"n: number of noise samples must be an integer >= 0, got {n!r}")
+    if not half_width >= 0.0:
+        raise ValueError(f"half_width: must be >= 0, got {half_width!r}")
+    return rng.uniform(-half_width, half_width, size=int(n))
+
+
+def sigma_from_range(half_range: float) -> float:
+    """Standard deviation of a Table 9.5 Gaussian row from its ± half range.
+
+    Convention (``docs/sensors.md``): a datasheet tolerance ±h is a guaranteed
+    acceptance limit and is read as ±3 sigma, so ``sigma = h / 3``; samples are
+    truncated at ±h (:func:`draw_range_gaussian`), which removes 0.27 % of
+    the mass and keeps every drawn value inside the parameter bounds.
+    """
+    if not half_range >= 0.0:
+        raise ValueError(f"half_range: must be >= 0, got {half_range!r}")
+    return half_range / RANGE_SIGMAS
+
+
+def draw_range_gaussian(rng: np.random.Generator, nominal: float, half_range: float, size: int) -> np.ndarray:
+    """Draw a Table 9.5 Gaussian row: N(nominal, (h/3)^2) truncated at nominal ± h.
+
+    Rejection sampling: each pass keeps 99.73 % of the draws, so the loop
+    ends after a few passes.
+    """
+    sigma = sigma_from_range(half_range)
+    out = rng.normal(nominal, sigma, size=size)
+    outside = np.abs(out - nominal) > half_range
+    while outside.any():
+        out[outside] = rng.normal(nominal, sigma, size=int(outside.sum()))
+        outside = np.abs(out - nominal) > half_range
+    return out

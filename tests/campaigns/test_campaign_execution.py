@@ -1,0 +1,70 @@
+"""Execution: worker-count invariance, failure isolation, the chunk-size rule."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+import campaigns
+from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
+from campaigns.sampling import sample
+from campaigns.testing import SyntheticModel, synthetic_run
+from conftest import SYNTHETIC_SPEC, data_variables, load, write_spec
+
+FAULTS = {("ds2", 3): "raise", ("ds4", 1): "nan", ("ds6", 2): "hang", ("ds5", 0): "diverge"}
+
+
+def test_results_do_not_depend_on_the_worker_count(reference_results, tmp_path):
+    one = campaigns.run_campaign(load(SYNTHETIC_SPEC), tmp_path, workers=1, progress=False, run_function=synthetic_run)
+    with xr.open_dataset(reference_results) as two, xr.open_dataset(one) as single:
+        assert (two["status"] == "ok").all()
+        xr.testing.assert_identical(data_variables(single), data_variables(two))
+
+
+def test_failed_runs_are_recorded_and_the_campaign_goes_on(tmp_path):
+    spec = load(write_spec(tmp_path, "runs_per_dataset = 8\n[execution]\ntimeout = 0.5\n"))
+    path = campaigns.run_campaign(spec, tmp_path / "out", workers=2, progress=False, run_function=SyntheticModel(faults=FAULTS))
+    with xr.open_dataset(path) as ds:
+        status = ds["status"].to_pandas()
+        reason = ds["failure_reason"].to_pandas()
+        assert status.size == 4 * 8  # every run has a record
+        assert status.loc["ds2", 3] == "error" and "RuntimeError: injected failure" in reason.loc["ds2", 3]
+        assert status.loc["ds4", 1] == "failed" and "backlash_feature is not finite" in reason.loc["ds4", 1]
+        assert status.loc["ds6", 2] == "timeout" and "killed after" in reason.loc["ds6", 2]
+        assert status.loc["ds5", 0] == "diverged" and reason.loc["ds5", 0] == "injected divergence"
+        assert float(ds["t_reached"].sel(dataset="ds5", run=0)) == 0.5
+        assert math.isnan(float(ds["t_reached"].sel(dataset="ds6", run=2)))
+        assert (status == "ok").sum().sum() == 4 * 8 - len(FAULTS)
+        assert (reason.values[status.values == "ok"] == "").all()
+        ok = ds["backlash_feature"].where(ds["status"] == "ok")
+
+    analysis = xr.open_dataset(campaigns.analyze(path))
+    with analysis:
+        excluded = analysis["n_excluded"].sel(feature="backlash_feature").to_pandas()
+        assert excluded.to_dict() == {"ds2": 1, "ds4": 1, "ds6": 1, "ds5": 1}
+        assert int(analysis["n_status"].sel(dataset="ds6", status="timeout")) == 1
+        np.testing.assert_allclose(analysis["feature_mean"].sel(feature="backlash_feature"), ok.mean("run"), rtol=1e-12)
+        assert "status 'ok'" in analysis.attrs["selection"]
+
+
+def test_in_process_isolation_records_failures_too(tmp_path):
+    """``isolation = "none"``: exceptions and NaN are still records (no kill fallback there)."""
+    spec = load(write_spec(tmp_path, "runs_per_dataset = 4\n"))
+    samples = sample(spec)
+    requests = [build_request(spec, samples, 0, i) for i in range(4)]
+    records = run_chunk(SyntheticModel(faults={("ds2", 1): "raise", ("ds2", 2): "nan"}), requests, "none")
+    assert [r["status"] for r in records] == ["ok", "error", "failed", "ok"]
+    assert [r["run_index"] for r in records] == [0, 1, 2, 3]
+
+
+def test_chunk_size_rule():
+    assert chunk_size(None, 1000, 2) == 1  # pilot
+    slow = 10.0  # s per run: overhead is negligible, one run per chunk
+    assert chunk_size(slow, 1000, 2) == 1
+    fast = 1e-3
+    c = chunk_size(fast, 10**6, 2)
+    assert TASK_OVERHEAD / (c * fast) <= OVERHEAD_TARGET  # overhead bound met
+    assert chunk_size(fast, 80, 2) == math.ceil(80 / (BALANCE_CHUNKS * 2))  # load balance wins at the tail
+    assert chunk_size(1e-9, 10**12, 1) * 1e-9 <= 60.0

@@ -1,0 +1,40 @@
+"""The `twin` command: runs end to end and reports bad input without a traceback."""
+
+import subprocess
+import sys
+
+import xarray as xr
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "twin.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+def test_simulate_writes_dataset_and_plot(tmp_path):
+    out, plot = tmp_path / "run.nc", tmp_path / "run.png"
+    result = run("simulate", "ds4", "--duration", "0.5", "--out", str(out), "--plot", str(plot))
+    assert result.returncode == 0, result.stderr
+    assert "backlash feature" in result.stdout
+    assert plot.stat().st_size > 10_000
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["status"] == "ok"
+        assert ds.nut1_position.attrs["units"] == "m"
+
+
+def test_bad_input_is_a_clear_error():
+    result = run("simulate", "nominal", "--set", "motor.inertia=-1", "--set", "scene.backlash=-2e-6",
+                 "--set", "nope.x=1")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    for field in ("motor.inertia", "conditions.backlash", "nope.x"):
+        assert field in result.stderr
+
+
+def test_unknown_scene():
+    result = run("simulate", "no_such_scene")
+    assert result.returncode == 2 and "no_such_scene" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_scenes_lists_data_sets():
+    result = run("scenes")
+    assert result.returncode == 0 and "ds7" in result.stdout and "nominal" in result.stdout

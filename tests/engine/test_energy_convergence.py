@@ -1,0 +1,70 @@
+"""Integrator checks on the mechanical chain: energy balance without losses, and convergence order."""
+
+import numpy as np
+import pytest
+from scipy.stats import linregress
+
+import twin
+from twin.engine.energy import mechanical_energy
+from twin.engine.integrators import INTEGRATORS, ORDER, step
+from twin.engine.layout import N_STATES, S
+from twin.engine.model import build_model
+
+LOSSLESS = {
+    "motor.viscous_damping": 0.0, "motor.friction_static_torque": 0.0, "motor.friction_dynamic_torque": 0.0,
+    "reducer.efficiency": 1.0, "drivetrain.damping": 0.0, "ball_screw.contact_damping_coefficient": 0.0,
+    "ball_screw.screw_axial_damping": 0.0, "ball_screw.screw_rotational_damping": 0.0,
+    "ball_screw.bearing_friction_static_torque": 0.0, "ball_screw.bearing_friction_dynamic_torque": 0.0,
+    "ball_screw.bearing_viscous_friction": 0.0, "sled.guide_roll_damping": 0.0,
+    "sled.guide_friction_static": 0.0, "sled.guide_friction_dynamic": 0.0, "sled.guide_viscous_friction": 0.0,
+    "preload.damping": 0.0,
+    # decouple the electrical circuit: no torque from current, no back-EMF into it
+    "motor.torque_constant": 1e-300, "motor.speed_constant": 1e-300,
+    # a smooth chain: the reducer's play would make the torsional force only C0
+    "reducer.backlash": 0.0,
+}
+DURATION = 0.02  # s: several periods of the slowest mechanical mode (~350 Hz torsion)
+
+
+def _free_motion(bench, scene_factory, method, dt):
+    """Integrate the plant alone from a preloaded equilibrium kicked by initial velocities."""
+    params = bench.with_values(LOSSLESS)
+    model = build_model(scene_factory(DURATION, preload=1000.0), params, quantizers=False)
+    x = model.initial_state.copy()
+    x[S.SCREW_SPEED] = 2.0
+    x[S.NUT1_SPEED] = 2e-3
+    x[S.NUT2_SPEED] = -1e-3
+    x[S.REDUCER_SPEED] = -1.0
+    energy_0 = mechanical_energy(x, model.constants, model.stiffness_poly)
+    work = np.zeros((5, N_STATES))
+    code = INTEGRATORS[method]
+    for k in range(int(round(DURATION / dt))):
+        step(code, k * dt, x, dt, model.constants, 0.0, model.force_table, model.stiffness_poly, work)
+    return x, energy_0, mechanical_energy(x, model.constants, model.stiffness_poly)
+
+
+def test_energy_balance_closes_without_losses(bench, scene_factory):
+    """RK4 at 5 us: the energy drifts by far less than its own truncation bound would allow at 4x the step."""
+    _, e0, e1 = _free_motion(bench, scene_factory, "rk4", 5e-6)
+    _, _, e1_coarse = _free_motion(bench, scene_factory, "rk4", 2e-5)
+    assert abs(e1 - e0) / e0 < 1e-8
+    # The drift is the integrator's: it shrinks with the step (RK4 energy error ~ h^4).
+    assert abs(e1 - e0) < abs(e1_coarse - e0) / 20
+
+
+@pytest.mark.parametrize("method", sorted(INTEGRATORS))
+def test_convergence_order_on_smooth_chain(bench, scene_factory, method):
+    """Fitted slope of log(error) vs log(step) matches the method's order (no contact transitions)."""
+    # Steps in the asymptotic range: near its stability limit (4e-5 s) RK4 is not yet at order 4.
+    steps = np.array([1e-5, 5e-6, 2.5e-6]) if method == "rk4" else np.array([4e-6, 2e-6, 1e-6, 5e-7])
+    reference, _, _ = _free_motion(bench, scene_factory, "rk4", 6.25e-7)
+    scale = np.abs(reference) + 1e-3 * np.max(np.abs(reference))
+    errors = [np.max(np.abs(_free_motion(bench, scene_factory, method, h)[0] - reference) / scale) for h in steps]
+    slope = linregress(np.log(steps), np.log(errors)).slope
+    assert slope == pytest.approx(ORDER[method], abs=0.25)
+
+
+def test_symplectic_euler_bounded_energy_error(bench, scene_factory):
+    """Semi-implicit Euler is first order but symplectic: its energy error stays bounded, O(h)."""
+    _, e0, e1 = _free_motion(bench, scene_factory, "semi_implicit_euler", 2e-6)
+    assert abs(e1 - e0) / e0 < 1e-2

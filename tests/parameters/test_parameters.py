@@ -1,0 +1,52 @@
+"""Parameter sets: provenance of every value, validation of files and overrides."""
+
+import pytest
+
+import twin
+from twin.errors import ParameterError
+
+
+def test_every_parameter_has_unit_and_provenance(bench):
+    for p in bench._parameters.values():
+        assert p.unit, p.name
+        assert (p.source is None) != (p.assumption is None), p.name
+        assert (p.source or p.assumption).strip(), p.name
+
+
+def test_override_validates_and_lists_every_problem(bench):
+    with pytest.raises(ParameterError) as info:
+        bench.with_values({"motor.inertia": -1.0, "ball_screw.elastic_modulus": 0.0, "motor.nonsense": 1.0,
+                           "reducer.backlash": float("nan")})
+    problems = info.value.problems
+    assert len(problems) == 4
+    text = str(info.value)
+    for name in ("motor.inertia", "ball_screw.elastic_modulus", "motor.nonsense", "reducer.backlash"):
+        assert name in text
+    assert "allowed: > 0" in text
+
+
+def test_override_returns_new_set(bench):
+    changed = bench.with_values({"motor.inertia": 1.6e-4})
+    assert changed.value("motor.inertia") == 1.6e-4
+    assert bench.value("motor.inertia") == 1.5e-4
+
+
+def test_malformed_file_reports_field(tmp_path):
+    (tmp_path / "motor.toml").write_text('[inertia]\nvalue = -2.0\nunit = "kg*m^2"\nsource = "x"\ngt = 0.0\n'
+                                        '[mass]\nvalue = 1.0\nunit = "kg"\n'
+                                        '[bad]\nvalue = 1.0\nunit = "kg"\nsource = "a"\nassumption = "b"\ncolour = 3\n')
+    with pytest.raises(ParameterError) as info:
+        twin.load_parameters(tmp_path)
+    text = str(info.value)
+    assert "motor.inertia" in text and "motor.mass" in text and "motor.bad" in text and "colour" in text
+
+
+def test_unknown_set_name():
+    with pytest.raises(ParameterError, match="built-in set"):
+        twin.load_parameters("no_such_set")
+
+
+def test_table_9_5_rows_are_tagged(bench):
+    tagged = [p for p in bench._parameters.values() if p.table_9_5]
+    groups = {p.table_9_5.split("/")[0].strip() for p in tagged}
+    assert {"Motor", "Reducer"} <= groups

@@ -1,0 +1,67 @@
+"""Reduced ball-screw contact (Eqs. 9.4-9.6): geometry, conservativeness, backlash, symmetry."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from twin.physics.ball_screw import contact_geometry, groove_centre_distance, helix_angle, nut_axial_force
+
+A0 = groove_centre_distance(1.5875e-3, 0.528)
+ALPHA0 = math.radians(45.13)
+COS_HELIX = math.cos(helix_angle(5e-3, 8e-3))
+K_CONST = np.array([5.27e9])  # constant stiffness polynomial
+Z = 22.0
+
+
+def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0):
+    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z, variable)
+
+
+def test_helix_angle_matches_table_7_5():
+    assert math.degrees(helix_angle(5e-3, 8e-3)) == pytest.approx(5.679, abs=5e-3)
+
+
+def test_contact_angle_first_order_matches_eq_9_4():
+    """For small deformation the exact geometry reduces to Eq. 9.4: tan(a) = tan(a0) + d/(2(r_s - r_b) cos a0)."""
+    delta = 1e-7
+    _, sin_alpha = contact_geometry(delta, A0, ALPHA0)
+    alpha = math.asin(sin_alpha)
+    assert math.tan(alpha) == pytest.approx(math.tan(ALPHA0) + delta / (A0 * math.cos(ALPHA0)), rel=1e-9)
+
+
+def test_contact_angle_grows_with_load():
+    angles = [math.asin(contact_geometry(d, A0, ALPHA0)[1]) for d in (0.0, 5e-6, 2e-5)]
+    assert angles[0] == pytest.approx(ALPHA0, abs=1e-12)
+    assert angles[0] < angles[1] < angles[2]
+
+
+@pytest.mark.parametrize("variable", [True, False])
+def test_force_is_gradient_of_energy(variable):
+    """dF/dx integrated numerically equals the Hertz energy Z * K * (2/5) delta_n^2.5 (conservative contact)."""
+    dx = 8e-6
+    energy, _ = quad(lambda d: force(d, variable=variable)[0], 0.0, dx, epsabs=1e-15, epsrel=1e-12)
+    delta_n = contact_geometry(dx * COS_HELIX, A0, ALPHA0)[0] if variable else dx * COS_HELIX * math.sin(ALPHA0)
+    assert energy == pytest.approx(Z * K_CONST[0] * 0.4 * delta_n**2.5, rel=1e-9)
+
+
+def test_hertz_three_halves_law_constant_angle():
+    f1, f2 = force(2e-6, variable=False)[0], force(4e-6, variable=False)[0]
+    assert f2 / f1 == pytest.approx(2**1.5, rel=1e-12)
+
+
+def test_backlash_gap_transmits_nothing_and_is_symmetric():
+    backlash = 20e-6
+    for dx in np.linspace(-9.99e-6, 9.99e-6, 21):
+        assert force(dx, backlash=backlash)[0] == 0.0
+    assert force(12e-6, backlash=backlash)[0] == pytest.approx(-force(-12e-6, backlash=backlash)[0], rel=1e-14)
+    assert force(12e-6, backlash=backlash)[0] == pytest.approx(force(2e-6)[0], rel=1e-14)
+
+
+def test_saturated_damping_never_pulls():
+    """Eq. 7.29: a fast separation cannot make the normal load negative (no attraction)."""
+    f, normal, _ = force(3e-6, dv=-10.0, damping=1.0)
+    assert normal == 0.0 and f == 0.0
+    f_slow, normal_slow, _ = force(3e-6, dv=1e-6, damping=1.0)
+    assert normal_slow > force(3e-6)[1]

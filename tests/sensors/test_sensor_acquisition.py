@@ -1,0 +1,89 @@
+"""Converters, electrical noise and the Table 9.5 range -> sigma convention."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sensors.acquisition import (
+    convert,
+    draw_range_gaussian,
+    draw_uniform_noise,
+    quantize,
+    sigma_from_range,
+    validate_converter,
+)
+
+
+def test_quantize_is_mid_tread_with_half_lsb_error():
+    lsb = 0.01
+    assert quantize(0.0, lsb) == 0.0
+    assert quantize(0.0049, lsb) == 0.0 and quantize(-0.0049, lsb) == 0.0
+    assert quantize(0.005, lsb) == pytest.approx(lsb)  # ties round up
+    assert quantize(-0.0051, lsb) == pytest.approx(-lsb)
+    x = np.random.default_rng(5).uniform(-3.0, 3.0, 10000)
+    err = np.array([quantize(v, lsb) for v in x]) - x
+    assert np.max(np.abs(err)) <= lsb / 2 * (1 + 1e-9)
+
+
+def test_convert_11_bits_plus_sign_saturates_at_the_extreme_codes():
+    lsb = 10.0 / 2048  # Table B.3: 11 bits + sign over ±10 V
+    assert convert(10.0, 10.0, 12) == pytest.approx(10.0 - lsb)
+    assert convert(25.0, 10.0, 12) == pytest.approx(10.0 - lsb)
+    assert convert(-10.0, 10.0, 12) == pytest.approx(-10.0)
+    assert convert(-25.0, 10.0, 12) == pytest.approx(-10.0)
+    assert convert(0.4 * lsb, 10.0, 12) == 0.0
+    assert convert(0.6 * lsb, 10.0, 12) == pytest.approx(lsb)
+    x = np.random.default_rng(6).uniform(-9.99, 9.99, 5000)
+    err = np.array([convert(v, 10.0, 12) for v in x]) - x
+    assert np.max(np.abs(err)) <= lsb / 2 * (1 + 1e-9)
+
+
+def test_validate_converter_names_the_field():
+    with pytest.raises(ValueError, match="daq"):
+        validate_converter("daq", -10.0, 16)
+    with pytest.raises(ValueError, match="daq"):
+        validate_converter("daq", 10.0, 15.5)
+
+
+def test_uniform_noise_bounds_mean_and_variance():
+    n, h = 1_000_000, 0.25  # ±2.5 %FS of a 10 V channel
+    noise = draw_uniform_noise(np.random.default_rng(7), n, h)
+    assert noise.shape == (n,) and noise.dtype == np.float64
+    assert np.all(np.abs(noise) <= h)
+    # P(max < h (1 - 40/n)) = (1 - 20/n)^n ~ e^-20: the support is filled.
+    assert noise.max() > h * (1 - 40 / n) and noise.min() < -h * (1 - 40 / n)
+    # mean: sigma_mean = h / sqrt(3 n); 5 sigma tolerance (false failure 6e-7)
+    assert abs(noise.mean()) < 5 * h / math.sqrt(3 * n)
+    # variance h^2/3; Var(s^2) = (mu4 - sigma^4)/n = (h^4/5 - h^4/9)/n = 4 h^4 / (45 n); 5 sigma
+    assert abs(noise.var() - h * h / 3) < 5 * math.sqrt(4 / (45 * n)) * h * h
+
+
+def test_noise_is_reproducible_from_the_seed():
+    a = draw_uniform_noise(np.random.default_rng(42), 1000, 0.25)
+    b = draw_uniform_noise(np.random.default_rng(42), 1000, 0.25)
+    c = draw_uniform_noise(np.random.default_rng(43), 1000, 0.25)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_noise_rejects_bad_arguments():
+    with pytest.raises(ValueError, match="half_width"):
+        draw_uniform_noise(np.random.default_rng(0), 10, -0.1)
+    with pytest.raises(ValueError, match="rng"):
+        draw_uniform_noise(np.random.RandomState(0), 10, 0.1)
+    with pytest.raises(ValueError, match="n"):
+        draw_uniform_noise(np.random.default_rng(0), -1, 0.1)
+
+
+def test_range_is_three_sigma_and_draws_are_truncated_at_the_range():
+    assert sigma_from_range(0.006) == pytest.approx(0.002)
+    with pytest.raises(ValueError, match="half_range"):
+        sigma_from_range(-1.0)
+    n, h = 200_000, 0.002
+    x = draw_range_gaussian(np.random.default_rng(8), 0.0, h, n)
+    assert np.all(np.abs(x) <= h)
+    # Normal truncated at ±3 sigma: std = sigma * sqrt(1 - 6 phi(3) / (2 Phi(3) - 1)) = 0.98658 sigma.
+    # Relative std error of the sample std ~ 1/sqrt(2n) = 0.16 %; 1 % is > 6 of them.
+    assert x.std() == pytest.approx(0.98658 * h / 3, rel=0.01)
+    np.testing.assert_array_equal(x, draw_range_gaussian(np.random.default_rng(8), 0.0, h, n))

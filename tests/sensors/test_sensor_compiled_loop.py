@@ -1,0 +1,65 @@
+"""The sensor functions as the engine calls them: inside one compiled loop, noise pre-drawn."""
+
+import math
+
+import numba
+import numpy as np
+
+from sensors.acquisition import draw_uniform_noise
+from sensors.analog import AN_NOISE_HALF_WIDTH, AS_SIZE, analog_init, analog_read, analog_step
+from sensors.encoder import ENC_STATE_SIZE, encoder_init, encoder_reading, encoder_speed, encoder_step
+from sensors.encoder import linear_encoder_parameters
+from sensors.hall import hall_current_step
+from sensors.resolver import resolver_angle, resolver_parameters
+from sensors.torque_meter import torque_meter_parameters
+
+DT, STEPS_PER_SAMPLE, SAMPLES = 1e-5, 100, 200
+
+
+@numba.njit
+def _loop(p_enc, p_tm, p_res, noise, out):
+    enc = np.zeros(ENC_STATE_SIZE)
+    tm = np.zeros(AS_SIZE)
+    encoder_init(enc, 0.0, 0.0, p_enc)
+    analog_init(tm, 0.0, 0.0, p_tm)
+    i_meas, i_prev = 0.0, 0.0
+    for j in range(SAMPLES):
+        for k in range(STEPS_PER_SAMPLE):
+            t = (j * STEPS_PER_SAMPLE + k + 1) * DT
+            x = 1e-3 * math.sin(2 * math.pi * 5.0 * t)  # sled: 1 mm at 5 Hz
+            encoder_step(enc, x, t, p_enc)
+            analog_step(tm, 3.0 * math.sin(2 * math.pi * 5.0 * t), t, p_tm)
+            i_new = math.sin(2 * math.pi * 50.0 * t)
+            i_meas = hall_current_step(i_meas, i_prev, i_new, DT, 3.18e-5)
+            i_prev = i_new
+        out[j, 0] = encoder_reading(enc, p_enc)
+        out[j, 1] = encoder_speed(enc, t, p_enc)
+        out[j, 2] = analog_read(tm, noise[j], p_tm)
+        out[j, 3] = resolver_angle(100.0 * t, p_res)
+        out[j, 4] = i_meas
+
+
+def _run(seed):
+    p_enc = linear_encoder_parameters({"sensors.linear_encoder_phase_error": 0.3})
+    p_tm = torque_meter_parameters(room_temperature=303.15)
+    noise = draw_uniform_noise(np.random.default_rng(seed), SAMPLES, p_tm[AN_NOISE_HALF_WIDTH])
+    out = np.empty((SAMPLES, 5))
+    _loop(p_enc, p_tm, resolver_parameters(), noise, out)
+    return out
+
+
+def test_sensors_run_inside_a_compiled_loop_and_reproduce_from_the_seed():
+    a, b, c = _run(11), _run(11), _run(12)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a[:, 2], c[:, 2])  # only the noisy channel differs
+    np.testing.assert_array_equal(a[:, [0, 1, 3, 4]], c[:, [0, 1, 3, 4]])
+    t = np.arange(1, SAMPLES + 1) * STEPS_PER_SAMPLE * DT
+    x = 1e-3 * np.sin(2 * np.pi * 5.0 * t)
+    assert np.max(np.abs(a[:, 0] - x)) <= 1e-6 + 0.3 / (2 * np.pi) * 4e-6  # count + phase error
+    v = 1e-3 * 2 * np.pi * 5.0 * np.cos(2 * np.pi * 5.0 * t)
+    v_max = 1e-3 * 2 * np.pi * 5.0
+    ripple = 0.3 / (np.pi / 2 - 0.3)  # phase-error ripple of the period method, docs/sensors.md
+    assert np.max(np.abs(a[:, 1] - v)) < (ripple + 0.05) * v_max  # + lag of one edge interval
+    # torque: ±2.5 %FS noise on 50 N*m (±1.25 N*m) plus hold lag of up to one refresh period
+    torque = 3.0 * np.sin(2 * np.pi * 5.0 * t)
+    assert np.max(np.abs(a[:, 2] - torque)) <= 1.25 + 3.0 * 2 * np.pi * 5.0 * 1e-3 + 0.01

@@ -1,0 +1,190 @@
+"""Torque meter, load cells, preload conditioner and Hall sensor readings."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sensors.analog import (
+    AN_DAQ_BITS,
+    AN_FULL_SCALE,
+    AN_GAIN,
+    AN_NOISE_HALF_WIDTH,
+    AN_OFFSET,
+    AN_REFRESH_PERIOD,
+    AN_TAU,
+    AS_FILTERED,
+    AS_SIZE,
+    analog_init,
+    analog_read,
+    analog_step,
+    transducer_voltage,
+)
+from sensors.hall import hall_current_step
+from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
+from sensors.torque_meter import torque_meter_parameters
+
+T25 = 298.15  # K, the nominal 25 degC of Sec. 9.4
+FINE_DAQ = {"sensors.daq_bits": 32.0}  # isolates the sensor model from DAQ quantisation
+
+
+def _read_series(p, t, x):
+    """Noise-free readings after each step of the measurand series x(t)."""
+    state = np.zeros(AS_SIZE)
+    analog_init(state, x[0], 0.0, p)
+    out = np.empty(t.size)
+    for k in range(t.size):
+        analog_step(state, x[k], t[k], p)
+        out[k] = analog_read(state, 0.0, p)
+    return out
+
+
+def test_torque_meter_misses_a_peak_between_refreshes_and_holds_one_it_samples():
+    p = torque_meter_parameters(room_temperature=T25)
+    assert p[AN_REFRESH_PERIOD] == pytest.approx(1e-3)  # 1 kHz, Table B.5
+    dt = 1e-5
+    t = np.arange(1, 1001) * dt  # 10 ms
+    torque = np.zeros_like(t)
+    torque[(t > 1.2e-3) & (t < 1.7e-3)] = 10.0  # 0.5 ms pulse between the 1 and 2 ms refreshes
+    torque[(t > 2.8e-3) & (t < 3.3e-3)] = 10.0  # 0.5 ms pulse across the 3 ms refresh
+    half_sine = (t > 6.7e-3) & (t < 7.5e-3)  # 0.8 ms half sine peaking at 7.1 ms
+    torque[half_sine] = 10.0 * np.sin(np.pi * (t[half_sine] - 6.7e-3) / 0.8e-3)
+    reading = _read_series(p, t, torque)
+    lsb = 2 * 50.0 / 2**16  # D/A and DAQ, 16 bit over ±50 N*m
+
+    assert np.all(np.abs(reading[t < 2.9e-3]) <= lsb)  # first pulse entirely lost
+    held = (t >= 3.0e-3 + dt / 2) & (t < 4.0e-3 - dt / 2)
+    np.testing.assert_allclose(reading[held], 10.0, atol=2 * lsb)  # held for a full period,
+    assert np.all(np.abs(reading[(t > 4.0e-3 + dt / 2) & (t < 7.0e-3 - dt / 2)]) <= lsb)  # twice the pulse
+    peak_read = reading[(t >= 7.0e-3 + dt / 2) & (t < 8.0e-3 - dt / 2)]
+    sampled = 10.0 * math.sin(math.pi * 0.3 / 0.8)  # value at the 7 ms refresh
+    np.testing.assert_allclose(peak_read, sampled, atol=2 * lsb + 2e-3)  # + interpolation error
+    assert peak_read.max() < 10.0 - 0.5  # the 10 N*m peak is attenuated
+
+
+def test_torque_meter_saturates_at_the_dac_full_scale():
+    p = torque_meter_parameters(room_temperature=T25)
+    reading = _read_series(p, np.array([1e-3, 2e-3]), np.array([80.0, -80.0]))
+    assert reading[0] == pytest.approx(50.0 * (1 - 2**-15))
+    assert reading[1] == pytest.approx(-50.0)
+
+
+@pytest.mark.parametrize(
+    "builder, force, overrides, gain_tcs, offset_tcs",
+    [
+        (
+            load_cell_parameters,
+            12e3,
+            {"sensors.load_cell_sensitivity_tempco": 1.0e-4, "sensors.load_cell_offset_tempco": -2.5e-4},
+            [1.0e-4],
+            [-2.5e-4],
+        ),
+        (
+            preload_load_cell_parameters,
+            4e3,
+            {
+                "sensors.preload_load_cell_sensitivity_tempco_range2": 1.5e-4,
+                "sensors.preload_conditioner_sensitivity_tempco_range2": -1.0e-5,
+                "sensors.preload_load_cell_offset_tempco_range2": 2.0e-4,
+                "sensors.preload_conditioner_offset_tempco": 1.2e-5,
+            },
+            [1.5e-4, -1.0e-5],
+            [2.0e-4, 1.2e-5],
+        ),
+        (
+            torque_meter_parameters,
+            20.0,
+            {"sensors.torque_meter_sensitivity_tempco_range1": -1.2e-4, "sensors.torque_meter_offset_tempco_range1": 0.8e-4},
+            [-1.2e-4],
+            [0.8e-4],
+        ),
+    ],
+)
+@pytest.mark.parametrize("delta_t", [10.0, -10.0])
+def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder, force, overrides, gain_tcs, offset_tcs, delta_t):
+    cold = builder({**overrides, **FINE_DAQ}, room_temperature=T25)
+    warm = builder({**overrides, **FINE_DAQ}, room_temperature=T25 + delta_t)
+    full_scale = cold[AN_FULL_SCALE]
+    expected = force * sum(gain_tcs) * delta_t + full_scale * sum(offset_tcs) * delta_t
+    # transducer voltage, no quantisation: exact to rounding
+    shift_v = transducer_voltage(force, warm) - transducer_voltage(force, cold)
+    assert shift_v * full_scale / 10.0 == pytest.approx(expected, rel=1e-9)
+    # full chain through a fine DAQ (16-bit torque-meter D/A: within its lsb)
+    t = np.array([1e-3, 2e-3, 3e-3])
+    x = np.full(3, force)
+    lsb = 2 * full_scale / 2**16
+    shift = _read_series(warm, t, x)[-1] - _read_series(cold, t, x)[-1]
+    assert shift == pytest.approx(expected, abs=lsb)
+
+
+def test_static_errors_act_on_gain_and_offset():
+    p = load_cell_parameters(
+        {
+            "sensors.load_cell_sensitivity_error": 1e-3,
+            "sensors.load_cell_repeatability_error": -5e-4,
+            "sensors.load_cell_offset": 2e-4,
+        },
+        room_temperature=T25,
+    )
+    assert p[AN_GAIN] == pytest.approx(1.0 + 1e-3 - 5e-4)
+    assert p[AN_OFFSET] == pytest.approx(2e-4)
+    assert p[AN_REFRESH_PERIOD] == pytest.approx(1 / 19200)  # Table B.13
+    q = preload_load_cell_parameters({"sensors.preload_load_cell_accuracy_error": 2e-3}, room_temperature=T25)
+    assert q[AN_FULL_SCALE] == 10e3 and q[AN_OFFSET] == pytest.approx(2e-3)  # 20 N on the 10 kN range
+
+
+def test_preload_conditioner_is_an_exact_first_order_lag_for_any_step():
+    p = preload_load_cell_parameters(room_temperature=T25)
+    tau = p[AN_TAU]
+    assert tau == pytest.approx(1 / (2 * math.pi * 10e3))  # 10 kHz cut-off, Table B.8
+    rate = 4e6  # N/s ramp, then hold from t_hold
+    t_hold = 1e-3
+    rng = np.random.default_rng(4)
+    dts = rng.choice([1e-7, 3e-6, 2e-5, 1e-4], size=200)
+    t = np.cumsum(dts)
+    t = np.sort(np.append(t[t < 2.5e-3], t_hold))  # a step ends at the ramp's corner
+
+    def exact(tt):  # ramp response, then the decay after the corner
+        ramp = rate * (tt - tau * (1.0 - np.exp(-tt / tau)))
+        at_hold = rate * (t_hold - tau * (1.0 - np.exp(-t_hold / tau)))
+        hold = rate * t_hold + (at_hold - rate * t_hold) * np.exp(-(tt - t_hold) / tau)
+        return np.where(tt <= t_hold, ramp, hold)
+
+    state = np.zeros(AS_SIZE)
+    analog_init(state, 0.0, 0.0, p)
+    volts_per_newton = 10.0 / 10e3
+    for tk in t:
+        analog_step(state, rate * min(tk, t_hold), tk, p)
+        assert state[AS_FILTERED] / volts_per_newton == pytest.approx(exact(tk), rel=1e-9, abs=1e-9)
+
+
+def test_hall_sensor_is_an_exact_first_order_lag():
+    tau = 3.18e-5  # drive.hall_time_constant
+    y, t = 0.0, 0.0
+    for dt in (1e-7, 5e-6, 4e-5, 1e-3):
+        y = hall_current_step(y, 2.0, 2.0, dt, tau)
+        t += dt
+        assert y == pytest.approx(2.0 * (1.0 - math.exp(-t / tau)), rel=1e-12)
+    # steady ramp: lag of tau * di/dt
+    y = hall_current_step(0.0 - 1e3 * tau, 0.0, 1e3 * 1e-4, 1e-4, tau)
+    assert y == pytest.approx(1e3 * (1e-4 - tau), rel=1e-12)
+
+
+def test_noise_sample_adds_to_the_reading_in_volts():
+    p = load_cell_parameters(FINE_DAQ, room_temperature=T25)
+    assert p[AN_NOISE_HALF_WIDTH] == pytest.approx(0.25)  # ±2.5 %FS of 10 V
+    assert p[AN_DAQ_BITS] == 32.0
+    state = np.zeros(AS_SIZE)
+    analog_init(state, 5e3, 0.0, p)
+    assert analog_read(state, 0.1, p) - analog_read(state, 0.0, p) == pytest.approx(0.1 * 20e3 / 10.0)
+
+
+def test_bad_inputs_name_the_field():
+    with pytest.raises(ValueError, match="room_temperature"):
+        load_cell_parameters(room_temperature=-5.0)
+    with pytest.raises(ValueError, match="sensors.torque_meter_range"):
+        torque_meter_parameters({"sensors.torque_meter_range": 1.5}, room_temperature=T25)
+    with pytest.raises(ValueError, match="sensors.load_cell_sensitivity_error"):  # beyond ±0.1 %Nom
+        load_cell_parameters({"sensors.load_cell_sensitivity_error": 0.01}, room_temperature=T25)
+    with pytest.raises(ValueError, match="sensors.preload_load_cell_sensitivty_error_range1"):
+        preload_load_cell_parameters({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}, room_temperature=T25)

@@ -1,0 +1,106 @@
+"""``twin`` command line: a thin layer over the library (the library never imports this module)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import twin
+from twin.engine.integrators import INTEGRATORS
+from twin.errors import InputError, SimulationFailed
+
+
+def _parse_assignment(text: str) -> tuple[str, float]:
+    name, sep, value = text.partition("=")
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f"--set expects name=value, got {text!r}")
+    try:
+        return name.strip(), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--set {name}: value {value!r} is not a number") from None
+
+
+def _scene_and_params(args) -> tuple[twin.Scene, twin.ParameterSet]:
+    """Apply ``--set`` overrides: ``scene.<condition>=v`` to the scene, anything else to the parameters."""
+    overrides = dict(args.set or [])
+    conditions = {k.removeprefix("scene."): v for k, v in overrides.items() if k.startswith("scene.")}
+    parameters = {k: v for k, v in overrides.items() if not k.startswith("scene.")}
+    problems: list[str] = []
+    scene = params = None
+    try:
+        scene = twin.load_scene(args.scene).with_conditions(conditions)
+    except InputError as exc:
+        problems += exc.problems
+    try:
+        params = twin.load_parameters(args.params).with_values(parameters)
+    except InputError as exc:
+        problems += exc.problems
+    if problems:
+        raise InputError("input", problems)
+    return scene, params
+
+
+def cmd_scenes(args) -> int:
+    for name in twin.list_scenes():
+        scene = twin.load_scene(name)
+        print(f"{name:10s} {scene.duration:6.1f} s  {scene.description}")
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    scene, params = _scene_and_params(args)
+    options = {"integrator": args.integrator, "throw": False}
+    if args.dt is not None:
+        options["dt"] = args.dt
+    if args.duration is not None:
+        options["duration"] = args.duration
+    ds = twin.simulate(scene, params, **options)
+    print(f"scene {scene.name}: status {ds.attrs['status']}"
+          + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok" else "")
+          + f", wall time {ds.attrs['wall_time']:.3f} s")
+    print(f"backlash feature (true signals, Eq. 9.12): {float(ds['backlash_feature_true']) * 1e6:.4f} um")
+    if args.out:
+        ds.to_netcdf(args.out, engine="netcdf4")
+        print(f"wrote {args.out}")
+    if args.plot:
+        from twin.plotting import plot_run
+
+        plot_run(ds, args.plot)
+        print(f"wrote {args.plot}")
+    return 0 if ds.attrs["status"] == "ok" else 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("scenes", help="list the built-in scenes (test procedures)")
+    p.set_defaults(func=cmd_scenes)
+
+    p = sub.add_parser("simulate", help="run one scene and write its signals and/or a plot")
+    p.add_argument("scene", help="built-in scene name (see `twin scenes`) or a scene TOML file")
+    p.add_argument("--params", default="bench", help="parameter set name or directory/file (default: bench)")
+    p.add_argument("--set", action="append", type=_parse_assignment, metavar="NAME=VALUE",
+                   help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5)")
+    p.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS))
+    p.add_argument("--dt", type=float, help="integration step [s]")
+    p.add_argument("--duration", type=float, help="override the scene duration [s]")
+    p.add_argument("--out", type=Path, help="write the run Dataset (netCDF)")
+    p.add_argument("--plot", type=Path, help="write an overview plot (PNG/SVG/PDF)")
+    p.set_defaults(func=cmd_simulate)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except (InputError, SimulationFailed) as exc:
+        print(f"twin: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

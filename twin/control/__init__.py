@@ -1,0 +1,1 @@
+"""Control of the bench: loop design (python-control) and the discrete controllers used in the compiled loop."""

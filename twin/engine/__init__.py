@@ -1,0 +1,1 @@
+"""Simulation engine: state layout, plant right-hand side, integrators, compiled loop, ``simulate``."""

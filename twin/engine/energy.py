@@ -1,0 +1,52 @@
+"""Stored and kinetic energy of the mechanical chain, for energy-balance checks."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import quad
+
+from twin.engine.layout import K, S
+from twin.engine.model import contact_force
+from twin.physics.coupling import elasto_backlash_energy
+
+
+def contact_energy(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
+    """Elastic energy of one nut's contact: the integral of its static axial force over ``dx`` [J]."""
+    half_gap = 0.5 * c[K.BACKLASH]
+    if abs(relative_position) <= half_gap:
+        return 0.0
+    side = np.sign(relative_position)
+    value, _ = quad(lambda d: side * contact_force(c, stiffness_poly, side * d), half_gap, abs(relative_position),
+                    epsabs=1e-14, epsrel=1e-11, limit=200)
+    return value
+
+
+def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) -> float:
+    """Kinetic plus elastic energy of the drivetrain, screw, nuts and preload spring [J].
+
+    Covers every spring of :func:`twin.engine.plant.rhs` (torsional elasto-backlash,
+    screw axial support, ball-groove contacts, guides' roll stiffness, preload set).
+    The preload damping/saturation and the external force are not included:
+    use it with those inactive.
+    """
+    kinetic = 0.5 * (
+        c[K.J_MOTOR_SIDE] * x[S.REDUCER_SPEED] ** 2
+        + c[K.J_SCREW_SIDE] * x[S.SCREW_SPEED] ** 2
+        + c[K.SCREW_MASS] * x[S.SCREW_AXIAL_SPEED] ** 2
+        + c[K.MASS_NUT1] * x[S.NUT1_SPEED] ** 2
+        + c[K.MASS_NUT2] * x[S.NUT2_SPEED] ** 2
+        + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
+    )
+    arm = c[K.LEAD_ARM]
+    axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + (c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]) / c[K.SHAFT_EA])
+    compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
+    elastic = (
+        elasto_backlash_energy(x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], c[K.TORSION_STIFFNESS], c[K.REDUCER_BACKLASH])
+        + 0.5 * axial_stiffness * x[S.SCREW_AXIAL] ** 2
+        + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
+        + 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
+    )
+    for position, angle in ((S.NUT1_POSITION, S.NUT1_ANGLE), (S.NUT2_POSITION, S.NUT2_ANGLE)):
+        dx = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[angle]) - x[position]
+        elastic += contact_energy(c, stiffness_poly, dx)
+    return float(kinetic + elastic)

@@ -1,0 +1,206 @@
+"""Index layouts shared by the model builder and the compiled loop.
+
+numba treats ``IntEnum`` members as compile-time integer constants, so the
+compiled right-hand side reads ``x[S.NUT1_POSITION]`` at no cost.
+"""
+
+from enum import IntEnum
+
+
+class S(IntEnum):
+    """Continuous state vector (SI units)."""
+
+    CURRENT = 0            # motor current i [A] (Eq. 9.1)
+    WINDING_TEMP = 1       # T_w [K] (Eq. 9.2)
+    REDUCER_ANGLE = 2      # theta_r [rad] (Eq. 9.3)
+    REDUCER_SPEED = 3
+    SCREW_ANGLE = 4        # theta_s [rad] (Eq. 9.7)
+    SCREW_SPEED = 5
+    SCREW_AXIAL = 6        # x_s [m]
+    SCREW_AXIAL_SPEED = 7
+    NUT1_POSITION = 8      # x_n1 [m] (Eq. 9.8, master)
+    NUT1_SPEED = 9
+    NUT1_ANGLE = 10        # theta_n1 [rad]
+    NUT1_ANGULAR_SPEED = 11
+    NUT2_POSITION = 12     # x_n2 [m] (slave)
+    NUT2_SPEED = 13
+    NUT2_ANGLE = 14
+    NUT2_ANGULAR_SPEED = 15
+    HALL_CURRENT = 16      # first-order Hall sensor output [A]
+    CURRENT_PI = 17        # analog current-PI integrator [V]
+
+
+N_STATES = len(S)
+
+# (position, velocity) pairs: the semi-implicit Euler integrator updates the
+# velocity first and moves the position with the new velocity.
+POSITION_VELOCITY_PAIRS = (
+    (S.REDUCER_ANGLE, S.REDUCER_SPEED),
+    (S.SCREW_ANGLE, S.SCREW_SPEED),
+    (S.SCREW_AXIAL, S.SCREW_AXIAL_SPEED),
+    (S.NUT1_POSITION, S.NUT1_SPEED),
+    (S.NUT1_ANGLE, S.NUT1_ANGULAR_SPEED),
+    (S.NUT2_POSITION, S.NUT2_SPEED),
+    (S.NUT2_ANGLE, S.NUT2_ANGULAR_SPEED),
+)
+
+
+class K(IntEnum):
+    """Model constants, derived from the parameter set and the scene (SI units)."""
+
+    # motor and drive
+    R20 = 0
+    R_TEMP_COEF = 1
+    INDUCTANCE = 2
+    TORQUE_CONSTANT = 3
+    SPEED_CONSTANT = 4
+    RATIO = 5
+    EFFICIENCY = 6
+    J_MOTOR_SIDE = 7          # J_mr tau^2, about the reducer output [kg m^2]
+    MOTOR_VISCOUS = 8         # b_mr on the motor shaft
+    MR_FRICTION_STATIC = 9
+    MR_FRICTION_DYNAMIC = 10
+    MR_FRICTION_RATE = 11
+    DC_BUS = 12
+    HALL_TAU = 13
+    CURRENT_KP = 14
+    CURRENT_KI = 15
+    CURRENT_AW_TIME = 16
+    THERMAL_RESISTANCE = 17
+    THERMAL_TAU = 18
+    HEAT_TRANSFER = 19
+    MOTOR_AREA = 20
+    EMISSIVITY = 21
+    AMBIENT = 22
+    # torsional chain
+    TORSION_STIFFNESS = 23
+    TORSION_DAMPING = 24
+    REDUCER_BACKLASH = 25
+    J_SCREW_SIDE = 26         # J_s + J_tm + 2 J_tc (Eq. 9.7)
+    SCREW_DAMPING = 27
+    SCREW_FRICTION_STATIC = 28
+    SCREW_FRICTION_DYNAMIC = 29
+    SCREW_FRICTION_RATE = 30
+    SCREW_FRICTION_VISCOUS = 31
+    # screw axial
+    SCREW_MASS = 32
+    BEARING_STIFFNESS = 33
+    SHAFT_EA = 34
+    SHAFT_LENGTH_0 = 35
+    SCREW_AXIAL_DAMPING = 36
+    # ball screw contact
+    LEAD_ARM = 37             # p / (2 pi)
+    COS_HELIX = 38
+    CENTRE_DISTANCE = 39
+    CONTACT_ANGLE_0 = 40
+    SIN_ALPHA_MIN = 41
+    SIN_ALPHA_SPAN = 42
+    CONTACT_DAMPING = 43
+    LOADED_BALLS = 44
+    BACKLASH = 45
+    VARIABLE_ANGLE = 46       # 1.0 = Eq. 9.4 variable angle, 0.0 = constant angle
+    # nuts and guides
+    MASS_NUT1 = 47
+    MASS_NUT2 = 48
+    J_NUT = 49
+    GUIDE_ROLL_STIFFNESS = 50
+    GUIDE_ROLL_DAMPING = 51
+    GUIDE_FRICTION_STATIC = 52
+    GUIDE_FRICTION_DYNAMIC = 53
+    GUIDE_FRICTION_RATE = 54
+    GUIDE_FRICTION_VISCOUS = 55
+    SLAVE_FRICTION_FRACTION = 56
+    # preload
+    PRELOAD_STIFFNESS = 57
+    PRELOAD_DAMPING = 58
+    PRELOAD_COMPRESSION = 59
+    PRELOAD_ORIENTATION = 60
+    # friction regularisation
+    LINEAR_V_THRESHOLD = 61
+    ANGULAR_V_THRESHOLD = 62
+    # digital loops
+    SPEED_KP = 63
+    SPEED_KI = 64
+    MAX_CURRENT = 65
+    POSITION_KP = 66
+    POSITION_KI = 67
+    SPEED_FULL_SCALE = 68
+    SPEED_COMMAND_LSB = 69    # rad/s per LSB of the drive's analog input; 0 = not quantised
+    ENCODER_RESOLUTION = 70   # m; 0 = ideal
+    RESOLVER_RESOLUTION = 71  # rad; 0 = ideal
+    # divergence guard
+    STROKE_LIMIT = 72
+    MAX_MOTOR_SPEED = 73
+    MAX_TEMPERATURE = 74
+    MAX_NORMAL_APPROACH = 75
+    # feature zeroing
+    NUT1_ZERO = 76
+    SCREW_ANGLE_ZERO = 77
+
+
+N_CONSTANTS = len(K)
+
+
+class Signal(IntEnum):
+    """Recorded output signals (one column each in the output buffer)."""
+
+    POSITION_DEMAND = 0
+    NUT1_POSITION = 1
+    NUT2_POSITION = 2
+    SCREW_ANGLE = 3
+    SCREW_EQUIVALENT_POSITION = 4
+    SCREW_AXIAL_POSITION = 5
+    MOTOR_CURRENT = 6
+    MOTOR_TORQUE = 7
+    MOTOR_SPEED = 8
+    WINDING_TEMPERATURE = 9
+    PRELOAD_FORCE = 10
+    EXTERNAL_FORCE = 11
+    TRANSMITTED_TORQUE = 12
+    NUT1_CONTACT_FORCE = 13
+    NUT2_CONTACT_FORCE = 14
+    SPEED_COMMAND = 15
+    CURRENT_DEMAND = 16
+    NUT1_SPEED = 17
+
+
+N_SIGNALS = len(Signal)
+
+# name -> (units, long name) for the xarray Dataset (CF-style attributes).
+SIGNAL_META = {
+    Signal.POSITION_DEMAND: ("m", "sled position demand"),
+    Signal.NUT1_POSITION: ("m", "master nut (sled) position"),
+    Signal.NUT2_POSITION: ("m", "slave nut position"),
+    Signal.SCREW_ANGLE: ("rad", "screw shaft angle"),
+    Signal.SCREW_EQUIVALENT_POSITION: ("m", "screw equivalent linear position p*theta_s/(2*pi) (Eq. 9.12)"),
+    Signal.SCREW_AXIAL_POSITION: ("m", "screw shaft axial displacement"),
+    Signal.MOTOR_CURRENT: ("A", "motor current (Eq. 9.1)"),
+    Signal.MOTOR_TORQUE: ("N m", "motor electromagnetic torque k_t*i"),
+    Signal.MOTOR_SPEED: ("rad/s", "motor shaft speed"),
+    Signal.WINDING_TEMPERATURE: ("K", "winding temperature (Eq. 9.2)"),
+    Signal.PRELOAD_FORCE: ("N", "preload force between the nuts"),
+    Signal.EXTERNAL_FORCE: ("N", "external force on the master nut"),
+    Signal.TRANSMITTED_TORQUE: ("N m", "torque through couplings and torque meter T_tm"),
+    Signal.NUT1_CONTACT_FORCE: ("N", "axial contact force of the screw on the master nut"),
+    Signal.NUT2_CONTACT_FORCE: ("N", "axial contact force of the screw on the slave nut"),
+    Signal.SPEED_COMMAND: ("rad/s", "motor speed command after the drive's analog input"),
+    Signal.CURRENT_DEMAND: ("A", "current demand of the speed loop"),
+    Signal.NUT1_SPEED: ("m/s", "master nut (sled) speed"),
+}
+
+# Run status codes returned by the compiled loop.
+STATUS_OK = 0
+STATUS_NONFINITE = 1
+STATUS_OUT_OF_BOUNDS = 2
+STATUS_TEXT = {STATUS_OK: "ok", STATUS_NONFINITE: "diverged", STATUS_OUT_OF_BOUNDS: "diverged"}
+
+# Bound codes (which physical bound the guard tripped on).
+BOUND_REASONS = {
+    0: "",
+    1: "non-finite state (NaN/inf)",
+    2: "sled beyond the stroke limit",
+    3: "motor speed beyond twice the maximum permissible speed",
+    4: "motor current beyond five times the drive/motor maximum",
+    5: "winding temperature beyond 200 degC",
+    6: "ball-groove normal approach beyond the Hertzian validity bound",
+}

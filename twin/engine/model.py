@@ -1,0 +1,228 @@
+"""Assemble the compiled model: constants array, tables and initial state from parameters and scene."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from twin.control.design import screw_inertia, torsional_stiffness
+from twin.engine.layout import N_CONSTANTS, N_STATES, K, S
+from twin.parameters import ParameterSet
+from twin.physics import hertz
+from twin.physics.ball_screw import effective_loaded_balls, groove_centre_distance, helix_angle, nut_axial_force
+from twin.physics.preload import series_stiffness
+from twin.scenes import Scene
+
+CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}
+STIFFNESS_FIT_POINTS = 200
+STIFFNESS_FIT_DEGREE = 6
+STIFFNESS_FIT_TOLERANCE = 1e-5  # relative; far below the 2 % error of the curvature fits (Sec. 3.5.5)
+SIN_ALPHA_MAX = 0.9397  # sin(70 deg): upper validity limit of the fitted curvature formulas (Eqs. 3.20, 3.27); far beyond any load the screw can carry
+
+# Numerical choices (not physics parameters): the friction laws' sign regularisation
+# and the divergence guard's bounds. Documented in docs/model.md.
+LINEAR_VELOCITY_THRESHOLD = 1.0e-4   # m/s: well below the slowest commanded motion (~1 mm/s)
+ANGULAR_VELOCITY_THRESHOLD = 1.0e-2  # rad/s: 8 um/s of nut travel through p/(2 pi), the scale of the linear threshold
+MAX_MOTOR_SPEED_FACTOR = 2.0         # guard: twice the motor's maximum permissible 7000 rpm (Table B.1)
+MOTOR_MAX_PERMISSIBLE_SPEED = 7000.0 * 2.0 * math.pi / 60.0
+MAX_WINDING_TEMPERATURE = 473.15     # K: 200 degC, beyond the insulation class of any servo winding
+MAX_NORMAL_APPROACH = 60.0e-6        # m: ~3x the Hertz approach at the screw's static load C0 = 13 kN
+
+
+@dataclass(frozen=True)
+class Model:
+    """Everything the compiled loop needs for one run."""
+
+    constants: np.ndarray
+    initial_state: np.ndarray
+    position_table: np.ndarray
+    force_table: np.ndarray
+    stiffness_poly: np.ndarray
+
+
+def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis", variable_angle: bool = True,
+                quantizers: bool = True) -> Model:
+    """Derive the model constants (layout :class:`K`) and the initial equilibrium state.
+
+    Parameters
+    ----------
+    scene : Scene
+        Test procedure (conditions and demand profiles).
+    params : ParameterSet
+        Component parameters.
+    curvature : {"thesis", "iso"}
+        Groove curvature formulas: Eqs. 3.20/3.27 (thesis) or Eqs. 3.21/3.28 (ISO 3408-4).
+    variable_angle : bool
+        Variable contact angle of Eq. 9.4 (True) or constant ``alpha_0``.
+    quantizers : bool
+        Encoder, resolver and analog-input quantisation on (True) or ideal.
+    """
+    p = params.values()
+    c = np.zeros(N_CONSTANTS)
+    ratio = p["reducer.ratio"]
+    # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3)
+    c[K.R20] = p["motor.winding_resistance_20C"]
+    c[K.R_TEMP_COEF] = p["motor.resistance_temperature_coefficient"]
+    c[K.INDUCTANCE] = p["motor.inductance"]
+    c[K.TORQUE_CONSTANT] = p["motor.torque_constant"]
+    c[K.SPEED_CONSTANT] = p["motor.speed_constant"]
+    c[K.RATIO] = ratio
+    c[K.EFFICIENCY] = p["reducer.efficiency"]
+    c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
+    c[K.MOTOR_VISCOUS] = p["motor.viscous_damping"]
+    c[K.MR_FRICTION_STATIC] = p["motor.friction_static_torque"]
+    c[K.MR_FRICTION_DYNAMIC] = p["motor.friction_dynamic_torque"]
+    c[K.MR_FRICTION_RATE] = p["motor.friction_stribeck_rate"]
+    c[K.DC_BUS] = p["drive.dc_bus_voltage"]
+    c[K.HALL_TAU] = p["drive.hall_time_constant"]
+    c[K.CURRENT_KP] = p["controller.current_kp"]
+    c[K.CURRENT_KI] = p["controller.current_ki"]
+    c[K.CURRENT_AW_TIME] = p["drive.current_antiwindup_time"]
+    c[K.THERMAL_RESISTANCE] = p["motor.thermal_resistance"]
+    c[K.THERMAL_TAU] = p["motor.thermal_time_constant"]
+    c[K.HEAT_TRANSFER] = p["motor.heat_transfer_coefficient"]
+    c[K.MOTOR_AREA] = p["motor.surface_area"]
+    c[K.EMISSIVITY] = p["motor.emissivity"]
+    c[K.AMBIENT] = scene.condition("room_temperature")
+    # torsional chain (Sec. 9.3 "Torque meter", Eq. 9.7)
+    c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
+    c[K.TORSION_DAMPING] = p["drivetrain.damping"]
+    c[K.REDUCER_BACKLASH] = p["reducer.backlash"]
+    c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
+    c[K.SCREW_DAMPING] = p["ball_screw.screw_rotational_damping"]
+    c[K.SCREW_FRICTION_STATIC] = p["ball_screw.bearing_friction_static_torque"]
+    c[K.SCREW_FRICTION_DYNAMIC] = p["ball_screw.bearing_friction_dynamic_torque"]
+    c[K.SCREW_FRICTION_RATE] = p["ball_screw.bearing_friction_stribeck_rate"]
+    c[K.SCREW_FRICTION_VISCOUS] = p["ball_screw.bearing_viscous_friction"]
+    # screw axial: rear bearing in series with the shaft (Table B.9)
+    pitch_radius = p["ball_screw.pitch_radius"]
+    c[K.SCREW_MASS] = p["ball_screw.screw_density"] * math.pi * pitch_radius**2 * p["ball_screw.screw_length"]
+    c[K.BEARING_STIFFNESS] = p["ball_screw.rear_bearing_axial_stiffness"]
+    c[K.SHAFT_EA] = p["ball_screw.elastic_modulus"] * math.pi * p["ball_screw.screw_root_diameter"] ** 2 / 4.0
+    c[K.SHAFT_LENGTH_0] = p["ball_screw.bearing_to_nut_distance"]
+    c[K.SCREW_AXIAL_DAMPING] = p["ball_screw.screw_axial_damping"]
+    # ball-screw contact (Eqs. 9.4-9.6, 5.5, Sec. 7.3)
+    lead = p["ball_screw.lead"]
+    ball_radius = p["ball_screw.ball_radius"]
+    alpha_e = helix_angle(lead, pitch_radius)
+    alpha_0 = p["ball_screw.contact_angle"]
+    c[K.LEAD_ARM] = lead / (2.0 * math.pi)
+    c[K.COS_HELIX] = math.cos(alpha_e)
+    c[K.CENTRE_DISTANCE] = groove_centre_distance(ball_radius, p["ball_screw.conformity"])
+    c[K.CONTACT_ANGLE_0] = alpha_0
+    sin_min = math.sin(alpha_0)
+    sin_grid = np.linspace(sin_min, SIN_ALPHA_MAX, STIFFNESS_FIT_POINTS)
+    groove_radius = 2.0 * p["ball_screw.conformity"] * ball_radius
+    e_star = hertz.equivalent_modulus(p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"],
+                                      p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"])
+    stiffness = hertz.stiffness_table(
+        np.arcsin(sin_grid), pitch_radius, ball_radius, groove_radius, groove_radius, alpha_e,
+        p["ball_screw.ogival_offset"], e_star, CURVATURE_FORMULAS[curvature])
+    stiffness_poly = fit_stiffness(sin_grid, stiffness)
+    c[K.SIN_ALPHA_MIN] = sin_min
+    c[K.SIN_ALPHA_SPAN] = SIN_ALPHA_MAX - sin_min
+    c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
+    c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
+    c[K.BACKLASH] = scene.condition("backlash")
+    c[K.VARIABLE_ANGLE] = 1.0 if variable_angle else 0.0
+    # nuts, guides (Eq. 9.8, Eq. 7.63)
+    c[K.MASS_NUT1] = p["sled.master_mass"]
+    c[K.MASS_NUT2] = p["sled.slave_mass"]
+    c[K.J_NUT] = p["sled.nut_rotational_inertia"]
+    c[K.GUIDE_ROLL_STIFFNESS] = p["sled.guide_roll_stiffness"]
+    c[K.GUIDE_ROLL_DAMPING] = p["sled.guide_roll_damping"]
+    c[K.GUIDE_FRICTION_STATIC] = p["sled.guide_friction_static"]
+    c[K.GUIDE_FRICTION_DYNAMIC] = p["sled.guide_friction_dynamic"]
+    c[K.GUIDE_FRICTION_RATE] = p["sled.guide_friction_stribeck_rate"]
+    c[K.GUIDE_FRICTION_VISCOUS] = p["sled.guide_viscous_friction"]
+    c[K.SLAVE_FRICTION_FRACTION] = p["sled.slave_friction_fraction"]
+    # preload (Secs. 9.2-9.3)
+    preload = scene.condition("preload")
+    c[K.PRELOAD_STIFFNESS] = series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"]) if preload > 0 else 0.0
+    c[K.PRELOAD_DAMPING] = p["preload.damping"] if preload > 0 else 0.0
+    c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
+    c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
+    c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
+    # digital loops (Table B.3, controller.toml)
+    c[K.SPEED_KP] = p["controller.speed_kp"]
+    c[K.SPEED_KI] = p["controller.speed_ki"]
+    c[K.MAX_CURRENT] = p["motor.max_current"]
+    c[K.POSITION_KP] = p["controller.position_kp"]
+    c[K.POSITION_KI] = p["controller.position_ki"]
+    c[K.SPEED_FULL_SCALE] = p["drive.speed_command_full_scale"]
+    if quantizers:
+        c[K.SPEED_COMMAND_LSB] = p["drive.speed_command_full_scale"] / 2.0 ** p["drive.analog_input_bits"]
+        c[K.ENCODER_RESOLUTION] = p["sensors.linear_encoder_resolution"]
+        c[K.RESOLVER_RESOLUTION] = p["sensors.resolver_resolution"]
+    # divergence guard
+    c[K.STROKE_LIMIT] = p["sled.stroke_limit"]
+    c[K.MAX_MOTOR_SPEED] = MAX_MOTOR_SPEED_FACTOR * MOTOR_MAX_PERMISSIBLE_SPEED
+    c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
+    c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
+
+    x0 = preload_equilibrium(c, stiffness_poly, preload)
+    c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
+    c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
+    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly)
+
+
+def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """Power-series coefficients (in the normalised variable of ``stiffness_at``) of ``K(sin alpha)``.
+
+    Raises
+    ------
+    RuntimeError
+        If the fit misses any grid value by more than ``STIFFNESS_FIT_TOLERANCE``.
+    """
+    u = 2.0 * (sin_grid - sin_grid[0]) / (sin_grid[-1] - sin_grid[0]) - 1.0
+    coefficients = np.polynomial.chebyshev.cheb2poly(np.polynomial.chebyshev.chebfit(u, stiffness, STIFFNESS_FIT_DEGREE))
+    error = np.max(np.abs(np.polynomial.polynomial.polyval(u, coefficients) / stiffness - 1.0))
+    if error > STIFFNESS_FIT_TOLERANCE:
+        raise RuntimeError(f"contact stiffness fit error {error:.2e} exceeds {STIFFNESS_FIT_TOLERANCE:.0e}")
+    return coefficients
+
+
+def contact_force(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
+    """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N]."""
+    return nut_axial_force(relative_position, 0.0, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE],
+                           c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+                           0.0, c[K.LOADED_BALLS], c[K.VARIABLE_ANGLE] > 0.5)[0]
+
+
+def contact_position_for_force(c: np.ndarray, stiffness_poly: np.ndarray, force: float) -> float:
+    """Relative position ``dx`` at which the static contact force equals ``force`` (brentq)."""
+    if force == 0.0:
+        return 0.0
+    side = math.copysign(1.0, force)
+    half_gap = 0.5 * c[K.BACKLASH]
+    upper = half_gap + 1e-6
+    while abs(contact_force(c, stiffness_poly, side * upper)) < abs(force):
+        upper = half_gap + 2.0 * (upper - half_gap)
+    return side * brentq(lambda d: abs(contact_force(c, stiffness_poly, side * d)) - abs(force), half_gap, upper,
+                         xtol=1e-15, rtol=1e-13)
+
+
+def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: float) -> np.ndarray:
+    """Static equilibrium at rest with the scene's preload and no external force.
+
+    The spring-set compression is chosen so that the preload *at equilibrium*
+    equals the scene value (Secs. 9.2-9.3: the preload is set by tightening the
+    caps and read on the load cell). Master nut: ``f_1 = s F_pr``; slave:
+    ``f_2 = -s F_pr`` (Eq. 9.8 with ``s = +1`` for O, ``-1`` for X); screw axial
+    force ``f_1 + f_2 = 0``; nut rotations balance the guides' roll stiffness.
+    """
+    x = np.zeros(N_STATES)
+    x[S.WINDING_TEMP] = c[K.AMBIENT]
+    if preload <= 0.0:
+        return x
+    orientation = c[K.PRELOAD_ORIENTATION]
+    arm = c[K.LEAD_ARM]
+    for force, pos, ang in ((orientation * preload, S.NUT1_POSITION, S.NUT1_ANGLE),
+                            (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
+        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS]
+        x[pos] = -arm * x[ang] - contact_position_for_force(c, stiffness_poly, force)
+    c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
+    return x

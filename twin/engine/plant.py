@@ -1,0 +1,140 @@
+"""Continuous-time right-hand side of the bench (Eqs. 9.1-9.8), compiled with numba.
+
+The digital controllers are outside: the speed loop's current demand enters as
+a held input (zero-order hold between drive samples).
+"""
+
+import numba
+
+from twin.engine.layout import K, S
+from twin.physics.ball_screw import nut_axial_force
+from twin.physics.coupling import elasto_backlash
+from twin.physics.friction import stribeck_friction
+from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
+from twin.physics.preload import preload_force
+from twin.scenes.profiles import profile_value
+
+
+@numba.njit(cache=True)
+def internal_forces(t, x, c, force_table, stiffness_poly):
+    """Coupling forces of the mechanical chain at state ``x``.
+
+    Returns
+    -------
+    (transmitted_torque, f_nut1, f_nut2, preload, external, p_nut1, p_nut2)
+        ``T_tm`` [N m] (Sec. 9.3), screw-on-nut axial forces [N] (Eqs. 9.4-9.6),
+        preload magnitude [N], external force [N], per-sphere normal loads [N].
+    """
+    torque = elasto_backlash(
+        x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], x[S.REDUCER_SPEED] - x[S.SCREW_SPEED],
+        c[K.TORSION_STIFFNESS], c[K.TORSION_DAMPING], c[K.REDUCER_BACKLASH],
+    )
+    arm = c[K.LEAD_ARM]
+    variable = c[K.VARIABLE_ANGLE] > 0.5
+    dx1 = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[S.NUT1_ANGLE]) - x[S.NUT1_POSITION]
+    dv1 = x[S.SCREW_AXIAL_SPEED] + arm * (x[S.SCREW_SPEED] - x[S.NUT1_ANGULAR_SPEED]) - x[S.NUT1_SPEED]
+    dx2 = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[S.NUT2_ANGLE]) - x[S.NUT2_POSITION]
+    dv2 = x[S.SCREW_AXIAL_SPEED] + arm * (x[S.SCREW_SPEED] - x[S.NUT2_ANGULAR_SPEED]) - x[S.NUT2_SPEED]
+    f1, p1, _ = nut_axial_force(dx1, dv1, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
+                                stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+                                c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
+    f2, p2, _ = nut_axial_force(dx2, dv2, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
+                                stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+                                c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
+    preload = preload_force(
+        x[S.NUT2_POSITION] - x[S.NUT1_POSITION], x[S.NUT2_SPEED] - x[S.NUT1_SPEED],
+        c[K.PRELOAD_COMPRESSION], c[K.PRELOAD_STIFFNESS], c[K.PRELOAD_DAMPING], c[K.PRELOAD_ORIENTATION],
+    )
+    external = profile_value(force_table, t)
+    return torque, f1, f2, preload, external, p1, p2
+
+
+@numba.njit(cache=True)
+def current_loop_voltage(x, c, current_demand):
+    """Analog PI output (unsaturated) and the voltage after the DC-bus duty-cycle limit."""
+    demand_voltage = c[K.CURRENT_KP] * (current_demand - x[S.HALL_CURRENT]) + x[S.CURRENT_PI]
+    bus = c[K.DC_BUS]
+    return demand_voltage, min(max(demand_voltage, -bus), bus)
+
+
+@numba.njit(cache=True)
+def rhs(t, x, c, current_demand, force_table, stiffness_poly, dxdt):
+    """Write ``dx/dt`` of the bench into ``dxdt``.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    x : 1-D array
+        State (layout :class:`twin.engine.layout.S`).
+    c : 1-D array
+        Model constants (layout :class:`twin.engine.layout.K`).
+    current_demand : float
+        Held output of the digital speed loop [A].
+    force_table, stiffness_poly : arrays
+        Compiled external-force profile and the contact stiffness table.
+    dxdt : 1-D array
+        Output.
+    """
+    ratio = c[K.RATIO]
+    # --- drive electronics and motor (Eqs. 9.1, 9.2; analog PI with back-calculation anti-windup)
+    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
+    resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
+    dxdt[S.CURRENT] = current_derivative(voltage, x[S.CURRENT], x[S.REDUCER_SPEED], resistance,
+                                         c[K.INDUCTANCE], c[K.SPEED_CONSTANT], ratio)
+    dxdt[S.CURRENT_PI] = (c[K.CURRENT_KI] * (current_demand - x[S.HALL_CURRENT])
+                          + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME])
+    dxdt[S.HALL_CURRENT] = (x[S.CURRENT] - x[S.HALL_CURRENT]) / c[K.HALL_TAU]
+    dxdt[S.WINDING_TEMP] = winding_temperature_derivative(
+        x[S.WINDING_TEMP], c[K.AMBIENT], resistance * x[S.CURRENT] ** 2, c[K.THERMAL_RESISTANCE],
+        c[K.THERMAL_TAU], c[K.HEAT_TRANSFER], c[K.MOTOR_AREA], c[K.EMISSIVITY],
+    )
+
+    torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
+
+    # --- motor-reducer mechanics (Eq. 9.3), written for the reducer output angle
+    w_r = x[S.REDUCER_SPEED]
+    friction_mr = stribeck_friction(w_r, c[K.MR_FRICTION_STATIC], c[K.MR_FRICTION_DYNAMIC],
+                                    c[K.MR_FRICTION_RATE], 0.0, c[K.ANGULAR_V_THRESHOLD])
+    drive = (c[K.TORQUE_CONSTANT] * x[S.CURRENT] * c[K.EFFICIENCY] - c[K.MOTOR_VISCOUS] * ratio * w_r) * ratio
+    dxdt[S.REDUCER_ANGLE] = w_r
+    dxdt[S.REDUCER_SPEED] = (drive - friction_mr - torque) / c[K.J_MOTOR_SIDE]
+
+    # --- screw rotation (Eq. 9.7): the nuts' reaction is -(p/2pi) * sum of their axial forces
+    arm = c[K.LEAD_ARM]
+    w_s = x[S.SCREW_SPEED]
+    friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC], c[K.SCREW_FRICTION_DYNAMIC],
+                                   c[K.SCREW_FRICTION_RATE], c[K.SCREW_FRICTION_VISCOUS], c[K.ANGULAR_V_THRESHOLD])
+    dxdt[S.SCREW_ANGLE] = w_s
+    dxdt[S.SCREW_SPEED] = (torque - c[K.SCREW_DAMPING] * w_s - friction_s - arm * (f1 + f2)) / c[K.J_SCREW_SIDE]
+
+    # --- screw axial motion: rear bearing in series with the shaft length to the sled (Sec. 9.3)
+    shaft_length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
+    axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + shaft_length / c[K.SHAFT_EA])
+    # The stiffness depends on the sled position, so the spring energy k(x_n1) x_s^2 / 2
+    # also pushes the sled: -dE/dx_n1 = k^2 x_s^2 / (2 EA). Tiny, but it keeps the model conservative.
+    stiffness_gradient_force = 0.5 * axial_stiffness**2 * x[S.SCREW_AXIAL] ** 2 / c[K.SHAFT_EA]
+    dxdt[S.SCREW_AXIAL] = x[S.SCREW_AXIAL_SPEED]
+    dxdt[S.SCREW_AXIAL_SPEED] = (-(f1 + f2) - axial_stiffness * x[S.SCREW_AXIAL]
+                                 - c[K.SCREW_AXIAL_DAMPING] * x[S.SCREW_AXIAL_SPEED]) / c[K.SCREW_MASS]
+
+    # --- nuts (Eq. 9.8): master carries the external force, preload acts between the nuts
+    orientation = c[K.PRELOAD_ORIENTATION]
+    guide_1 = stribeck_friction(x[S.NUT1_SPEED], c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC],
+                                c[K.GUIDE_FRICTION_RATE], c[K.GUIDE_FRICTION_VISCOUS], c[K.LINEAR_V_THRESHOLD])
+    guide_2 = c[K.SLAVE_FRICTION_FRACTION] * stribeck_friction(
+        x[S.NUT2_SPEED], c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC],
+        c[K.GUIDE_FRICTION_RATE], c[K.GUIDE_FRICTION_VISCOUS], c[K.LINEAR_V_THRESHOLD])
+    dxdt[S.NUT1_POSITION] = x[S.NUT1_SPEED]
+    dxdt[S.NUT1_SPEED] = (f1 - guide_1 - orientation * preload + external + stiffness_gradient_force) / c[K.MASS_NUT1]
+    dxdt[S.NUT2_POSITION] = x[S.NUT2_SPEED]
+    dxdt[S.NUT2_SPEED] = (f2 - guide_2 + orientation * preload) / c[K.MASS_NUT2]
+
+    # --- nut rotation restrained by the linear guides (Sec. 9.3): contact torque (p/2pi) f_i
+    k_roll = c[K.GUIDE_ROLL_STIFFNESS]
+    c_roll = c[K.GUIDE_ROLL_DAMPING]
+    dxdt[S.NUT1_ANGLE] = x[S.NUT1_ANGULAR_SPEED]
+    dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 - k_roll * x[S.NUT1_ANGLE] - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
+    dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
+    dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 - k_roll * x[S.NUT2_ANGLE] - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
+

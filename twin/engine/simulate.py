@@ -1,0 +1,132 @@
+"""``simulate``: the single entry point that runs one bench test and returns an xarray Dataset."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import xarray as xr
+
+from twin.engine.integrators import INTEGRATORS
+from twin.engine.layout import BOUND_REASONS, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, Signal
+from twin.engine.loop import run_loop
+from twin.engine.model import CURVATURE_FORMULAS, build_model
+from twin.errors import OptionError, SimulationFailed
+from twin.parameters import ParameterSet, load_parameters
+from twin.scenes import Scene, load_scene
+
+DEFAULT_INTEGRATOR = "rk4"
+DEFAULT_DT = 3.125e-5      # s; see docs/model.md "Step size" (a quarter of the drive's speed-loop period)
+DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
+
+
+def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
+    n = round(period / dt)
+    if n < 1 or abs(n * dt - period) > 1e-9 * period:
+        problems.append(f"dt: {dt:g} s must divide the {what} ({period:g} s) into a whole number of steps")
+        return 1
+    return n
+
+
+def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
+             integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
+             duration: float | None = None, curvature: str = "thesis", variable_angle: bool = True,
+             quantizers: bool = True, throw: bool = True) -> xr.Dataset:
+    """Run one bench test.
+
+    Parameters
+    ----------
+    scene : Scene or str
+        Test procedure or the name/path of one (see :func:`twin.list_scenes`).
+    params : ParameterSet, str or None
+        Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
+    integrator : {"rk4", "semi_implicit_euler"}
+        Fixed-step method of the compiled loop.
+    dt : float
+        Integration step [s]; must divide the speed- and position-loop periods.
+    output_dt : float
+        Spacing of the recorded signals [s]; a multiple of ``dt``.
+    duration : float, optional
+        Override of the scene's duration [s].
+    curvature : {"thesis", "iso"}
+        Groove curvature formulas (Eqs. 3.20/3.27 or 3.21/3.28).
+    variable_angle : bool
+        Eq. 9.4 variable contact angle (True) or constant design angle.
+    quantizers : bool
+        Quantisation of the encoder, resolver and the drive's analog input.
+    throw : bool
+        If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
+        is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
+        and ``t_reached``, and the signals up to that time.
+
+    Returns
+    -------
+    xarray.Dataset
+        Signals on ``time`` [s] with ``units`` attributes, the scalar
+        ``backlash_feature_true`` [m] (Eq. 9.12 on true signals) and run metadata.
+
+    Raises
+    ------
+    OptionError, SceneError, ParameterError
+        On invalid input, before anything runs.
+    """
+    scene = load_scene(scene)
+    if not isinstance(params, ParameterSet):
+        params = load_parameters("bench" if params is None else params)
+    if duration is not None:
+        scene = scene.with_duration(duration)
+    problems: list[str] = []
+    if integrator not in INTEGRATORS:
+        problems.append(f"integrator: {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+    if curvature not in CURVATURE_FORMULAS:
+        problems.append(f"curvature: {curvature!r} is not one of {', '.join(CURVATURE_FORMULAS)}")
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
+        problems.append(f"dt: {dt!r} must be a step in (0, 1e-3] s")
+        dt = 1e-3
+    speed_every = _steps_per(params.value("drive.speed_loop_sample_time"), dt, "speed-loop period", problems)
+    position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period", problems)
+    output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
+    if problems:
+        raise OptionError(problems)
+
+    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle, quantizers=quantizers)
+    n_steps = int(round(scene.duration / dt))
+    output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
+    x = model.initial_state.copy()
+    start = time.perf_counter()
+    status, bound, steps_done, rows, feature_sum, feature_samples = run_loop(
+        x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
+        speed_every, position_every, output_every, INTEGRATORS[integrator], output)
+    wall_time = time.perf_counter() - start
+    t_reached = steps_done * dt
+    reason = BOUND_REASONS[bound]
+    if status != STATUS_OK and throw:
+        raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
+
+    time_axis = np.arange(rows) * output_every * dt
+    data_vars = {
+        signal.name.lower(): ("time", output[:rows, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
+        for signal in Signal
+    }
+    feature = feature_sum / feature_samples if (status == STATUS_OK and feature_samples) else np.nan
+    data_vars["backlash_feature_true"] = ((), feature, {
+        "units": "m", "long_name": "backlash feature f_b on true signals (Eq. 9.12)",
+        "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
+    return xr.Dataset(
+        data_vars,
+        coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"})},
+        attrs={
+            "status": STATUS_TEXT[status],
+            "failure_reason": reason,
+            "t_reached": t_reached,
+            "scene": scene.name,
+            "parameter_set": params.name,
+            "integrator": integrator,
+            "dt": dt,
+            "curvature": curvature,
+            "variable_contact_angle": int(variable_angle),
+            "quantizers": int(quantizers),
+            "wall_time": wall_time,
+        },
+    )

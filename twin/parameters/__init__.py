@@ -1,0 +1,223 @@
+"""Parameter sets: named, unit-tagged values with their source.
+
+A parameter set is a directory of TOML files, one per component; a parameter's
+full name is ``<file stem>.<key>``. Each entry carries ``value``, ``unit`` and
+exactly one of ``source`` (a datasheet table or thesis equation) or
+``assumption`` (the reasoning behind a value the thesis does not give), plus
+optional bounds ``min`` / ``gt`` / ``max`` that every override is checked
+against. See ``docs/architecture.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Iterator, Mapping
+
+from twin.errors import ParameterError
+
+BUILTIN_DIR = Path(__file__).parent
+_ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5"}
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter value with its unit, provenance and allowed range."""
+
+    name: str
+    value: float
+    unit: str
+    source: str | None = None
+    assumption: str | None = None
+    min: float | None = None
+    gt: float | None = None
+    max: float | None = None
+    table_9_5: str | None = None
+
+    @property
+    def is_assumption(self) -> bool:
+        return self.assumption is not None
+
+    def allowed(self) -> str:
+        """Human-readable allowed range, used in error messages."""
+        parts = []
+        if self.gt is not None:
+            parts.append(f"> {self.gt:g}")
+        if self.min is not None:
+            parts.append(f">= {self.min:g}")
+        if self.max is not None:
+            parts.append(f"<= {self.max:g}")
+        return " and ".join(parts) if parts else "any finite number"
+
+    def check(self, value: float) -> str | None:
+        """Return a problem description if ``value`` is not allowed, else None."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return f"{self.name}: value {value!r} is not a number ({self.unit})"
+        if not math.isfinite(value):
+            return f"{self.name}: value {value!r} is not finite; allowed: {self.allowed()} [{self.unit}]"
+        if (
+            (self.gt is not None and not value > self.gt)
+            or (self.min is not None and value < self.min)
+            or (self.max is not None and value > self.max)
+        ):
+            return f"{self.name}: value {value:g} {self.unit} is out of range; allowed: {self.allowed()}"
+        return None
+
+
+class ParameterSet(Mapping[str, Parameter]):
+    """An immutable, validated mapping ``name -> Parameter``.
+
+    Load with :func:`load_parameters`; derive variants with :meth:`with_values`.
+    """
+
+    def __init__(self, name: str, parameters: Mapping[str, Parameter]):
+        self.name = name
+        self._parameters = MappingProxyType(dict(parameters))
+
+    def __getitem__(self, name: str) -> Parameter:
+        try:
+            return self._parameters[name]
+        except KeyError:
+            raise ParameterError([_unknown(name, self._parameters)]) from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._parameters)
+
+    def __len__(self) -> int:
+        return len(self._parameters)
+
+    @property
+    def names(self) -> list[str]:
+        return list(self._parameters)
+
+    def value(self, name: str) -> float:
+        return self[name].value
+
+    def values(self) -> dict[str, float]:  # type: ignore[override]
+        """Plain ``{name: value}`` dictionary (SI units)."""
+        return {n: p.value for n, p in self._parameters.items()}
+
+    def with_values(self, overrides: Mapping[str, float]) -> "ParameterSet":
+        """Return a copy with some values replaced; every override is validated.
+
+        Raises
+        ------
+        ParameterError
+            Listing every unknown name and every out-of-range value at once.
+        """
+        problems = []
+        updated = dict(self._parameters)
+        for name, value in overrides.items():
+            if name not in self._parameters:
+                problems.append(_unknown(name, self._parameters))
+                continue
+            problem = self._parameters[name].check(value)
+            if problem:
+                problems.append(problem)
+            else:
+                updated[name] = replace(self._parameters[name], value=float(value))
+        if problems:
+            raise ParameterError(problems)
+        return ParameterSet(self.name, updated)
+
+    def table(self) -> list[dict]:
+        """Rows (name, value, unit, source/assumption) for documentation and reports."""
+        return [
+            {
+                "name": p.name,
+                "value": p.value,
+                "unit": p.unit,
+                "provenance": p.source if p.source is not None else f"ASSUMPTION: {p.assumption}",
+            }
+            for p in self._parameters.values()
+        ]
+
+
+def _unknown(name: str, known: Mapping[str, Parameter]) -> str:
+    group = name.split(".")[0]
+    siblings = sorted(n for n in known if n.startswith(group + "."))
+    hint = f"; known in '{group}': {', '.join(siblings)}" if siblings else f"; known groups: {', '.join(sorted({n.split('.')[0] for n in known}))}"
+    return f"{name}: unknown parameter{hint}"
+
+
+def available_parameter_sets() -> list[str]:
+    """Names of the parameter sets shipped with the package."""
+    return sorted(p.name for p in BUILTIN_DIR.iterdir() if p.is_dir() and any(p.glob("*.toml")))
+
+
+def load_parameters(name_or_path: str | Path = "bench") -> ParameterSet:
+    """Load a parameter set by built-in name or from a directory / single TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A built-in set name (see :func:`available_parameter_sets`), a directory
+        of component TOML files, or one TOML file.
+
+    Raises
+    ------
+    ParameterError
+        If the set does not exist or any entry is malformed (all problems listed).
+    """
+    path = Path(name_or_path)
+    if not path.exists():
+        builtin = BUILTIN_DIR / str(name_or_path)
+        if not builtin.is_dir():
+            raise ParameterError(
+                [f"params: '{name_or_path}' is neither a file/directory nor a built-in set "
+                 f"({', '.join(available_parameter_sets())})"]
+            )
+        path = builtin
+    files = sorted(path.glob("*.toml")) if path.is_dir() else [path]
+    problems: list[str] = []
+    parameters: dict[str, Parameter] = {}
+    for file in files:
+        try:
+            data = tomllib.loads(file.read_text())
+        except tomllib.TOMLDecodeError as exc:
+            problems.append(f"{file.name}: not valid TOML ({exc})")
+            continue
+        for key, entry in data.items():
+            name = f"{file.stem}.{key}"
+            parameter, entry_problems = _parse_entry(name, entry)
+            problems.extend(entry_problems)
+            if parameter is not None:
+                parameters[name] = parameter
+    if problems:
+        raise ParameterError(problems)
+    return ParameterSet(path.stem if path.is_file() else path.name, parameters)
+
+
+def _parse_entry(name: str, entry) -> tuple[Parameter | None, list[str]]:
+    if not isinstance(entry, dict):
+        return None, [f"{name}: expected a table with value/unit/source, got {type(entry).__name__}"]
+    problems = [f"{name}.{k}: unknown field; allowed: {', '.join(sorted(_ALLOWED_KEYS))}" for k in entry if k not in _ALLOWED_KEYS]
+    if "value" not in entry:
+        problems.append(f"{name}.value: missing")
+    if not isinstance(entry.get("unit"), str):
+        problems.append(f"{name}.unit: missing or not a string (use SI, '1' for dimensionless)")
+    if ("source" in entry) == ("assumption" in entry):
+        problems.append(f"{name}: give exactly one of 'source' (datasheet/equation) or 'assumption' (reasoning)")
+    for bound in ("min", "gt", "max"):
+        if bound in entry and not isinstance(entry[bound], (int, float)):
+            problems.append(f"{name}.{bound}: must be a number")
+    if problems:
+        return None, problems
+    parameter = Parameter(
+        name=name,
+        value=entry["value"],
+        unit=entry["unit"],
+        source=entry.get("source"),
+        assumption=entry.get("assumption"),
+        min=entry.get("min"),
+        gt=entry.get("gt"),
+        max=entry.get("max"),
+        table_9_5=entry.get("table_9_5"),
+    )
+    problem = parameter.check(entry["value"])
+    if problem:
+        return None, [problem]
+    return replace(parameter, value=float(entry["value"])), []

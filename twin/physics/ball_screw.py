@@ -1,0 +1,150 @@
+"""Reduced ball screw: per-sphere double-sided elasto-backlash Hertzian contact (Sec. 9.3).
+
+Sign convention (documented choice between Eqs. 9.5 and 9.12)
+-------------------------------------------------------------
+A positive screw rotation ``theta_s`` advances the nuts along ``+x``, so the
+screw's *equivalent linear position* is ``x_eq = p theta_s / (2 pi)``: the
+sign of Eq. 9.12. Eq. 9.5 writes ``-p theta_s/(2 pi)``, i.e. the opposite
+angle sign (its right-hand screw turns negatively for a positive stroke,
+Fig. 9.12c); flipping the angle sign maps one onto the other. The relative
+axial position of nut ``i`` (Eq. 9.5 in this convention) is
+
+    dx_i = x_s + p (theta_s - theta_ni) / (2 pi) - x_ni
+
+where ``x_s`` is the screw axial displacement, ``theta_ni`` the nut rotation
+allowed by the guides and ``x_ni`` the nut translation (each from its
+assembled, centred position). ``dx_i > b/2`` loads the flanks that push the
+nut towards ``+x``; ``|dx_i| < b/2`` is the open backlash gap.
+
+Contact law
+-----------
+The axial interference, projected on the plane normal to the thread, is
+``delta_a = (|dx| - b/2) cos(alpha_e)``. The ball centre moves along the line
+of the two groove curvature centres, distant ``A0 = (r_s - r_b) + (r_n - r_b)``,
+so the contact angle and the normal approach are (Eq. 9.4, in the exact
+angular-contact-bearing form of Harris & Kotzalas, *Rolling Bearing Analysis*,
+2007, Sec. 2.4; the printed Eq. 9.4 is its first-order form)
+
+    tan(alpha) = tan(alpha_0) + delta_a / (A0 cos(alpha_0)),
+    delta_n    = A0 cos(alpha_0) / cos(alpha) - A0.
+
+The normal load per sphere is Hertzian (Eq. 7.28) with the stiffness of the
+sphere-screw and sphere-nut contacts in series, ``K(alpha)`` (Sec. 7.3 with the
+groove curvatures of Sec. 3.5.5, fitted by a polynomial in ``sin(alpha)``), plus the
+saturated damping of Eq. 7.29 with ``C_H = b_h sqrt(K)`` (Eq. 7.54). Its axial
+component is ``P sin(alpha) cos(alpha_e)`` (Eq. 9.6) and ``Z_eff`` spheres carry
+it (Eq. 5.5). Because ``d(delta_n)/d(delta_a) = sin(alpha)`` exactly, the
+axial force is the derivative of the stored elastic energy: the undamped
+contact is conservative.
+"""
+
+import math
+
+import numba
+
+from twin.physics.coupling import saturated_damping
+
+
+@numba.njit(cache=True)
+def contact_geometry(axial_interference, centre_distance, contact_angle_0):
+    """Normal approach and ``sin(alpha)`` for an axial interference (Eq. 9.4, exact form).
+
+    Parameters
+    ----------
+    axial_interference : float
+        ``delta_a >= 0`` on the plane normal to the thread [m].
+    centre_distance : float
+        ``A0``, distance of the groove curvature centres at first contact [m].
+    contact_angle_0 : float
+        Design contact angle ``alpha_0`` [rad].
+
+    Returns
+    -------
+    (delta_n, sin_alpha)
+    """
+    radial = centre_distance * math.cos(contact_angle_0)
+    axial = centre_distance * math.sin(contact_angle_0) + axial_interference
+    distance = math.sqrt(radial * radial + axial * axial)
+    return distance - centre_distance, axial / distance
+
+
+@numba.njit(cache=True)
+def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
+    """Series Hertz stiffness ``K(alpha)`` from its polynomial fit in ``sin(alpha)`` (Horner).
+
+    The fit variable ``u = 2 (sin(alpha) - sin_min)/span - 1`` is clamped to [-1, 1]:
+    the curvature formulas are only fitted up to 70 deg (Sec. 3.5.5). A polynomial,
+    unlike a piecewise-linear table, keeps the force smooth, so the integrators
+    keep their order (tests/engine/test_energy_convergence.py).
+    """
+    u = 2.0 * (sin_alpha - sin_alpha_min) / sin_alpha_span - 1.0
+    u = min(max(u, -1.0), 1.0)
+    value = 0.0
+    for k in range(coefficients.shape[0] - 1, -1, -1):
+        value = value * u + coefficients[k]
+    return value
+
+
+@numba.njit(cache=True)
+def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance,
+                    contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_coefficient,
+                    loaded_balls, variable_angle):
+    """Axial force of the screw on one nut (Eqs. 9.4-9.6, 7.28, 7.29, 7.54, 5.5).
+
+    Parameters
+    ----------
+    relative_position, relative_velocity : float
+        ``dx_i`` and its rate (module docstring) [m, m/s].
+    backlash : float
+        Total axial play ``b`` of the nut [m].
+    cos_helix : float
+        ``cos(alpha_e)``.
+    centre_distance, contact_angle_0 : float
+        ``A0`` [m], ``alpha_0`` [rad].
+    stiffness_coefficients : 1-D array
+        Polynomial fit of the series Hertz stiffness ``K`` [N/m^1.5] (:func:`stiffness_at`).
+    sin_alpha_min, sin_alpha_span : float
+        Range of ``sin(alpha)`` covered by the fit.
+    damping_coefficient : float
+        ``b_h`` of Eq. 7.54.
+    loaded_balls : float
+        ``Z_eff``.
+    variable_angle : bool
+        False freezes the contact angle at ``alpha_0`` (cheaper, for scenes that do not need it).
+
+    Returns
+    -------
+    (force, normal_load, sin_alpha)
+        ``force`` acts on the nut along ``+x`` (and its reaction on the screw);
+        ``normal_load`` is ``P`` per sphere [N].
+    """
+    gap = abs(relative_position) - 0.5 * backlash
+    if gap <= 0.0:
+        return 0.0, 0.0, math.sin(contact_angle_0)
+    side = 1.0 if relative_position > 0.0 else -1.0
+    delta_a = gap * cos_helix
+    if variable_angle:
+        delta_n, sin_alpha = contact_geometry(delta_a, centre_distance, contact_angle_0)
+    else:
+        sin_alpha = math.sin(contact_angle_0)
+        delta_n = delta_a * sin_alpha
+    stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
+    elastic = stiffness * delta_n * math.sqrt(delta_n)
+    approach_rate = side * relative_velocity * cos_helix * sin_alpha
+    normal = elastic + saturated_damping(elastic, damping_coefficient * math.sqrt(stiffness) * approach_rate)
+    return side * loaded_balls * normal * sin_alpha * cos_helix, normal, sin_alpha
+
+
+def effective_loaded_balls(total_balls: float, loaded_fraction: float) -> int:
+    """Eq. 5.5: ``Z_eff = floor(0.65 Z_tot)`` (the fraction is a parameter)."""
+    return int(math.floor(loaded_fraction * total_balls + 1e-9))
+
+
+def groove_centre_distance(ball_radius: float, conformity: float) -> float:
+    """``A0 = r_s + r_n - 2 r_b = 2 (2 f - 1) r_b`` for equal screw/nut conformity ``f`` [m] (Eq. 9.4)."""
+    return 2.0 * (2.0 * conformity - 1.0) * ball_radius
+
+
+def helix_angle(lead: float, pitch_radius: float) -> float:
+    """Helix angle ``alpha_e = atan(p / (2 pi r_m))`` [rad] (5.68 deg for Table 7.5, as listed there)."""
+    return math.atan(lead / (2.0 * math.pi * pitch_radius))
