@@ -26,6 +26,8 @@ from scipy import stats
 
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
+#: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
+_EXPLAINED = 1e-18
 
 
 def _pearson(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -85,11 +87,11 @@ def prcc(X, y) -> np.ndarray:
 
     The PRCC of column ``j`` is the Pearson correlation of the residuals of
     ``rank(x_j)`` and ``rank(y)`` after linear regression (with intercept) on
-    the ranks of the other columns (Marino et al. 2008, J. Theor. Biol. 254).
-    It is computed in closed form from the inverse ``P`` of the rank
-    correlation matrix: ``-P[j, y] / sqrt(P[j, j] P[y, y])``. Constant columns
-    are left out of the regression and get NaN, as does everything when there
-    are too few rows.
+    the ranks of the other columns (Marino et al. 2008, J. Theor. Biol. 254,
+    Sec. 2.4), computed here by that definition. Constant columns are left out
+    of the regressions and get NaN; so does a column whose residual is zero
+    (the other columns explain it, or ``y``, completely) and every column when
+    there are too few rows.
 
     Parameters
     ----------
@@ -105,11 +107,13 @@ def prcc(X, y) -> np.ndarray:
     varying = np.flatnonzero(np.ptp(X, axis=0) > 0)
     if len(varying) == 0 or np.ptp(y) == 0 or len(y) < len(varying) + 3:
         return out
-    ranks = stats.rankdata(np.column_stack([X[:, varying], y]), axis=0)
-    precision = np.linalg.pinv(np.corrcoef(ranks, rowvar=False))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out[varying] = -precision[:-1, -1] / np.sqrt(np.diag(precision)[:-1] * precision[-1, -1])
-    return np.clip(out, -1.0, 1.0)
+    R, ry = stats.rankdata(X[:, varying], axis=0), stats.rankdata(y)
+    for k, j in enumerate(varying):
+        others = np.column_stack([np.ones(len(y)), np.delete(R, k, axis=1)])
+        rx, rr = (v - others @ np.linalg.lstsq(others, v, rcond=None)[0] for v in (R[:, k], ry))
+        if min(rx @ rx, rr @ rr) > _EXPLAINED * len(y) ** 3:  # rank variance ~ n^3 / 12
+            out[j] = _pearson(rx, rr)
+    return out
 
 
 def overlap_coefficient(a, b, bins: int | None = None) -> float:

@@ -29,8 +29,8 @@ def quantize(value, lsb):
 
     Mid-tread (zero is a reconstruction level) is the transfer function of
     bipolar converters and resolver-to-digital converters: a zero input reads
-    exactly zero and the error is bounded by ±lsb/2. Ties round up
-    (``floor(x + 1/2)``) rather than to even, as a comparator ladder does.
+    exactly zero and the error is bounded by ±lsb/2. Ties round towards
+    +inf (``floor(x + 1/2)``), one fixed code transition, not to even.
 
     Parameters
     ----------
@@ -160,25 +160,12 @@ def sigma_from_range(half_range: float) -> float:
     """Standard deviation of a Table 9.5 Gaussian row from its ± half range.
 
     Convention (``docs/sensors.md``): a datasheet tolerance ±h is a guaranteed
-    acceptance limit and is read as ±3 sigma, so ``sigma = h / 3``; samples are
-    truncated at ±h (:func:`draw_range_gaussian`), which removes 0.27 % of
-    the mass and keeps every drawn value inside the parameter bounds.
+    acceptance limit and is read as ±3 sigma, so ``sigma = h / 3``; the
+    campaign truncates sensor error draws at ±h (``truncated_gaussian``),
+    which removes 0.27 % of the mass and keeps every value inside the
+    parameter bounds.
     """
     if not half_range >= 0.0:
         raise ValueError(f"half_range: must be >= 0, got {half_range!r}")
     return half_range / RANGE_SIGMAS
 
-
-def draw_range_gaussian(rng: np.random.Generator, nominal: float, half_range: float, size: int) -> np.ndarray:
-    """Draw a Table 9.5 Gaussian row: N(nominal, (h/3)^2) truncated at nominal ± h.
-
-    Rejection sampling: each pass keeps 99.73 % of the draws, so the loop
-    ends after a few passes.
-    """
-    sigma = sigma_from_range(half_range)
-    out = rng.normal(nominal, sigma, size=size)
-    outside = np.abs(out - nominal) > half_range
-    while outside.any():
-        out[outside] = rng.normal(nominal, sigma, size=int(outside.sum()))
-        outside = np.abs(out - nominal) > half_range
-    return out

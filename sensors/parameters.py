@@ -28,10 +28,11 @@ def validate_sensor_values(params: ParameterSet | Mapping[str, float] | None = N
     Parameters
     ----------
     params : ParameterSet or mapping or None
-        A parameter set (e.g. ``twin.load_parameters("bench")``) or a mapping
-        of full names to values (SI units). Entries of other groups are
-        ignored (they belong to other components); ``sensors.*`` entries
-        override the bench values; missing ones take the bench values.
+        A parameter set (e.g. ``twin.load_parameters("bench")``), already
+        validated against its own files, or a mapping of full names to values
+        (SI units), validated here against the bench file. Entries of other
+        groups are ignored (they belong to other components); ``sensors.*``
+        entries override the bench values; missing ones take the bench values.
 
     Raises
     ------
@@ -42,9 +43,7 @@ def validate_sensor_values(params: ParameterSet | Mapping[str, float] | None = N
     base = _bench_sensors()
     if params is None:
         return base.values()
-    overrides = {
-        name: getattr(value, "value", value)
-        for name, value in params.items()
-        if name.split(".", 1)[0] == GROUP
-    }
-    return base.with_values(overrides).values()
+    ours = {name: value for name, value in params.items() if name.split(".", 1)[0] == GROUP}
+    if isinstance(params, ParameterSet):
+        return {**base.values(), **{name: parameter.value for name, parameter in ours.items()}}
+    return base.with_values(ours).values()

@@ -7,7 +7,7 @@ from scipy.stats import linregress
 import twin
 from twin.engine.energy import mechanical_energy
 from twin.engine.integrators import INTEGRATORS, ORDER, step
-from twin.engine.layout import N_STATES, S
+from twin.engine.layout import S
 from twin.engine.model import build_model
 
 LOSSLESS = {
@@ -36,7 +36,7 @@ def _free_motion(bench, scene_factory, method, dt):
     x[S.NUT2_SPEED] = -1e-3
     x[S.REDUCER_SPEED] = -1.0
     energy_0 = mechanical_energy(x, model.constants, model.stiffness_poly)
-    work = np.zeros((5, N_STATES))
+    work = np.zeros((5, x.size))
     code = INTEGRATORS[method]
     for k in range(int(round(DURATION / dt))):
         step(code, k * dt, x, dt, model.constants, 0.0, model.force_table, model.stiffness_poly, work)

@@ -188,3 +188,29 @@ def test_bad_inputs_name_the_field():
         load_cell_parameters({"sensors.load_cell_sensitivity_error": 0.01}, room_temperature=T25)
     with pytest.raises(ValueError, match="sensors.preload_load_cell_sensitivty_error_range1"):
         preload_load_cell_parameters({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}, room_temperature=T25)
+
+
+@pytest.mark.parametrize(
+    "builder, selector, full_scale, error_name",
+    [
+        (torque_meter_parameters, "sensors.torque_meter_range", {1: 50.0, 2: 5.0}, "sensors.torque_meter_sensitivity_error_range"),
+        (preload_load_cell_parameters, "sensors.preload_load_cell_range", {1: 1e3, 2: 10e3}, "sensors.preload_load_cell_sensitivity_error_range"),
+    ],
+)
+@pytest.mark.parametrize("selected", [1, 2])
+def test_range_selection_picks_the_range_full_scale_and_errors(builder, selector, full_scale, error_name, selected):
+    other = 3 - selected
+    p = builder({selector: float(selected), f"{error_name}{selected}": 0.002, f"{error_name}{other}": -0.002},
+                room_temperature=T25)
+    assert p[AN_FULL_SCALE] == full_scale[selected]
+    assert p[AN_GAIN] == pytest.approx(1.002)
+
+
+def test_a_step_spanning_several_refreshes_shows_the_last_one():
+    p = torque_meter_parameters({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}, room_temperature=T25)
+    state = np.zeros(AS_SIZE)
+    analog_init(state, 0.0, 0.0, p)
+    analog_step(state, 25.0, 2.5e-3, p)  # ramp 0 -> 25 N*m over one 2.5 ms step; refreshes at 1 and 2 ms
+    assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)
+    analog_step(state, 25.0, 2.9e-3, p)  # no refresh until 3 ms
+    assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from sensors.parameters import SENSORS_TOML, validate_sensor_values
+from twin.parameters import load_parameters
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -116,3 +117,10 @@ def test_validation_fills_defaults_ignores_other_groups_and_names_bad_fields():
     message = str(err.value)
     for field in ("sensors.linear_encoder_phase_error", "sensors.no_such_sensor", "sensors.daq_bits"):
         assert field in message
+
+
+def test_a_parameter_set_is_taken_as_already_validated():
+    ps = load_parameters(SENSORS_TOML).with_values({"sensors.linear_encoder_precision": -3e-6})
+    values = validate_sensor_values(ps)
+    assert values["sensors.linear_encoder_precision"] == -3e-6
+    assert len(values) == len(ps)

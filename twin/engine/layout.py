@@ -28,9 +28,17 @@ class S(IntEnum):
     NUT2_ANGULAR_SPEED = 15
     HALL_CURRENT = 16      # first-order Hall sensor output [A]
     CURRENT_PI = 17        # analog current-PI integrator [V]
+    # pneumatic load system (Eqs. 9.9-9.11), present only at the "full" pneumatics fidelity
+    SPOOL_POSITION = 18    # normalised valve spool position [-1, 1]
+    SPOOL_SPEED = 19
+    CHAMBER1_PRESSURE = 20  # cap side [Pa, absolute]
+    CHAMBER2_PRESSURE = 21  # rod side
+    PISTON_POSITION = 22   # from the cap-end stop [m]
+    PISTON_SPEED = 23
 
 
 N_STATES = len(S)
+N_CORE_STATES = S.SPOOL_POSITION  # states without the pneumatic system
 
 # (position, velocity) pairs: the semi-implicit Euler integrator updates the
 # velocity first and moves the position with the new velocity.
@@ -42,7 +50,24 @@ POSITION_VELOCITY_PAIRS = (
     (S.NUT1_ANGLE, S.NUT1_ANGULAR_SPEED),
     (S.NUT2_POSITION, S.NUT2_SPEED),
     (S.NUT2_ANGLE, S.NUT2_ANGULAR_SPEED),
+    (S.PISTON_POSITION, S.PISTON_SPEED),
 )
+
+
+class U(IntEnum):
+    """Inputs held between controller samples (zero-order hold)."""
+
+    CURRENT_DEMAND = 0     # speed-loop output [A]
+    VALVE_COMMAND = 1      # effective valve command after D/A and hysteresis [V]
+
+
+N_INPUTS = len(U)
+
+# Pneumatics fidelity codes (constant K.PNEUMATICS).
+PNEUMATICS_ABSENT = 0      # no external force at all
+PNEUMATICS_IDEAL = 1       # ideal force source following the scene's force demand
+PNEUMATICS_FULL = 2        # valve, chambers, piston and load cell under the force loop
+PNEUMATICS_LEVELS = {"absent": PNEUMATICS_ABSENT, "ideal": PNEUMATICS_IDEAL, "full": PNEUMATICS_FULL}
 
 
 class K(IntEnum):
@@ -136,6 +161,47 @@ class K(IntEnum):
     # feature zeroing
     NUT1_ZERO = 76
     SCREW_ANGLE_ZERO = 77
+    # pneumatic load system (Eqs. 9.9-9.11, Tables B.11-B.13, pneumatics.toml)
+    PNEUMATICS = 78
+    P_SUPPLY = 79
+    P_ATMOSPHERE = 80
+    AIR_TEMPERATURE = 81
+    GAS_CONSTANT = 82
+    POLYTROPIC_EXPONENT = 83
+    REFERENCE_DENSITY = 84
+    REFERENCE_TEMPERATURE = 85
+    MAX_CONDUCTANCE = 86
+    LEAKAGE_FRACTION = 87
+    CRITICAL_RATIO = 88
+    LAMINAR_RATIO = 89
+    VALVE_MID = 90
+    VALVE_MIN = 91
+    VALVE_MAX = 92
+    VALVE_FREQUENCY = 93
+    VALVE_DAMPING = 94
+    VALVE_HYSTERESIS = 95
+    AREA1 = 96
+    AREA2 = 97
+    DEAD_VOLUME1 = 98
+    DEAD_VOLUME2 = 99
+    STROKE = 100
+    PISTON_MASS = 101
+    PISTON_DAMPING = 102
+    CYLINDER_FRICTION_STATIC = 103
+    CYLINDER_FRICTION_DYNAMIC = 104
+    CYLINDER_FRICTION_RATE = 105
+    CYLINDER_FRICTION_VISCOUS = 106
+    CYLINDER_V_THRESHOLD = 107
+    DAMPER_STIFFNESS = 108
+    DAMPER_TRAVEL = 109
+    DAMPER_DAMPING = 110
+    END_STOP_STIFFNESS = 111
+    LOAD_CELL_STIFFNESS = 112
+    LOAD_CELL_DAMPING = 113
+    LINK_OFFSET = 114         # piston position minus sled position at zero load-cell force [m]
+    FORCE_KP = 115
+    FORCE_KI = 116
+    VALVE_COMMAND_LSB = 117   # V; 0 = not quantised
 
 
 N_CONSTANTS = len(K)
@@ -162,6 +228,11 @@ class Signal(IntEnum):
     SPEED_COMMAND = 15
     CURRENT_DEMAND = 16
     NUT1_SPEED = 17
+    FORCE_DEMAND = 18
+    CHAMBER1_PRESSURE = 19
+    CHAMBER2_PRESSURE = 20
+    VALVE_COMMAND = 21
+    PISTON_POSITION = 22
 
 
 N_SIGNALS = len(Signal)
@@ -186,7 +257,15 @@ SIGNAL_META = {
     Signal.SPEED_COMMAND: ("rad/s", "motor speed command after the drive's analog input"),
     Signal.CURRENT_DEMAND: ("A", "current demand of the speed loop"),
     Signal.NUT1_SPEED: ("m/s", "master nut (sled) speed"),
+    Signal.FORCE_DEMAND: ("N", "external force demand"),
+    Signal.CHAMBER1_PRESSURE: ("Pa", "cylinder cap-side chamber pressure (absolute)"),
+    Signal.CHAMBER2_PRESSURE: ("Pa", "cylinder rod-side chamber pressure (absolute)"),
+    Signal.VALVE_COMMAND: ("V", "effective proportional-valve command"),
+    Signal.PISTON_POSITION: ("m", "piston position from the cap-end stop"),
 }
+
+# Signals that exist only with the full pneumatic system.
+PNEUMATIC_SIGNALS = (Signal.CHAMBER1_PRESSURE, Signal.CHAMBER2_PRESSURE, Signal.VALVE_COMMAND, Signal.PISTON_POSITION)
 
 # Run status codes returned by the compiled loop.
 STATUS_OK = 0
@@ -203,4 +282,5 @@ BOUND_REASONS = {
     4: "motor current beyond five times the drive/motor maximum",
     5: "winding temperature beyond 200 degC",
     6: "ball-groove normal approach beyond the Hertzian validity bound",
+    7: "chamber pressure outside [0, 2 x supply] (absolute)",
 }

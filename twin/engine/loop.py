@@ -13,16 +13,19 @@ import numpy as np
 from twin.control.discrete import pi_step
 from twin.engine.integrators import step
 from twin.engine.layout import (
-    K,
-
+    N_INPUTS,
+    PNEUMATICS_FULL,
     STATUS_NONFINITE,
     STATUS_OK,
     STATUS_OUT_OF_BOUNDS,
+    K,
     S,
     Signal,
+    U,
 )
 from twin.engine.plant import internal_forces
 from twin.physics.ball_screw import contact_geometry
+from twin.physics.pneumatics import hysteresis_play
 from twin.scenes.profiles import profile_value
 
 
@@ -67,11 +70,15 @@ def guard(x, c):
             approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
             if approach > c[K.MAX_NORMAL_APPROACH]:
                 return 6
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        for chamber in (S.CHAMBER1_PRESSURE, S.CHAMBER2_PRESSURE):
+            if x[chamber] <= 0.0 or x[chamber] > 2.0 * c[K.P_SUPPLY]:
+                return 7
     return 0
 
 
 @numba.njit(cache=True)
-def record(row, t, x, c, demand, speed_command, current_demand, force_table, stiffness_poly):
+def record(row, t, x, c, u, demand, speed_command, force_table, stiffness_poly):
     torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
     row[Signal.POSITION_DEMAND] = demand
     row[Signal.NUT1_POSITION] = x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
@@ -89,8 +96,32 @@ def record(row, t, x, c, demand, speed_command, current_demand, force_table, sti
     row[Signal.NUT1_CONTACT_FORCE] = f1
     row[Signal.NUT2_CONTACT_FORCE] = f2
     row[Signal.SPEED_COMMAND] = speed_command
-    row[Signal.CURRENT_DEMAND] = current_demand
+    row[Signal.CURRENT_DEMAND] = u[U.CURRENT_DEMAND]
     row[Signal.NUT1_SPEED] = x[S.NUT1_SPEED]
+    row[Signal.FORCE_DEMAND] = profile_value(force_table, t)
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        row[Signal.CHAMBER1_PRESSURE] = x[S.CHAMBER1_PRESSURE]
+        row[Signal.CHAMBER2_PRESSURE] = x[S.CHAMBER2_PRESSURE]
+        row[Signal.VALVE_COMMAND] = u[U.VALVE_COMMAND]
+        row[Signal.PISTON_POSITION] = x[S.PISTON_POSITION]
+
+
+@numba.njit(cache=True)
+def force_loop(t, x, c, u, integral, sample_time, force_table, stiffness_poly):
+    """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading -> valve command.
+
+    The PI output is a deviation from the valve's mid position, limited to the
+    command range; it goes through the output D/A and the valve's hysteresis.
+    Returns the new PI integral; the effective command is written to ``u``.
+    """
+    measured = internal_forces(t, x, c, force_table, stiffness_poly)[4]
+    half_span = 0.5 * (c[K.VALVE_MAX] - c[K.VALVE_MIN])
+    deviation, integral = pi_step(profile_value(force_table, t) - measured, integral, c[K.FORCE_KP], c[K.FORCE_KI],
+                                  sample_time, half_span)
+    command = quantize_round(deviation, c[K.VALVE_COMMAND_LSB], half_span) + c[K.VALVE_MID]
+    u[U.VALVE_COMMAND] = hysteresis_play(command, u[U.VALVE_COMMAND], c[K.VALVE_HYSTERESIS], c[K.VALVE_MIN],
+                                         c[K.VALVE_MAX])
+    return integral
 
 
 @numba.njit(cache=True)
@@ -114,12 +145,15 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
         (acquisition) instants: ``|x_n1 - x_n1(0) - p (theta_s - theta_s(0)) / 2 pi|``.
     """
     work = np.zeros((5, x.shape[0]))
+    u = np.zeros(N_INPUTS)
+    u[U.VALVE_COMMAND] = c[K.VALVE_MID]
+    pneumatics = int(c[K.PNEUMATICS]) == PNEUMATICS_FULL
     speed_ts = speed_every * dt
     position_ts = position_every * dt
     position_integral = 0.0
     speed_integral = 0.0
+    force_integral = 0.0
     speed_command = 0.0
-    current_demand = 0.0
     demand = profile_value(position_table, 0.0)
     lsb = c[K.SPEED_COMMAND_LSB]
     previous_angle = quantize_floor(c[K.RATIO] * x[S.REDUCER_ANGLE], c[K.RESOLVER_RESOLUTION])
@@ -134,6 +168,8 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
             command, position_integral = pi_step(demand - measured, position_integral, c[K.POSITION_KP],
                                                  c[K.POSITION_KI], position_ts, c[K.SPEED_FULL_SCALE])
             speed_command = quantize_round(command, lsb, c[K.SPEED_FULL_SCALE])
+            if pneumatics:
+                force_integral = force_loop(t, x, c, u, force_integral, position_ts, force_table, stiffness_poly)
             feature_sum += abs(x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
                                - c[K.LEAD_ARM] * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]))
             feature_samples += 1
@@ -141,14 +177,14 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
             angle = quantize_floor(c[K.RATIO] * x[S.REDUCER_ANGLE], c[K.RESOLVER_RESOLUTION])
             measured_speed = (angle - previous_angle) / speed_ts
             previous_angle = angle
-            current_demand, speed_integral = pi_step(speed_command - measured_speed, speed_integral, c[K.SPEED_KP],
-                                                     c[K.SPEED_KI], speed_ts, c[K.MAX_CURRENT])
+            u[U.CURRENT_DEMAND], speed_integral = pi_step(speed_command - measured_speed, speed_integral,
+                                                          c[K.SPEED_KP], c[K.SPEED_KI], speed_ts, c[K.MAX_CURRENT])
         if k % output_every == 0:
-            record(output[rows], t, x, c, demand, speed_command, current_demand, force_table, stiffness_poly)
+            record(output[rows], t, x, c, u, demand, speed_command, force_table, stiffness_poly)
             rows += 1
         if k == n_steps:
             break
-        step(method, t, x, dt, c, current_demand, force_table, stiffness_poly, work)
+        step(method, t, x, dt, c, u, force_table, stiffness_poly, work)
         code = guard(x, c)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS

@@ -9,9 +9,11 @@ import numpy as np
 from scipy.optimize import brentq
 
 from twin.control.design import screw_inertia, torsional_stiffness
-from twin.engine.layout import N_CONSTANTS, N_STATES, K, S
+from twin.control.force_loop_design import operating_point
+from twin.engine.layout import N_CONSTANTS, N_CORE_STATES, PNEUMATICS_FULL, PNEUMATICS_LEVELS, K, S
 from twin.parameters import ParameterSet
 from twin.physics import hertz
+from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import effective_loaded_balls, groove_centre_distance, helix_angle, nut_axial_force
 from twin.physics.preload import series_stiffness
 from twin.scenes import Scene
@@ -44,7 +46,7 @@ class Model:
 
 
 def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis", variable_angle: bool = True,
-                quantizers: bool = True) -> Model:
+                quantizers: bool = True, pneumatics: str = "ideal") -> Model:
     """Derive the model constants (layout :class:`K`) and the initial equilibrium state.
 
     Parameters
@@ -59,6 +61,9 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
         Variable contact angle of Eq. 9.4 (True) or constant ``alpha_0``.
     quantizers : bool
         Encoder, resolver and analog-input quantisation on (True) or ideal.
+    pneumatics : {"full", "ideal", "absent"}
+        Load system: valve, chambers and piston under the force loop; an ideal
+        force source following the force demand; or no external force.
     """
     p = params.values()
     c = np.zeros(N_CONSTANTS)
@@ -163,10 +168,72 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
     c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
 
+    c[K.PNEUMATICS] = PNEUMATICS_LEVELS[pneumatics]
+    if quantizers:
+        c[K.VALVE_COMMAND_LSB] = (p["pneumatics.valve_command_max"] - p["pneumatics.valve_command_min"]) / 2.0 ** p["controller.valve_command_dac_bits"]
+
     x0 = preload_equilibrium(c, stiffness_poly, preload)
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
+    if c[K.PNEUMATICS] == PNEUMATICS_FULL:
+        x0 = np.concatenate([x0, pneumatic_constants(c, p, scene)])
     return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly)
+
+
+def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.ndarray:
+    """Fill the load-system constants (Eqs. 9.9-9.11) and return its initial state.
+
+    The supply pressure and the air temperature are the scene's conditions (Table 9.5 varies
+    the supply from test to test); the system starts at rest at mid stroke with the valve in the
+    spool position that holds zero force (the static working point of
+    :func:`twin.control.force_loop_design.operating_point`).
+    """
+    q = {**p, "pneumatics.supply_pressure": scene.condition("supply_pressure"),
+         "pneumatics.air_temperature": scene.condition("room_temperature")}
+    pn.validate_pneumatics(q)
+    c[K.P_SUPPLY] = q["pneumatics.supply_pressure"]
+    c[K.P_ATMOSPHERE] = q["pneumatics.atmospheric_pressure"]
+    c[K.AIR_TEMPERATURE] = q["pneumatics.air_temperature"]
+    c[K.GAS_CONSTANT] = q["pneumatics.gas_constant"]
+    c[K.POLYTROPIC_EXPONENT] = q["pneumatics.polytropic_exponent"]
+    c[K.REFERENCE_DENSITY] = q["pneumatics.reference_density"]
+    c[K.REFERENCE_TEMPERATURE] = q["pneumatics.reference_temperature"]
+    c[K.CRITICAL_RATIO] = q["pneumatics.critical_pressure_ratio"]
+    c[K.LAMINAR_RATIO] = q["pneumatics.laminar_ratio"]
+    c[K.MAX_CONDUCTANCE] = pn.conductance_from_nominal_flow(
+        q["pneumatics.nominal_flow_rate"], q["pneumatics.nominal_flow_upstream_pressure"],
+        q["pneumatics.nominal_flow_downstream_pressure"], c[K.CRITICAL_RATIO], c[K.LAMINAR_RATIO])
+    c[K.LEAKAGE_FRACTION] = q["pneumatics.valve_leakage_fraction"]
+    c[K.VALVE_MID] = q["pneumatics.valve_mid_voltage"]
+    c[K.VALVE_MIN] = q["pneumatics.valve_command_min"]
+    c[K.VALVE_MAX] = q["pneumatics.valve_command_max"]
+    c[K.VALVE_FREQUENCY] = q["pneumatics.valve_critical_frequency"]
+    c[K.VALVE_DAMPING] = q["pneumatics.valve_damping_ratio"]
+    c[K.VALVE_HYSTERESIS] = q["pneumatics.valve_hysteresis"]
+    c[K.AREA1], c[K.AREA2] = pn.piston_areas(q["pneumatics.bore_diameter"], q["pneumatics.rod_diameter"])
+    c[K.DEAD_VOLUME1] = q["pneumatics.dead_volume_1"]
+    c[K.DEAD_VOLUME2] = q["pneumatics.dead_volume_2"]
+    c[K.STROKE] = q["pneumatics.stroke"]
+    c[K.PISTON_MASS] = q["pneumatics.piston_mass"]
+    c[K.PISTON_DAMPING] = q["pneumatics.piston_damping"]
+    c[K.CYLINDER_FRICTION_STATIC] = q["pneumatics.friction_static"]
+    c[K.CYLINDER_FRICTION_DYNAMIC] = q["pneumatics.friction_dynamic"]
+    c[K.CYLINDER_FRICTION_RATE] = q["pneumatics.friction_stribeck_coefficient"]
+    c[K.CYLINDER_FRICTION_VISCOUS] = q["pneumatics.friction_viscous"]
+    c[K.CYLINDER_V_THRESHOLD] = q["pneumatics.friction_velocity_threshold"]
+    c[K.DAMPER_STIFFNESS] = q["pneumatics.damper_stiffness"]
+    c[K.DAMPER_TRAVEL] = q["pneumatics.damper_travel"]
+    c[K.DAMPER_DAMPING] = q["pneumatics.damper_damping"]
+    c[K.END_STOP_STIFFNESS] = q["pneumatics.end_stop_stiffness"]
+    c[K.LOAD_CELL_STIFFNESS] = q["pneumatics.load_cell_stiffness"]
+    c[K.LOAD_CELL_DAMPING] = q["pneumatics.load_cell_damping"]
+    c[K.FORCE_KP] = p["controller.force_kp"]
+    c[K.FORCE_KI] = p["controller.force_ki"]
+    working_point = operating_point(q, force=0.0)
+    state = working_point["state"]
+    # Zero load-cell force at the start: the rod end sits where the sled is.
+    c[K.LINK_OFFSET] = state[4] - c[K.NUT1_ZERO]
+    return state
 
 
 def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
@@ -214,7 +281,7 @@ def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: floa
     ``f_2 = -s F_pr`` (Eq. 9.8 with ``s = +1`` for O, ``-1`` for X); screw axial
     force ``f_1 + f_2 = 0``; nut rotations balance the guides' roll stiffness.
     """
-    x = np.zeros(N_STATES)
+    x = np.zeros(N_CORE_STATES)
     x[S.WINDING_TEMP] = c[K.AMBIENT]
     if preload <= 0.0:
         return x

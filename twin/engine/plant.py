@@ -6,7 +6,8 @@ a held input (zero-order hold between drive samples).
 
 import numba
 
-from twin.engine.layout import K, S
+from twin.engine.layout import PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
+from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import nut_axial_force
 from twin.physics.coupling import elasto_backlash
 from twin.physics.friction import stribeck_friction
@@ -45,8 +46,50 @@ def internal_forces(t, x, c, force_table, stiffness_poly):
         x[S.NUT2_POSITION] - x[S.NUT1_POSITION], x[S.NUT2_SPEED] - x[S.NUT1_SPEED],
         c[K.PRELOAD_COMPRESSION], c[K.PRELOAD_STIFFNESS], c[K.PRELOAD_DAMPING], c[K.PRELOAD_ORIENTATION],
     )
-    external = profile_value(force_table, t)
+    external = external_force(t, x, c, force_table)
     return torque, f1, f2, preload, external, p1, p2
+
+
+@numba.njit(cache=True)
+def external_force(t, x, c, force_table):
+    """External force on the master nut [N, +x]: the load cell's spring force (full pneumatics),
+    the scene's force demand (ideal source) or nothing (absent)."""
+    level = int(c[K.PNEUMATICS])
+    if level == PNEUMATICS_FULL:
+        return pn.load_cell_spring_force(x[S.PISTON_POSITION] - c[K.LINK_OFFSET], x[S.NUT1_POSITION],
+                                         x[S.PISTON_SPEED], x[S.NUT1_SPEED],
+                                         c[K.LOAD_CELL_STIFFNESS], c[K.LOAD_CELL_DAMPING])
+    if level == PNEUMATICS_IDEAL:
+        return profile_value(force_table, t)
+    return 0.0
+
+
+@numba.njit(cache=True)
+def pneumatics_rhs(x, c, valve_command, load_cell_force, dxdt):
+    """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11)."""
+    dxdt[S.SPOOL_POSITION], dxdt[S.SPOOL_SPEED] = pn.spool_derivative(
+        x[S.SPOOL_POSITION], x[S.SPOOL_SPEED], valve_command, c[K.VALVE_MID], c[K.VALVE_MIN], c[K.VALVE_MAX],
+        c[K.VALVE_FREQUENCY], c[K.VALVE_DAMPING])
+    p1 = x[S.CHAMBER1_PRESSURE]
+    p2 = x[S.CHAMBER2_PRESSURE]
+    temperature = c[K.AIR_TEMPERATURE]
+    g1, g2 = pn.chamber_mass_flows(
+        x[S.SPOOL_POSITION], p1, p2, c[K.P_SUPPLY], c[K.P_ATMOSPHERE], c[K.MAX_CONDUCTANCE], c[K.LEAKAGE_FRACTION],
+        c[K.CRITICAL_RATIO], c[K.REFERENCE_DENSITY], c[K.REFERENCE_TEMPERATURE], temperature, temperature,
+        c[K.LAMINAR_RATIO])
+    v1, dv1, v2, dv2 = pn.chamber_volumes(x[S.PISTON_POSITION], x[S.PISTON_SPEED], c[K.AREA1], c[K.AREA2],
+                                          c[K.DEAD_VOLUME1], c[K.DEAD_VOLUME2], c[K.STROKE])
+    dxdt[S.CHAMBER1_PRESSURE] = pn.chamber_pressure_derivative(p1, g1, v1, dv1, temperature, c[K.GAS_CONSTANT],
+                                                               c[K.POLYTROPIC_EXPONENT])
+    dxdt[S.CHAMBER2_PRESSURE] = pn.chamber_pressure_derivative(p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT],
+                                                               c[K.POLYTROPIC_EXPONENT])
+    dxdt[S.PISTON_POSITION] = x[S.PISTON_SPEED]
+    dxdt[S.PISTON_SPEED] = pn.piston_acceleration(
+        p1, p2, x[S.PISTON_POSITION], x[S.PISTON_SPEED], load_cell_force, c[K.AREA1], c[K.AREA2],
+        c[K.P_ATMOSPHERE], c[K.PISTON_MASS], c[K.PISTON_DAMPING], c[K.CYLINDER_FRICTION_STATIC],
+        c[K.CYLINDER_FRICTION_DYNAMIC], c[K.CYLINDER_FRICTION_RATE], c[K.CYLINDER_FRICTION_VISCOUS],
+        c[K.CYLINDER_V_THRESHOLD], c[K.STROKE], c[K.DAMPER_TRAVEL], c[K.DAMPER_STIFFNESS], c[K.DAMPER_DAMPING],
+        c[K.END_STOP_STIFFNESS])
 
 
 @numba.njit(cache=True)
@@ -58,7 +101,7 @@ def current_loop_voltage(x, c, current_demand):
 
 
 @numba.njit(cache=True)
-def rhs(t, x, c, current_demand, force_table, stiffness_poly, dxdt):
+def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     """Write ``dx/dt`` of the bench into ``dxdt``.
 
     Parameters
@@ -69,14 +112,15 @@ def rhs(t, x, c, current_demand, force_table, stiffness_poly, dxdt):
         State (layout :class:`twin.engine.layout.S`).
     c : 1-D array
         Model constants (layout :class:`twin.engine.layout.K`).
-    current_demand : float
-        Held output of the digital speed loop [A].
+    u : 1-D array
+        Inputs held by the digital loops (layout :class:`twin.engine.layout.U`).
     force_table, stiffness_poly : arrays
         Compiled external-force profile and the contact stiffness table.
     dxdt : 1-D array
         Output.
     """
     ratio = c[K.RATIO]
+    current_demand = u[U.CURRENT_DEMAND]
     # --- drive electronics and motor (Eqs. 9.1, 9.2; analog PI with back-calculation anti-windup)
     demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
     resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
@@ -137,4 +181,7 @@ def rhs(t, x, c, current_demand, force_table, stiffness_poly, dxdt):
     dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 - k_roll * x[S.NUT1_ANGLE] - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
     dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
     dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 - k_roll * x[S.NUT2_ANGLE] - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
+
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        pneumatics_rhs(x, c, u[U.VALVE_COMMAND], external, dxdt)
 

@@ -9,7 +9,16 @@ import numpy as np
 import xarray as xr
 
 from twin.engine.integrators import INTEGRATORS
-from twin.engine.layout import BOUND_REASONS, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, Signal
+from twin.engine.layout import (
+    BOUND_REASONS,
+    N_SIGNALS,
+    PNEUMATIC_SIGNALS,
+    PNEUMATICS_LEVELS,
+    SIGNAL_META,
+    STATUS_OK,
+    STATUS_TEXT,
+    Signal,
+)
 from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.errors import OptionError, SimulationFailed
@@ -32,7 +41,7 @@ def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
 def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
              integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
              duration: float | None = None, curvature: str = "thesis", variable_angle: bool = True,
-             quantizers: bool = True, throw: bool = True) -> xr.Dataset:
+             quantizers: bool = True, pneumatics: str = "auto", throw: bool = True) -> xr.Dataset:
     """Run one bench test.
 
     Parameters
@@ -54,7 +63,11 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     variable_angle : bool
         Eq. 9.4 variable contact angle (True) or constant design angle.
     quantizers : bool
-        Quantisation of the encoder, resolver and the drive's analog input.
+        Quantisation of the encoder, resolver, the drive's analog input and the valve's D/A.
+    pneumatics : {"auto", "full", "ideal", "absent"}
+        External-force system: the pneumatic cylinder under the force loop
+        (Eqs. 9.9-9.11), an ideal force source, or none. ``"auto"`` is
+        ``"full"`` when the scene demands a force and ``"absent"`` otherwise.
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -84,13 +97,20 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
         problems.append(f"dt: {dt!r} must be a step in (0, 1e-3] s")
         dt = 1e-3
+    if pneumatics == "auto":
+        pneumatics = "full" if scene.has_force_demand else "absent"
+    if pneumatics not in PNEUMATICS_LEVELS:
+        problems.append(f"pneumatics: {pneumatics!r} is not one of auto, {', '.join(PNEUMATICS_LEVELS)}")
+    elif pneumatics == "absent" and scene.has_force_demand:
+        problems.append(f"pneumatics: 'absent' cannot apply the force demand of scene '{scene.name}'; use 'full' or 'ideal'")
     speed_every = _steps_per(params.value("drive.speed_loop_sample_time"), dt, "speed-loop period", problems)
     position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period", problems)
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
         raise OptionError(problems)
 
-    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle, quantizers=quantizers)
+    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle, quantizers=quantizers,
+                        pneumatics=pneumatics)
     n_steps = int(round(scene.duration / dt))
     output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
     x = model.initial_state.copy()
@@ -108,6 +128,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     data_vars = {
         signal.name.lower(): ("time", output[:rows, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
         for signal in Signal
+        if pneumatics == "full" or signal not in PNEUMATIC_SIGNALS
     }
     feature = feature_sum / feature_samples if (status == STATUS_OK and feature_samples) else np.nan
     data_vars["backlash_feature_true"] = ((), feature, {
@@ -127,6 +148,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "curvature": curvature,
             "variable_contact_angle": int(variable_angle),
             "quantizers": int(quantizers),
+            "pneumatics": pneumatics,
             "wall_time": wall_time,
         },
     )

@@ -42,7 +42,7 @@ import math
 
 import numba
 
-from twin.physics.coupling import saturated_damping
+from twin.physics.hertz import damping_coefficient, elastic_force, saturated_damping_force
 
 
 @numba.njit(cache=True)
@@ -87,7 +87,7 @@ def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
 
 @numba.njit(cache=True)
 def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance,
-                    contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_coefficient,
+                    contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h,
                     loaded_balls, variable_angle):
     """Axial force of the screw on one nut (Eqs. 9.4-9.6, 7.28, 7.29, 7.54, 5.5).
 
@@ -105,7 +105,7 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         Polynomial fit of the series Hertz stiffness ``K`` [N/m^1.5] (:func:`stiffness_at`).
     sin_alpha_min, sin_alpha_span : float
         Range of ``sin(alpha)`` covered by the fit.
-    damping_coefficient : float
+    damping_b_h : float
         ``b_h`` of Eq. 7.54.
     loaded_balls : float
         ``Z_eff``.
@@ -129,9 +129,9 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         sin_alpha = math.sin(contact_angle_0)
         delta_n = delta_a * sin_alpha
     stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
-    elastic = stiffness * delta_n * math.sqrt(delta_n)
+    elastic = elastic_force(stiffness, delta_n)
     approach_rate = side * relative_velocity * cos_helix * sin_alpha
-    normal = elastic + saturated_damping(elastic, damping_coefficient * math.sqrt(stiffness) * approach_rate)
+    normal = elastic + saturated_damping_force(elastic, damping_coefficient(damping_b_h, stiffness), approach_rate)
     return side * loaded_balls * normal * sin_alpha * cos_helix, normal, sin_alpha
 
 

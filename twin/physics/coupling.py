@@ -2,20 +2,7 @@
 
 import numba
 
-
-@numba.njit(cache=True)
-def saturated_damping(elastic, damping_force):
-    """Damping force saturated to the elastic force (Eq. 7.29; the same device as Eq. 5.9).
-
-    Avoids force jumps at contact onset with non-zero approach speed and any
-    attractive (pulling) force while the contact separates.
-    """
-    bound = abs(elastic)
-    if damping_force > bound:
-        return bound
-    if damping_force < -bound:
-        return -bound
-    return damping_force
+from twin.physics.hertz import saturated_damping_force
 
 
 @numba.njit(cache=True)
@@ -45,7 +32,8 @@ def elasto_backlash(deflection, deflection_rate, stiffness, damping, backlash):
         elastic = stiffness * (deflection + half)
     else:
         return 0.0
-    return elastic + saturated_damping(elastic, damping * deflection_rate)
+    # damping saturated to the elastic force as in Eq. 7.29 (no force jump at re-engagement)
+    return elastic + saturated_damping_force(abs(elastic), damping, deflection_rate)
 
 
 @numba.njit(cache=True)

@@ -305,7 +305,7 @@ def elastic_force(k_h, delta):
     """Elastic normal force ``K_H delta^1.5`` (Eq. 7.28), zero without interpenetration (Eq. 7.30) [N]."""
     if delta <= 0.0:
         return 0.0
-    return k_h * delta**1.5
+    return k_h * delta * math.sqrt(delta)  # delta**1.5, without the slower pow()
 
 
 @njit(cache=True)

@@ -2,7 +2,7 @@
 
 import numba
 
-from twin.physics.coupling import saturated_damping
+from twin.physics.hertz import saturated_damping_force
 
 
 @numba.njit(cache=True)
@@ -43,4 +43,4 @@ def preload_force(separation, separation_rate, initial_compression, stiffness, d
     if compression <= 0.0:
         return 0.0
     elastic = stiffness * compression
-    return elastic + saturated_damping(elastic, -damping * orientation * separation_rate)
+    return elastic + saturated_damping_force(elastic, damping, -orientation * separation_rate)

@@ -1,0 +1,130 @@
+"""Campaign throughput: runs/s, scheduling overhead, 1 -> 2 worker scaling, driver peak memory.
+
+Usage::
+
+    python benchmarks/campaign_throughput.py --synthetic --runs 200 --delay 0.005
+    python benchmarks/campaign_throughput.py --runs 10          # the real bench (demo spec)
+
+For each worker count a local cluster is started first and warmed up (worker
+and sandbox start-up are not campaign throughput); the campaign then runs on it
+through ``scheduler=``. Figures:
+
+* runs/s: all runs / campaign wall time;
+* scheduling overhead: ``1 - sum(run wall times) / (workers x campaign wall time)``,
+  i.e. the share of worker time not spent inside run functions (dask round trips,
+  sandbox pipes, the driver's chunk writes, load imbalance at the tail);
+* driver peak memory: Python allocations traced by :mod:`tracemalloc` during the
+  campaign, and the process's peak resident set size.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import xarray as xr
+from distributed import LocalCluster
+
+import campaigns
+from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+
+SPECS = Path(campaigns.__file__).parent / "specs"
+
+SYNTHETIC_SPEC = """
+name = "throughput"
+root_seed = 1
+runs_per_dataset = {runs}
+features = ["backlash_feature", "backlash_feature_true"]
+[execution]
+timeout = 60.0
+{datasets}
+[[uncertainties]]
+target = "synthetic.gain"
+distribution = "gaussian"
+relative = true
+half_range = 10.0
+[[uncertainties]]
+target = "synthetic.offset"
+distribution = "uniform"
+low = -1.0
+high = 1.0
+unit = "um"
+[[uncertainties]]
+target = "scene.room_temperature"
+distribution = "uniform"
+low = 15.0
+high = 35.0
+unit = "degC"
+"""
+
+
+def _spec(args, tmp: Path, runs: int) -> campaigns.CampaignSpec:
+    if not args.synthetic:
+        return campaigns.load_spec(SPECS / "demo.toml", runs=runs)
+    datasets = "".join(
+        f'[[datasets]]\nname = "ds{k}"\nconditions = {{ backlash = {b}, preload = 0.0 }}\n'
+        for k, b in enumerate((0.0, 5e-6, 40e-6, 80e-6), start=1)
+    )
+    path = tmp / f"spec-{runs}.toml"
+    path.write_text(SYNTHETIC_SPEC.format(runs=runs, datasets=datasets))
+    return campaigns.load_spec(path, catalog=SYNTHETIC_CATALOG)
+
+
+def measure(args, workers: int, tmp: Path) -> dict:
+    """Run the campaign on a warmed-up local cluster of ``workers`` processes."""
+    run_function = SyntheticModel(delay=args.delay) if args.synthetic else None
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        address = cluster.scheduler_address
+        warm = _spec(args, tmp, workers)  # one run per worker thread starts every sandbox
+        campaigns.run_campaign(warm, tmp / f"warm-{workers}", scheduler=address, progress=False, run_function=run_function)
+        spec = _spec(args, tmp, args.runs)
+        tracemalloc.start()
+        start = time.perf_counter()
+        results = campaigns.run_campaign(spec, tmp / f"run-{workers}", scheduler=address, progress=False, run_function=run_function)
+        elapsed = time.perf_counter() - start
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+    with xr.open_dataset(results) as ds:
+        n = ds.sizes["dataset"] * ds.sizes["run"]
+        compute = float(ds["wall_time"].sum())
+        ok = int((ds["status"] == "ok").sum())
+    return {
+        "workers": workers,
+        "runs": n,
+        "ok": ok,
+        "elapsed": elapsed,
+        "runs_per_s": n / elapsed,
+        "mean_run_s": compute / n,
+        "overhead_pct": 100.0 * (1.0 - compute / (workers * elapsed)),
+        "traced_peak_mb": peak / 2**20,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=200, help="runs per data set (default 200)")
+    parser.add_argument("--synthetic", action="store_true", help="use the synthetic model instead of the bench twin")
+    parser.add_argument("--delay", type=float, default=0.005, help="synthetic compute time per run [s] (default 0.005)")
+    parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts to compare (default 1 2)")
+    args = parser.parse_args()
+    model = f"synthetic (delay {args.delay:g} s)" if args.synthetic else "bench twin (demo spec)"
+    print(f"model: {model}; runs per data set: {args.runs}")
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = [measure(args, w, Path(tmp)) for w in args.workers]
+    for r in rows:
+        print(
+            f"workers={r['workers']}: {r['runs']} runs ({r['ok']} ok) in {r['elapsed']:.2f} s -> {r['runs_per_s']:.1f} runs/s; "
+            f"mean run {1e3 * r['mean_run_s']:.2f} ms; scheduling overhead {r['overhead_pct']:.1f} %; "
+            f"driver traced peak {r['traced_peak_mb']:.1f} MiB"
+        )
+    if len(rows) > 1:
+        print(f"scaling {rows[0]['workers']} -> {rows[-1]['workers']} workers: x{rows[-1]['runs_per_s'] / rows[0]['runs_per_s']:.2f}")
+    print(f"driver peak RSS: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+
+
+if __name__ == "__main__":
+    main()

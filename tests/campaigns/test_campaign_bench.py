@@ -1,0 +1,47 @@
+"""Integration with the bench twin: the shipped specs against its catalog, and two real runs."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+import campaigns
+
+twin = pytest.importorskip("twin", reason="the bench twin (twin package) is not importable")
+if not hasattr(twin, "simulate"):
+    pytest.skip("twin.simulate does not exist yet", allow_module_level=True)
+
+SPECS = Path(campaigns.__file__).parent / "specs"
+
+
+@pytest.mark.parametrize("name", ["thesis_backlash.toml", "demo.toml"])
+def test_shipped_specs_validate_against_the_bench(name):
+    spec = campaigns.load_spec(SPECS / name)
+    assert len(spec.distributions()) == 38
+
+
+def test_two_real_bench_runs(tmp_path):
+    """Data sets 2 (80 um) and 4 (0 um), one run each, through twin.simulate in the sandbox."""
+    path = tmp_path / "two_runs.toml"
+    path.write_text(
+        f'extends = "{SPECS / "thesis_backlash.toml"}"\n'
+        'name = "two_runs"\nruns_per_dataset = 1\n'
+        '[observability]\nsweep = ["ds4", "ds2"]\n'
+        '[traces]\nruns_per_dataset = 1\n'
+        '[[datasets]]\nname = "ds2"\nscene = "ds2"\nconditions = { backlash = 80e-6, preload = 0.0 }\n'
+        '[[datasets]]\nname = "ds4"\nscene = "ds4"\nconditions = { backlash = 0.0, preload = 0.0 }\n'
+    )
+    results = campaigns.run_campaign(campaigns.load_spec(path), tmp_path / "out", workers=2, progress=False)
+    with xr.open_dataset(results) as ds:
+        reasons = dict(zip(ds["dataset"].values, ds["failure_reason"].values[:, 0]))
+        assert (ds["status"] == "ok").all(), f"runs not ok: {reasons}"
+        true = ds["backlash_feature_true"].sel(run=0)
+        assert float(true.sel(dataset="ds2")) > float(true.sel(dataset="ds4"))
+        assert math.isfinite(float(ds["backlash_feature"].sel(dataset="ds2", run=0)))
+        assert ds["trace_nut1_position"].attrs["units"] == "m"
+    analysis = campaigns.analyze(results)
+    with xr.open_dataset(analysis) as a:
+        assert list(a["sweep_point"].values) == ["ds4", "ds2"]
