@@ -7,7 +7,7 @@ from scipy.stats import linregress
 import twin
 from twin.engine.energy import mechanical_energy
 from twin.engine.integrators import INTEGRATORS, ORDER, step
-from twin.engine.layout import S
+from twin.engine.layout import N_INPUTS, S
 from twin.engine.model import build_model
 
 LOSSLESS = {
@@ -38,8 +38,9 @@ def _free_motion(bench, scene_factory, method, dt):
     energy_0 = mechanical_energy(x, model.constants, model.stiffness_poly)
     work = np.zeros((5, x.size))
     code = INTEGRATORS[method]
+    held_inputs = np.zeros(N_INPUTS)  # no current demand; the load system is absent
     for k in range(int(round(DURATION / dt))):
-        step(code, k * dt, x, dt, model.constants, 0.0, model.force_table, model.stiffness_poly, work)
+        step(code, k * dt, x, dt, model.constants, held_inputs, model.force_table, model.stiffness_poly, work)
     return x, energy_0, mechanical_energy(x, model.constants, model.stiffness_poly)
 
 
