@@ -39,11 +39,6 @@ def _pearson(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.clip(r, -1.0, 1.0)
 
 
-def _spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Spearman correlation along the last axis (Pearson of average ranks)."""
-    return _pearson(stats.rankdata(x, axis=-1), stats.rankdata(y, axis=-1))
-
-
 def bootstrap_correlation(x, y, method: str = "spearman", *, n_boot: int = 1000, confidence: float = 0.95, seed=None):
     """Correlation of ``x`` and ``y`` with a percentile-bootstrap confidence interval.
 
@@ -69,13 +64,13 @@ def bootstrap_correlation(x, y, method: str = "spearman", *, n_boot: int = 1000,
 
 def _correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, confidence: float):
     """Estimates and percentile CIs for each row of ``X`` (shape (p, n)) against ``y``, shared resamples ``idx``."""
-    statistic = _pearson if method == "pearson" else _spearman
-    estimate = statistic(X, y[None, :])
-    yb = y[idx]
+    transform = (lambda v: stats.rankdata(v, axis=-1)) if method == "spearman" else (lambda v: v)
+    estimate = _pearson(transform(X), transform(y)[None, :])
+    yb = transform(y[idx])  # ranked once, shared by every parameter
     alpha = 0.5 * (1.0 - confidence)
     lower, upper = np.full(len(X), math.nan), np.full(len(X), math.nan)
     for j, x in enumerate(X):
-        boot = statistic(x[idx], yb)
+        boot = _pearson(transform(x[idx]), yb)
         boot = boot[np.isfinite(boot)]  # resamples without variance have no correlation
         if len(boot):
             lower[j], upper[j] = np.quantile(boot, [alpha, 1.0 - alpha])

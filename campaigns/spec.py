@@ -25,7 +25,7 @@ from typing import Annotated, Literal
 import pydantic
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
-from campaigns.catalog import CONDITION_UNITS, Catalog
+from campaigns.catalog import CONDITION_UNITS, SCENE_PREFIX, Catalog
 from twin.errors import InputError
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
@@ -182,7 +182,6 @@ class Dataset(_Strict):
     @classmethod
     def _known_scene(cls, scene: str | None, info: ValidationInfo) -> str | None:
         return Base._known_scene(scene, info) if scene is not None else None
-
 
 
 class Observability(_Strict):
@@ -369,7 +368,7 @@ class CampaignSpec(_Strict):
         duplicates = sorted({t for t in targets if targets.count(t) > 1})
         if duplicates:
             problems.append(f"uncertainties: target(s) listed twice: {', '.join(duplicates)}")
-        sampled = {t.removeprefix("scene.") for t in targets if t.startswith("scene.")}
+        sampled = {t.removeprefix(SCENE_PREFIX) for t in targets if t.startswith(SCENE_PREFIX)}
         for k, dataset in enumerate(self.datasets):
             clash = sorted(sampled & set(dataset.conditions))
             if clash:

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from campaigns.catalog import CONDITION_UNITS, SCENE_PREFIX
+from campaigns.catalog import CONDITION_UNITS
 from campaigns.runs import STATUS_MEANINGS
 from campaigns.spec import HALF_RANGE_SIGMAS, CampaignSpec
 
@@ -229,10 +229,9 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
     data_vars["t_reached"] = (dims, t_reached, {"units": "s", "long_name": "simulated time reached"})
     data_vars["wall_time"] = (dims, wall_time, {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})
-    sampled_conditions = {d.target.removeprefix(SCENE_PREFIX) for d in spec.distributions()}
     for key, unit in CONDITION_UNITS.items():
         values = [ds.conditions.get(key, math.nan) for ds in spec.datasets]
-        if key not in sampled_conditions and any(not math.isnan(v) for v in values):
+        if any(not math.isnan(v) for v in values):
             long_name = f"data-set condition {key} (NaN: the scene's own value)"
             data_vars[f"condition_{key}"] = (("dataset",), np.array(values, dtype=float), {"units": unit, "long_name": long_name})
     coords = {

@@ -53,9 +53,9 @@ class SyntheticModel:
     ----------
     faults : dict, optional
         ``{(dataset_name, run_index): kind}`` with kind ``"raise"`` (exception),
-        ``"nan"`` (a NaN feature), ``"diverge"`` (status diverged) or ``"hang"``
+        ``"nan"`` (a NaN feature), ``"diverge"`` (status diverged), ``"hang"``
         (sleeps far past ``wall_time_limit``, ignoring it, as a stuck compiled
-        loop would).
+        loop would) or ``"crash"`` (the process exits at once, as on a segfault).
     delay : float, default 0
         Seconds each run sleeps (to emulate compute time).
     log_dir : str, optional
@@ -78,6 +78,8 @@ class SyntheticModel:
             raise RuntimeError("injected failure")
         if fault == "hang":
             time.sleep(request.wall_time_limit + 3600.0)
+        if fault == "crash":
+            os._exit(3)
         values = {**SYNTHETIC_CATALOG.conditions, **request.conditions}
         params = {name: value for name, (value, _) in SYNTHETIC_CATALOG.parameters.items()}
         params.update(request.parameter_values)

@@ -8,6 +8,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
+import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 _MICRO = 1e6
@@ -37,6 +38,11 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
 
     ax = axes[0, 1]
     ax.plot(t, (ds["nut1_position"] - ds["screw_equivalent_position"]) * _MICRO, lw=0.8, label="true")
+    if "screw_angle_measured" in ds:
+        lead_arm = ds.attrs["screw_lead"] / (2 * np.pi)
+        measured = ds["linear_encoder_position"] - lead_arm * ds["screw_angle_measured"]
+        ax.plot(t, measured * _MICRO, lw=0.6, alpha=0.8, label="encoders")
+        ax.legend(fontsize=8)
     ax.set_ylabel("x_n1 - p*theta_s/2pi [um]")
     ax.set_title("(b) nut minus screw equivalent position")
 
@@ -51,6 +57,8 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
     ax = axes[1, 1]
     ax.plot(t, ds["preload_force"], lw=1.0, label="preload")
     ax.plot(t, ds["external_force"], lw=1.0, label="external force")
+    if "chamber1_pressure" in ds:
+        ax.plot(t, ds["force_demand"], lw=0.8, ls=":", label="force demand")
     ax.set_ylabel("force [N]")
     ax.set_title("(d) preload and external force")
     ax.legend(fontsize=8)
@@ -67,9 +75,9 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
     ax.set_title("(f) winding temperature")
     ax.set_xlabel("time [s]")
 
-    feature = float(ds["backlash_feature_true"]) * _MICRO
-    fig.suptitle(f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}, "
-                 f"backlash feature (true) {feature:.3f} um")
+    fig.suptitle(f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}, backlash feature "
+                 f"{float(ds['backlash_feature']) * _MICRO:.3f} um measured, "
+                 f"{float(ds['backlash_feature_true']) * _MICRO:.3f} um true")
     for a in axes.flat:
         a.grid(True, alpha=0.3)
     if path is not None:

@@ -10,6 +10,7 @@ import xarray as xr
 import campaigns
 from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
 from campaigns.sampling import sample
+from campaigns.sandbox import KILL_GRACE, Sandbox
 from campaigns.testing import SyntheticModel, synthetic_run
 from conftest import SYNTHETIC_SPEC, data_variables, load, write_spec
 
@@ -57,6 +58,21 @@ def test_in_process_isolation_records_failures_too(tmp_path):
     records = run_chunk(SyntheticModel(faults={("ds2", 1): "raise", ("ds2", 2): "nan"}), requests, "none")
     assert [r["status"] for r in records] == ["ok", "error", "failed", "ok"]
     assert [r["run_index"] for r in records] == [0, 1, 2, 3]
+
+
+def test_sandbox_survives_a_crash_and_a_hang(tmp_path):
+    """The child process dies or is killed; the records say why and the next run gets a fresh child."""
+    spec = load(write_spec(tmp_path, "runs_per_dataset = 3\n[execution]\ntimeout = 0.2\n"))
+    samples = sample(spec)
+    model = SyntheticModel(faults={("ds2", 0): "crash", ("ds2", 1): "hang"})
+    sandbox = Sandbox()
+    try:
+        records = [sandbox.run(model, build_request(spec, samples, 0, i)) for i in range(3)]
+    finally:
+        sandbox.close()
+    assert [r["status"] for r in records] == ["error", "timeout", "ok"]
+    assert records[0]["failure_reason"] == "run process died (exit code 3)"
+    assert records[1]["wall_time"] >= 0.2 + KILL_GRACE
 
 
 def test_chunk_size_rule():

@@ -9,7 +9,7 @@ import pytest
 
 import campaigns
 from campaigns.spec import HALF_RANGE_SIGMAS, SpecError
-from campaigns.testing import SyntheticModel
+from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
 from conftest import SYNTHETIC_SPEC, load, write_spec
 
 SPECS = Path(campaigns.__file__).parent / "specs"
@@ -77,19 +77,13 @@ def test_a_bad_spec_reports_every_problem_and_runs_nothing(tmp_path):
     log = tmp_path / "log"
     log.mkdir()
     with pytest.raises(SpecError) as info:
-        campaigns.run_campaign(path, tmp_path / "out", catalog=campaigns_catalog(), progress=False, run_function=SyntheticModel(log_dir=str(log)))
+        campaigns.run_campaign(path, tmp_path / "out", catalog=SYNTHETIC_CATALOG, progress=False, run_function=SyntheticModel(log_dir=str(log)))
     problems = info.value.problems
     for expected in EXPECTED:
         assert any(p.startswith(expected) for p in problems), f"{expected!r} not in {problems}"
     assert len(problems) == len(EXPECTED)
     assert not list(log.iterdir())  # the run function was never called
     assert not (tmp_path / "out").exists()  # nothing was submitted or written
-
-
-def campaigns_catalog():
-    from campaigns.testing import SYNTHETIC_CATALOG
-
-    return SYNTHETIC_CATALOG
 
 
 @pytest.mark.parametrize(

@@ -29,7 +29,7 @@ DURATION = 0.02  # s: several periods of the slowest mechanical mode (~350 Hz to
 def _free_motion(bench, scene_factory, method, dt):
     """Integrate the plant alone from a preloaded equilibrium kicked by initial velocities."""
     params = bench.with_values(LOSSLESS)
-    model = build_model(scene_factory(DURATION, preload=1000.0), params, quantizers=False)
+    model = build_model(scene_factory(DURATION, preload=1000.0), params, converters=False)
     x = model.initial_state.copy()
     x[S.SCREW_SPEED] = 2.0
     x[S.NUT1_SPEED] = 2e-3

@@ -150,58 +150,56 @@ class K(IntEnum):
     POSITION_KP = 66
     POSITION_KI = 67
     SPEED_FULL_SCALE = 68
-    SPEED_COMMAND_LSB = 69    # rad/s per LSB of the drive's analog input; 0 = not quantised
-    ENCODER_RESOLUTION = 70   # m; 0 = ideal
-    RESOLVER_RESOLUTION = 71  # rad; 0 = ideal
+    SPEED_COMMAND_BITS = 69   # word length (sign incl.) of the drive's analog speed input; 0 = not quantised
+    VALVE_COMMAND_BITS = 70   # word length (sign incl.) of the valve-command D/A; 0 = not quantised
     # divergence guard
-    STROKE_LIMIT = 72
-    MAX_MOTOR_SPEED = 73
-    MAX_TEMPERATURE = 74
-    MAX_NORMAL_APPROACH = 75
+    STROKE_LIMIT = 71
+    MAX_MOTOR_SPEED = 72
+    MAX_TEMPERATURE = 73
+    MAX_NORMAL_APPROACH = 74
     # feature zeroing
-    NUT1_ZERO = 76
-    SCREW_ANGLE_ZERO = 77
+    NUT1_ZERO = 75
+    SCREW_ANGLE_ZERO = 76
     # pneumatic load system (Eqs. 9.9-9.11, Tables B.11-B.13, pneumatics.toml)
-    PNEUMATICS = 78
-    P_SUPPLY = 79
-    P_ATMOSPHERE = 80
-    AIR_TEMPERATURE = 81
-    GAS_CONSTANT = 82
-    POLYTROPIC_EXPONENT = 83
-    REFERENCE_DENSITY = 84
-    REFERENCE_TEMPERATURE = 85
-    MAX_CONDUCTANCE = 86
-    LEAKAGE_FRACTION = 87
-    CRITICAL_RATIO = 88
-    LAMINAR_RATIO = 89
-    VALVE_MID = 90
-    VALVE_MIN = 91
-    VALVE_MAX = 92
-    VALVE_FREQUENCY = 93
-    VALVE_DAMPING = 94
-    VALVE_HYSTERESIS = 95
-    AREA1 = 96
-    AREA2 = 97
-    DEAD_VOLUME1 = 98
-    DEAD_VOLUME2 = 99
-    STROKE = 100
-    PISTON_MASS = 101
-    PISTON_DAMPING = 102
-    CYLINDER_FRICTION_STATIC = 103
-    CYLINDER_FRICTION_DYNAMIC = 104
-    CYLINDER_FRICTION_RATE = 105
-    CYLINDER_FRICTION_VISCOUS = 106
-    CYLINDER_V_THRESHOLD = 107
-    DAMPER_STIFFNESS = 108
-    DAMPER_TRAVEL = 109
-    DAMPER_DAMPING = 110
-    END_STOP_STIFFNESS = 111
-    LOAD_CELL_STIFFNESS = 112
-    LOAD_CELL_DAMPING = 113
-    LINK_OFFSET = 114         # piston position minus sled position at zero load-cell force [m]
-    FORCE_KP = 115
-    FORCE_KI = 116
-    VALVE_COMMAND_LSB = 117   # V; 0 = not quantised
+    PNEUMATICS = 77
+    P_SUPPLY = 78
+    P_ATMOSPHERE = 79
+    AIR_TEMPERATURE = 80
+    GAS_CONSTANT = 81
+    POLYTROPIC_EXPONENT = 82
+    REFERENCE_DENSITY = 83
+    REFERENCE_TEMPERATURE = 84
+    MAX_CONDUCTANCE = 85
+    LEAKAGE_FRACTION = 86
+    CRITICAL_RATIO = 87
+    LAMINAR_RATIO = 88
+    VALVE_MID = 89
+    VALVE_MIN = 90
+    VALVE_MAX = 91
+    VALVE_FREQUENCY = 92
+    VALVE_DAMPING = 93
+    VALVE_HYSTERESIS = 94
+    AREA1 = 95
+    AREA2 = 96
+    DEAD_VOLUME1 = 97
+    DEAD_VOLUME2 = 98
+    STROKE = 99
+    PISTON_MASS = 100
+    PISTON_DAMPING = 101
+    CYLINDER_FRICTION_STATIC = 102
+    CYLINDER_FRICTION_DYNAMIC = 103
+    CYLINDER_FRICTION_RATE = 104
+    CYLINDER_FRICTION_VISCOUS = 105
+    CYLINDER_V_THRESHOLD = 106
+    DAMPER_STIFFNESS = 107
+    DAMPER_TRAVEL = 108
+    DAMPER_DAMPING = 109
+    END_STOP_STIFFNESS = 110
+    LOAD_CELL_STIFFNESS = 111
+    LOAD_CELL_DAMPING = 112
+    LINK_OFFSET = 113         # piston position minus sled position at zero load-cell force [m]
+    FORCE_KP = 114
+    FORCE_KI = 115
 
 
 N_CONSTANTS = len(K)
@@ -233,6 +231,15 @@ class Signal(IntEnum):
     CHAMBER2_PRESSURE = 20
     VALVE_COMMAND = 21
     PISTON_POSITION = 22
+    # measured signals (sensors), held at their last acquisition sample
+    LINEAR_ENCODER_POSITION = 23
+    SCREW_ANGLE_MEASURED = 24
+    NUT_SPEED_MEASURED = 25
+    MOTOR_SPEED_MEASURED = 26
+    MOTOR_CURRENT_MEASURED = 27
+    TORQUE_MEASURED = 28
+    PRELOAD_FORCE_MEASURED = 29
+    EXTERNAL_FORCE_MEASURED = 30
 
 
 N_SIGNALS = len(Signal)
@@ -262,6 +269,14 @@ SIGNAL_META = {
     Signal.CHAMBER2_PRESSURE: ("Pa", "cylinder rod-side chamber pressure (absolute)"),
     Signal.VALVE_COMMAND: ("V", "effective proportional-valve command"),
     Signal.PISTON_POSITION: ("m", "piston position from the cap-end stop"),
+    Signal.LINEAR_ENCODER_POSITION: ("m", "sled position read by the linear encoder (zeroed at t = 0)"),
+    Signal.SCREW_ANGLE_MEASURED: ("rad", "screw angle read by the torque-meter encoder (zeroed at t = 0)"),
+    Signal.NUT_SPEED_MEASURED: ("m/s", "sled speed from the linear encoder (period/frequency method)"),
+    Signal.MOTOR_SPEED_MEASURED: ("rad/s", "motor speed estimated by the drive from the resolver"),
+    Signal.MOTOR_CURRENT_MEASURED: ("A", "motor current acquired through the current monitor"),
+    Signal.TORQUE_MEASURED: ("N m", "torque-meter reading"),
+    Signal.PRELOAD_FORCE_MEASURED: ("N", "preload load-cell reading"),
+    Signal.EXTERNAL_FORCE_MEASURED: ("N", "external-force load-cell reading"),
 }
 
 # Signals that exist only with the full pneumatic system.

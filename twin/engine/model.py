@@ -46,7 +46,7 @@ class Model:
 
 
 def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis", variable_angle: bool = True,
-                quantizers: bool = True, pneumatics: str = "ideal") -> Model:
+                converters: bool = True, pneumatics: str = "ideal") -> Model:
     """Derive the model constants (layout :class:`K`) and the initial equilibrium state.
 
     Parameters
@@ -59,8 +59,9 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
         Groove curvature formulas: Eqs. 3.20/3.27 (thesis) or Eqs. 3.21/3.28 (ISO 3408-4).
     variable_angle : bool
         Variable contact angle of Eq. 9.4 (True) or constant ``alpha_0``.
-    quantizers : bool
-        Encoder, resolver and analog-input quantisation on (True) or ideal.
+    converters : bool
+        Quantisation of the controller's output converters (the drive's analog speed
+        input, the valve-command D/A) on (True) or ideal.
     pneumatics : {"full", "ideal", "absent"}
         Load system: valve, chambers and piston under the force loop; an ideal
         force source following the force demand; or no external force.
@@ -158,10 +159,8 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.POSITION_KP] = p["controller.position_kp"]
     c[K.POSITION_KI] = p["controller.position_ki"]
     c[K.SPEED_FULL_SCALE] = p["drive.speed_command_full_scale"]
-    if quantizers:
-        c[K.SPEED_COMMAND_LSB] = p["drive.speed_command_full_scale"] / 2.0 ** p["drive.analog_input_bits"]
-        c[K.ENCODER_RESOLUTION] = p["sensors.linear_encoder_resolution"]
-        c[K.RESOLVER_RESOLUTION] = p["sensors.resolver_resolution"]
+    if converters:
+        c[K.SPEED_COMMAND_BITS] = p["drive.analog_input_bits"] + 1.0  # 11 bits + sign (Table B.3)
     # divergence guard
     c[K.STROKE_LIMIT] = p["sled.stroke_limit"]
     c[K.MAX_MOTOR_SPEED] = MAX_MOTOR_SPEED_FACTOR * MOTOR_MAX_PERMISSIBLE_SPEED
@@ -169,8 +168,8 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
 
     c[K.PNEUMATICS] = PNEUMATICS_LEVELS[pneumatics]
-    if quantizers:
-        c[K.VALVE_COMMAND_LSB] = (p["pneumatics.valve_command_max"] - p["pneumatics.valve_command_min"]) / 2.0 ** p["controller.valve_command_dac_bits"]
+    if converters:
+        c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
 
     x0 = preload_equilibrium(c, stiffness_poly, preload)
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]

@@ -17,6 +17,24 @@ from twin.scenes.profiles import profile_value
 
 
 @numba.njit(cache=True)
+def transmitted_torque(x, c):
+    """``T_tm`` through couplings and torque meter (Sec. 9.3, elasto-backlash) [N m]."""
+    return elasto_backlash(
+        x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], x[S.REDUCER_SPEED] - x[S.SCREW_SPEED],
+        c[K.TORSION_STIFFNESS], c[K.TORSION_DAMPING], c[K.REDUCER_BACKLASH],
+    )
+
+
+@numba.njit(cache=True)
+def preload_between_nuts(x, c):
+    """Preload force magnitude between the nuts (Secs. 9.2-9.3) [N]."""
+    return preload_force(
+        x[S.NUT2_POSITION] - x[S.NUT1_POSITION], x[S.NUT2_SPEED] - x[S.NUT1_SPEED],
+        c[K.PRELOAD_COMPRESSION], c[K.PRELOAD_STIFFNESS], c[K.PRELOAD_DAMPING], c[K.PRELOAD_ORIENTATION],
+    )
+
+
+@numba.njit(cache=True)
 def internal_forces(t, x, c, force_table, stiffness_poly):
     """Coupling forces of the mechanical chain at state ``x``.
 
@@ -26,10 +44,6 @@ def internal_forces(t, x, c, force_table, stiffness_poly):
         ``T_tm`` [N m] (Sec. 9.3), screw-on-nut axial forces [N] (Eqs. 9.4-9.6),
         preload magnitude [N], external force [N], per-sphere normal loads [N].
     """
-    torque = elasto_backlash(
-        x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], x[S.REDUCER_SPEED] - x[S.SCREW_SPEED],
-        c[K.TORSION_STIFFNESS], c[K.TORSION_DAMPING], c[K.REDUCER_BACKLASH],
-    )
     arm = c[K.LEAD_ARM]
     variable = c[K.VARIABLE_ANGLE] > 0.5
     dx1 = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[S.NUT1_ANGLE]) - x[S.NUT1_POSITION]
@@ -42,12 +56,8 @@ def internal_forces(t, x, c, force_table, stiffness_poly):
     f2, p2, _ = nut_axial_force(dx2, dv2, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
                                 stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
                                 c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
-    preload = preload_force(
-        x[S.NUT2_POSITION] - x[S.NUT1_POSITION], x[S.NUT2_SPEED] - x[S.NUT1_SPEED],
-        c[K.PRELOAD_COMPRESSION], c[K.PRELOAD_STIFFNESS], c[K.PRELOAD_DAMPING], c[K.PRELOAD_ORIENTATION],
-    )
-    external = external_force(t, x, c, force_table)
-    return torque, f1, f2, preload, external, p1, p2
+    return (transmitted_torque(x, c), f1, f2, preload_between_nuts(x, c), external_force(t, x, c, force_table),
+            p1, p2)
 
 
 @numba.njit(cache=True)

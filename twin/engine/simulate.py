@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Mapping
 
 import numpy as np
 import xarray as xr
 
+from twin.engine.instrumentation import build_instruments, resolve_levels
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.layout import (
     BOUND_REASONS,
@@ -26,8 +28,9 @@ from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import Scene, load_scene
 
 DEFAULT_INTEGRATOR = "rk4"
-DEFAULT_DT = 3.125e-5      # s; see docs/model.md "Step size" (a quarter of the drive's speed-loop period)
+DEFAULT_DT = 3.125e-5       # s; see docs/model.md "Step size" (a quarter of the drive's speed-loop period)
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
+DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
 
 
 def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
@@ -40,8 +43,9 @@ def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
 
 def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
              integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
-             duration: float | None = None, curvature: str = "thesis", variable_angle: bool = True,
-             quantizers: bool = True, pneumatics: str = "auto", throw: bool = True) -> xr.Dataset:
+             duration: float | None = None, sensors: str | Mapping[str, str] = "full",
+             rng: np.random.Generator | int | None = None, curvature: str = "thesis", variable_angle: bool = True,
+             pneumatics: str = "auto", throw: bool = True) -> xr.Dataset:
     """Run one bench test.
 
     Parameters
@@ -58,12 +62,17 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
         Override of the scene's duration [s].
+    sensors : {"full", "quantized", "ideal"} or mapping
+        Fidelity of the instruments (:mod:`twin.engine.instrumentation`): one level
+        for all, or ``{instrument: level}`` (others "full"). ``"ideal"`` also makes
+        the controller's output converters ideal (no quantisation anywhere).
+    rng : numpy.random.Generator, int or None
+        Source of the electrical noise (Table 9.5); an int seeds a new Generator;
+        ``None`` uses seed 0. Same generator state, same noise.
     curvature : {"thesis", "iso"}
         Groove curvature formulas (Eqs. 3.20/3.27 or 3.21/3.28).
     variable_angle : bool
         Eq. 9.4 variable contact angle (True) or constant design angle.
-    quantizers : bool
-        Quantisation of the encoder, resolver, the drive's analog input and the valve's D/A.
     pneumatics : {"auto", "full", "ideal", "absent"}
         External-force system: the pneumatic cylinder under the force loop
         (Eqs. 9.9-9.11), an ideal force source, or none. ``"auto"`` is
@@ -76,8 +85,9 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     Returns
     -------
     xarray.Dataset
-        Signals on ``time`` [s] with ``units`` attributes, the scalar
-        ``backlash_feature_true`` [m] (Eq. 9.12 on true signals) and run metadata.
+        True and measured signals on ``time`` [s] with ``units`` attributes, the
+        scalars ``backlash_feature`` (Eq. 9.12 on the measured encoder signals) and
+        ``backlash_feature_true`` (on true signals), and run metadata in ``attrs``.
 
     Raises
     ------
@@ -103,21 +113,30 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         problems.append(f"pneumatics: {pneumatics!r} is not one of auto, {', '.join(PNEUMATICS_LEVELS)}")
     elif pneumatics == "absent" and scene.has_force_demand:
         problems.append(f"pneumatics: 'absent' cannot apply the force demand of scene '{scene.name}'; use 'full' or 'ideal'")
+    levels, level_problems = resolve_levels(sensors)
+    problems += level_problems
+    if rng is not None and not isinstance(rng, (np.random.Generator, int)):
+        problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
     speed_every = _steps_per(params.value("drive.speed_loop_sample_time"), dt, "speed-loop period", problems)
     position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period", problems)
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
         raise OptionError(problems)
 
-    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle, quantizers=quantizers,
-                        pneumatics=pneumatics)
+    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle,
+                        converters=sensors != "ideal", pneumatics=pneumatics)
+    generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
+        DEFAULT_NOISE_SEED if rng is None else rng)
     n_steps = int(round(scene.duration / dt))
+    instruments = build_instruments(params.values(), scene.condition("room_temperature"), levels, generator,
+                                    n_steps // position_every + 1)
     output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
     x = model.initial_state.copy()
     start = time.perf_counter()
-    status, bound, steps_done, rows, feature_sum, feature_samples = run_loop(
+    status, bound, steps_done, rows, feature_sums, feature_samples = run_loop(
         x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
-        speed_every, position_every, output_every, INTEGRATORS[integrator], output)
+        speed_every, position_every, output_every, INTEGRATORS[integrator], instruments.parameters,
+        instruments.levels, instruments.noise, output)
     wall_time = time.perf_counter() - start
     t_reached = steps_done * dt
     reason = BOUND_REASONS[bound]
@@ -130,10 +149,12 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         for signal in Signal
         if pneumatics == "full" or signal not in PNEUMATIC_SIGNALS
     }
-    feature = feature_sum / feature_samples if (status == STATUS_OK and feature_samples) else np.nan
-    data_vars["backlash_feature_true"] = ((), feature, {
-        "units": "m", "long_name": "backlash feature f_b on true signals (Eq. 9.12)",
-        "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
+    ok = status == STATUS_OK and feature_samples > 0
+    for name, total, source in (("backlash_feature_true", feature_sums[0], "true signals"),
+                                ("backlash_feature", feature_sums[1], "the linear encoder and the torque-meter encoder")):
+        data_vars[name] = ((), total / feature_samples if ok else np.nan, {
+            "units": "m", "long_name": f"backlash feature f_b (Eq. 9.12) from {source}",
+            "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
     return xr.Dataset(
         data_vars,
         coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"})},
@@ -143,12 +164,14 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "t_reached": t_reached,
             "scene": scene.name,
             "parameter_set": params.name,
+            "screw_lead": params.value("ball_screw.lead"),
             "integrator": integrator,
             "dt": dt,
             "curvature": curvature,
             "variable_contact_angle": int(variable_angle),
-            "quantizers": int(quantizers),
             "pneumatics": pneumatics,
+            "sensors": ", ".join(f"{k}={v}" for k, v in levels.items()),
+            "noise_seed": "caller generator" if isinstance(rng, np.random.Generator) else str(DEFAULT_NOISE_SEED if rng is None else rng),
             "wall_time": wall_time,
         },
     )

@@ -1,0 +1,40 @@
+"""Wall-time share of the sensor models (issue: sensors and acquisition).
+
+Times the same scene with every instrument ideal (true signals, no sensor model runs) and at
+the quantized and full (edge-accurate with errors and noise) levels; prints the overhead.
+Usage: python benchmarks/sensor_overhead.py [--scene ds2] [--repeats 5]
+"""
+
+import argparse
+import statistics
+import time
+
+import twin
+
+
+def median_wall(scene, repeats, **options):
+    twin.simulate(scene, duration=0.01, **options)  # compile
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        twin.simulate(scene, **options)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--scene", default="ds2")
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    scene = twin.load_scene(args.scene)
+    print(f"# scene '{scene.name}' ({scene.duration} s), median of {args.repeats} runs after compilation")
+    for integrator in ("rk4", "semi_implicit_euler"):
+        base = median_wall(scene, args.repeats, integrator=integrator, sensors="ideal")
+        for level in ("quantized", "full"):
+            wall = median_wall(scene, args.repeats, integrator=integrator, sensors=level)
+            print(f"{integrator:20s} ideal {base:.3f} s   {level:9s} {wall:.3f} s   overhead {100 * (wall / base - 1):5.1f} %")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+"""The instruments in the closed loop: measured signals, the Eq. 9.12 feature and the noise seed."""
+
+import math
+
+import numpy as np
+import pytest
+
+import twin
+from twin.engine.instrumentation import SCALE_ORIGIN
+
+MEASURED = ["linear_encoder_position", "screw_angle_measured", "nut_speed_measured", "motor_speed_measured",
+            "motor_current_measured", "torque_measured", "preload_force_measured", "external_force_measured"]
+
+
+@pytest.fixture(scope="module")
+def ds1_full():
+    return twin.simulate("ds1", duration=2.0, rng=np.random.default_rng(7))
+
+
+def test_measured_signals_present_with_units(ds1_full):
+    for name in MEASURED + ["backlash_feature"]:
+        assert name in ds1_full and ds1_full[name].attrs["units"], name
+        assert np.all(np.isfinite(ds1_full[name].values)), name
+
+
+def test_ideal_instruments_give_the_true_feature():
+    ds = twin.simulate("ds2", duration=2.0, sensors="ideal")
+    assert float(ds.backlash_feature) == float(ds.backlash_feature_true)
+    np.testing.assert_array_equal(ds.linear_encoder_position.values, ds.nut1_position.values)
+
+
+def test_quantized_linear_encoder_is_floor_of_true_position(bench):
+    """Ideal edges: the reading is floor quantisation of the true position at every acquisition sample."""
+    ds = twin.simulate("ds4", duration=2.0, sensors="quantized")
+    res = bench.value("sensors.linear_encoder_resolution")
+    expected = (np.floor((SCALE_ORIGIN + ds.nut1_position.values) / res) - np.floor(SCALE_ORIGIN / res)) * res
+    np.testing.assert_allclose(ds.linear_encoder_position.values, expected, rtol=0, atol=1e-12)
+
+
+def test_torque_meter_encoder_resolution(bench):
+    ds = twin.simulate("ds4", duration=1.5, sensors="quantized")
+    res = 2 * math.pi / (4 * bench.value("sensors.torque_meter_encoder_pulses_per_turn"))
+    error = ds.screw_angle_measured - ds.screw_angle
+    assert float(error.max()) <= 1e-12 and float(error.min()) >= -res - 1e-12
+
+
+def test_same_seed_same_noise_other_seed_other_noise():
+    a = twin.simulate("ds5", duration=0.5, rng=123)
+    b = twin.simulate("ds5", duration=0.5, rng=np.random.default_rng(123))
+    c = twin.simulate("ds5", duration=0.5, rng=124)
+    np.testing.assert_array_equal(a.torque_measured.values, b.torque_measured.values)
+    assert not np.array_equal(a.preload_force_measured.values, c.preload_force_measured.values)
+
+
+def test_preload_reading_close_to_truth(ds1_full, bench):
+    """The preload reading: 1000 N within the noise (+/-2.5 % of the 10 kN range) and accuracy errors."""
+    half_width = bench.value("sensors.electrical_noise_half_width") * bench.value("sensors.preload_load_cell_nominal_force_range2")
+    error = ds1_full.preload_force_measured - ds1_full.preload_force
+    assert float(np.abs(error).max()) <= 1.05 * half_width
+    assert abs(float(error.mean())) < 0.1 * half_width
+
+
+def test_feature_sees_backlash_through_the_encoders():
+    """Measured and true features agree to within the encoders' resolution (~1 um) when the gap is large."""
+    ds = twin.simulate("ds7", duration=4.0)
+    assert float(ds.backlash_feature) == pytest.approx(float(ds.backlash_feature_true), abs=1.0e-6)
+    assert float(ds.backlash_feature) > 5e-6
+
+
+def test_unknown_instrument_or_level_is_an_error():
+    with pytest.raises(twin.OptionError) as info:
+        twin.simulate("ds4", sensors={"laser": "full", "resolver": "perfect"})
+    assert "sensors.laser" in str(info.value) and "sensors.resolver" in str(info.value)

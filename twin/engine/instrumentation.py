@@ -1,0 +1,227 @@
+"""The bench's instruments inside the compiled loop: what the controller and the DAQ read.
+
+Wires the measurement models of :mod:`sensors` to the bench state. Every
+instrument has a fidelity level (Sec. 9.3, Table 9.5):
+
+``ideal`` (0)
+    the true signal.
+``quantized`` (1)
+    resolutions, converters and refresh/filters, no errors and no noise.
+``full`` (2)
+    edge-accurate encoders with their phase/asymmetry/precision errors, the
+    sensitivity, offset and temperature errors of the analog channels, and the
+    electrical noise of Table 9.5 drawn from the caller's Generator.
+
+Instruments and what they measure:
+
+=======================  ==========================  ==========================================
+instrument               measurand                   used by
+=======================  ==========================  ==========================================
+linear encoder           master-nut (sled) position  position loop, acquisition, Eq. 9.12
+torque-meter encoder     screw angle                 acquisition, Eq. 9.12
+resolver                 motor angle                 drive speed loop
+torque meter             transmitted torque T_tm     acquisition
+preload load cell        preload force               acquisition
+load cell                external force              force loop, acquisition
+current monitor          Hall-sensor current         acquisition
+=======================  ==========================  ==========================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+import numba
+import numpy as np
+
+from sensors.acquisition import draw_uniform_noise
+from sensors.analog import (
+    AN_GAIN,
+    AN_NOISE_HALF_WIDTH,
+    AN_OFFSET,
+    AN_SIZE,
+    AS_SIZE,
+    analog_init,
+    analog_parameters,
+    analog_read,
+    analog_step,
+)
+from sensors.encoder import (
+    ENC_SIZE,
+    ENC_STATE_SIZE,
+    encoder_init,
+    encoder_reading,
+    encoder_speed,
+    encoder_step,
+    linear_encoder_parameters,
+    torque_meter_encoder_parameters,
+)
+from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
+from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
+from sensors.torque_meter import torque_meter_parameters
+from twin.engine.layout import K, S
+
+LINEAR_ENCODER = 0
+TORQUE_METER_ENCODER = 1
+RESOLVER = 2
+TORQUE_METER = 3
+PRELOAD_CELL = 4
+LOAD_CELL = 5
+CURRENT_MONITOR = 6
+INSTRUMENTS = ("linear_encoder", "torque_meter_encoder", "resolver", "torque_meter", "preload_load_cell",
+               "load_cell", "current_monitor")
+ANALOG = (TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR)
+LEVELS = {"ideal": 0, "quantized": 1, "full": 2}
+ROW = max(ENC_SIZE, AN_SIZE, RES_SIZE)
+STATE_ROW = max(ENC_STATE_SIZE, AS_SIZE)
+
+# The linear encoder's scale: the test starts with the sled at the middle of the
+# 320 mm measuring stroke (Table B.4), so the precision error (a function of the
+# absolute scale position) is sampled about mid-scale.
+SCALE_ORIGIN = 0.16  # m
+CURRENT_MONITOR_FULL_SCALE_VOLTS = 10.0  # V at the motor's maximum current (drive analog monitor, assumption)
+
+
+@dataclass(frozen=True)
+class Instruments:
+    """Packed parameters (one row per instrument), levels and pre-drawn noise for one run."""
+
+    parameters: np.ndarray   # (len(INSTRUMENTS), ROW)
+    levels: np.ndarray       # (len(INSTRUMENTS),) int codes
+    noise: np.ndarray        # (n_samples, len(INSTRUMENTS)) [V]; zero columns for digital instruments
+    names: dict[str, str]    # instrument -> level name
+
+
+def resolve_levels(sensors: str | Mapping[str, str]) -> tuple[dict[str, str], list[str]]:
+    """Expand the ``sensors`` option (one level, or a per-instrument mapping) and list its problems."""
+    problems = []
+    if isinstance(sensors, str):
+        chosen = {name: sensors for name in INSTRUMENTS}
+    else:
+        chosen = {name: "full" for name in INSTRUMENTS}
+        for name, level in dict(sensors).items():
+            if name not in INSTRUMENTS:
+                problems.append(f"sensors.{name}: unknown instrument; allowed: {', '.join(INSTRUMENTS)}")
+            chosen[name] = level
+    for name, level in chosen.items():
+        if level not in LEVELS:
+            problems.append(f"sensors.{name}: level {level!r} is not one of {', '.join(LEVELS)}")
+    return chosen, problems
+
+
+def build_instruments(p: Mapping[str, float], room_temperature: float, levels: Mapping[str, str],
+                      rng: np.random.Generator, n_samples: int) -> Instruments:
+    """Pack the instruments of one run (parameters from the ``sensors`` group of ``p``).
+
+    Parameters
+    ----------
+    p : mapping
+        Parameter values (the whole set; the ``sensors.*`` and ``motor.max_current`` entries are used).
+    room_temperature : float
+        Scene room temperature [K]: drives every temperature effect.
+    levels : mapping
+        Instrument -> level name (see :func:`resolve_levels`).
+    rng : numpy.random.Generator
+        Source of the electrical noise (one column per analog channel, drawn in a fixed order).
+    n_samples : int
+        Number of acquisition samples of the run.
+    """
+    codes = np.array([LEVELS[levels[name]] for name in INSTRUMENTS], dtype=np.int64)
+    rows = np.zeros((len(INSTRUMENTS), ROW))
+    rows[LINEAR_ENCODER, :ENC_SIZE] = linear_encoder_parameters(p, fidelity=int(codes[LINEAR_ENCODER]))
+    rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(p, fidelity=int(codes[TORQUE_METER_ENCODER]))
+    rows[RESOLVER, :RES_SIZE] = resolver_parameters(p)
+    rows[TORQUE_METER, :AN_SIZE] = torque_meter_parameters(p, room_temperature=room_temperature)
+    rows[PRELOAD_CELL, :AN_SIZE] = preload_load_cell_parameters(p, room_temperature=room_temperature)
+    rows[LOAD_CELL, :AN_SIZE] = load_cell_parameters(p, room_temperature=room_temperature)
+    rows[CURRENT_MONITOR, :AN_SIZE] = analog_parameters(
+        full_scale=p["motor.max_current"], output_full_scale=CURRENT_MONITOR_FULL_SCALE_VOLTS, gain=1.0, offset=0.0,
+        tau=0.0, refresh_period=0.0, output_bits=0.0, daq_full_scale=p["sensors.daq_full_scale"],
+        daq_bits=p["sensors.daq_bits"],
+        noise_half_width=p["sensors.electrical_noise_half_width"] * CURRENT_MONITOR_FULL_SCALE_VOLTS)
+    if codes[RESOLVER] < LEVELS["full"]:
+        rows[RESOLVER, RES_ACCURACY] = 0.0
+        rows[RESOLVER, RES_OFFSET] = 0.0
+    noise = np.zeros((n_samples, len(INSTRUMENTS)))
+    for channel in ANALOG:
+        if codes[channel] < LEVELS["full"]:
+            rows[channel, AN_GAIN] = 1.0
+            rows[channel, AN_OFFSET] = 0.0
+            rows[channel, AN_NOISE_HALF_WIDTH] = 0.0
+        noise[:, channel] = draw_uniform_noise(rng, n_samples, rows[channel, AN_NOISE_HALF_WIDTH])
+    return Instruments(rows, codes, noise, dict(levels))
+
+
+@numba.njit(cache=True)
+def measurands(x, c, torque, preload, external):
+    """True values seen by the instruments, in ``INSTRUMENTS`` order."""
+    return (SCALE_ORIGIN + x[S.NUT1_POSITION] - c[K.NUT1_ZERO], x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO],
+            c[K.RATIO] * x[S.REDUCER_ANGLE], torque, preload, external, x[S.HALL_CURRENT])
+
+
+@numba.njit(cache=True)
+def instruments_init(state, rows, x, c, t, torque, preload, external):
+    """Zero the encoders and settle the analog channels on the initial state."""
+    m = measurands(x, c, torque, preload, external)
+    encoder_init(state[LINEAR_ENCODER], m[0], t, rows[LINEAR_ENCODER])
+    encoder_init(state[TORQUE_METER_ENCODER], m[1], t, rows[TORQUE_METER_ENCODER])
+    analog_init(state[TORQUE_METER], m[3], t, rows[TORQUE_METER])
+    analog_init(state[PRELOAD_CELL], m[4], t, rows[PRELOAD_CELL])
+    analog_init(state[LOAD_CELL], m[5], t, rows[LOAD_CELL])
+    analog_init(state[CURRENT_MONITOR], m[6], t, rows[CURRENT_MONITOR])
+
+
+@numba.njit(cache=True)
+def instruments_step(state, rows, levels, x, c, t, torque, preload, external):
+    """Advance the edge-tracking and filtered instruments to the end of an integration step."""
+    m = measurands(x, c, torque, preload, external)
+    if levels[LINEAR_ENCODER] > 0:
+        encoder_step(state[LINEAR_ENCODER], m[0], t, rows[LINEAR_ENCODER])
+    if levels[TORQUE_METER_ENCODER] > 0:
+        encoder_step(state[TORQUE_METER_ENCODER], m[1], t, rows[TORQUE_METER_ENCODER])
+    for channel in (TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR):
+        if levels[channel] > 0:
+            analog_step(state[channel], m[channel], t, rows[channel])
+
+
+@numba.njit(cache=True)
+def linear_encoder_position(state, rows, levels, x, c):
+    """Sled position read by the linear encoder, zeroed at the start [m]."""
+    if levels[LINEAR_ENCODER] == 0:
+        return x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
+    return encoder_reading(state[LINEAR_ENCODER], rows[LINEAR_ENCODER])
+
+
+@numba.njit(cache=True)
+def screw_angle_measured(state, rows, levels, x, c):
+    """Screw angle read by the torque meter's encoder, zeroed at the start [rad]."""
+    if levels[TORQUE_METER_ENCODER] == 0:
+        return x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]
+    return encoder_reading(state[TORQUE_METER_ENCODER], rows[TORQUE_METER_ENCODER])
+
+
+@numba.njit(cache=True)
+def sled_speed_measured(state, rows, levels, x, t):
+    """Sled speed by the period/frequency method of the linear encoder [m/s]."""
+    if levels[LINEAR_ENCODER] == 0:
+        return x[S.NUT1_SPEED]
+    return encoder_speed(state[LINEAR_ENCODER], t, rows[LINEAR_ENCODER])
+
+
+@numba.njit(cache=True)
+def motor_angle_measured(rows, levels, x, c):
+    """Motor angle read by the resolver [rad]."""
+    angle = c[K.RATIO] * x[S.REDUCER_ANGLE]
+    if levels[RESOLVER] == 0:
+        return angle
+    return resolver_angle(angle, rows[RESOLVER])
+
+
+@numba.njit(cache=True)
+def analog_measured(state, rows, levels, channel, true_value, noise):
+    """DAQ reading of an analog channel (true value at the ideal level)."""
+    if levels[channel] == 0:
+        return true_value
+    return analog_read(state[channel], noise, rows[channel])
+
