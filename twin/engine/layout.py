@@ -282,6 +282,32 @@ SIGNAL_META = {
 # Signals that exist only with the full pneumatic system.
 PNEUMATIC_SIGNALS = (Signal.CHAMBER1_PRESSURE, Signal.CHAMBER2_PRESSURE, Signal.VALVE_COMMAND, Signal.PISTON_POSITION)
 
+class M(IntEnum):
+    """Memory of the digital loops and the acquisition between samples."""
+
+    POSITION_INTEGRAL = 0
+    SPEED_INTEGRAL = 1
+    FORCE_INTEGRAL = 2
+    SPEED_COMMAND = 3       # after the drive's analog input [rad/s]
+    PREVIOUS_ANGLE = 4      # resolver reading at the previous speed sample [rad]
+    DEMAND = 5              # position demand at the last acquisition [m]
+    FEATURE_TRUE = 6        # running sums of Eq. 9.12
+    FEATURE_MEASURED = 7
+    SAMPLES = 8             # acquisition samples taken
+    # last acquired readings, in the order of Signal.LINEAR_ENCODER_POSITION ...
+    SLED = 9
+    SCREW_ANGLE = 10
+    SLED_SPEED = 11
+    MOTOR_SPEED = 12
+    CURRENT = 13
+    TORQUE = 14
+    PRELOAD = 15
+    EXTERNAL = 16
+
+
+N_MEMORY = len(M)
+N_MEASURED = M.EXTERNAL - M.SLED + 1
+
 # Run status codes returned by the compiled loop.
 STATUS_OK = 0
 STATUS_NONFINITE = 1

@@ -16,11 +16,13 @@ from twin.engine import instrumentation as ins
 from twin.engine.integrators import step
 from twin.engine.layout import (
     N_INPUTS,
+    N_MEASURED,
     PNEUMATICS_FULL,
     STATUS_NONFINITE,
     STATUS_OK,
     STATUS_OUT_OF_BOUNDS,
     K,
+    M,
     S,
     Signal,
     U,
@@ -63,9 +65,10 @@ def guard(x, c):
 
 
 @numba.njit(cache=True)
-def record(row, t, x, c, u, demand, speed_command, measured, force_table, stiffness_poly):
+def record(row, t, x, c, u, memory, force_table, stiffness_poly):
+    """Write one output row: true signals from the state, measured ones from the last acquisition."""
     torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
-    row[Signal.POSITION_DEMAND] = demand
+    row[Signal.POSITION_DEMAND] = memory[M.DEMAND]
     row[Signal.NUT1_POSITION] = x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
     row[Signal.NUT2_POSITION] = x[S.NUT2_POSITION] - c[K.NUT1_ZERO]
     row[Signal.SCREW_ANGLE] = x[S.SCREW_ANGLE]
@@ -80,7 +83,7 @@ def record(row, t, x, c, u, demand, speed_command, measured, force_table, stiffn
     row[Signal.TRANSMITTED_TORQUE] = torque
     row[Signal.NUT1_CONTACT_FORCE] = f1
     row[Signal.NUT2_CONTACT_FORCE] = f2
-    row[Signal.SPEED_COMMAND] = speed_command
+    row[Signal.SPEED_COMMAND] = memory[M.SPEED_COMMAND]
     row[Signal.CURRENT_DEMAND] = u[U.CURRENT_DEMAND]
     row[Signal.NUT1_SPEED] = x[S.NUT1_SPEED]
     row[Signal.FORCE_DEMAND] = profile_value(force_table, t)
@@ -89,32 +92,99 @@ def record(row, t, x, c, u, demand, speed_command, measured, force_table, stiffn
         row[Signal.CHAMBER2_PRESSURE] = x[S.CHAMBER2_PRESSURE]
         row[Signal.VALVE_COMMAND] = u[U.VALVE_COMMAND]
         row[Signal.PISTON_POSITION] = x[S.PISTON_POSITION]
-    for j in range(measured.shape[0]):
-        row[Signal.LINEAR_ENCODER_POSITION + j] = measured[j]
+    for j in range(N_MEASURED):
+        row[Signal.LINEAR_ENCODER_POSITION + j] = memory[M.SLED + j]
 
 
 @numba.njit(cache=True)
-def force_loop(t, c, u, measured_force, integral, sample_time, force_table):
+def force_loop(t, c, u, memory, sample_time, force_table):
     """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading -> valve command.
 
     The PI output is a deviation from the valve's mid position, limited to the
     command range; it goes through the output D/A and the valve's hysteresis.
-    Returns the new PI integral; the effective command is written to ``u``.
     """
     half_span = 0.5 * (c[K.VALVE_MAX] - c[K.VALVE_MIN])
-    deviation, integral = pi_step(profile_value(force_table, t) - measured_force, integral, c[K.FORCE_KP],
-                                  c[K.FORCE_KI], sample_time, half_span)
+    deviation, memory[M.FORCE_INTEGRAL] = pi_step(profile_value(force_table, t) - memory[M.EXTERNAL],
+                                                  memory[M.FORCE_INTEGRAL], c[K.FORCE_KP], c[K.FORCE_KI],
+                                                  sample_time, half_span)
     if c[K.VALVE_COMMAND_BITS] > 0.0:
         deviation = convert(deviation, half_span, c[K.VALVE_COMMAND_BITS])
-    command = deviation + c[K.VALVE_MID]
-    u[U.VALVE_COMMAND] = hysteresis_play(command, u[U.VALVE_COMMAND], c[K.VALVE_HYSTERESIS], c[K.VALVE_MIN],
-                                         c[K.VALVE_MAX])
-    return integral
+    u[U.VALVE_COMMAND] = hysteresis_play(deviation + c[K.VALVE_MID], u[U.VALVE_COMMAND], c[K.VALVE_HYSTERESIS],
+                                         c[K.VALVE_MIN], c[K.VALVE_MAX])
+
+
+@numba.njit(cache=True)
+def controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly):
+    """Reset the loops' memory and zero/settle the instruments on the initial state."""
+    memory[:] = 0.0
+    u[:] = 0.0
+    u[U.VALVE_COMMAND] = c[K.VALVE_MID]
+    torque, _, _, preload, external, _, _ = internal_forces(0.0, x, c, force_table, stiffness_poly)
+    ins.instruments_init(instrument_state, rows, x, c, 0.0, torque, preload, external)
+    memory[M.PREVIOUS_ANGLE] = ins.motor_angle_measured(rows, levels, x, c)
+
+
+@numba.njit(cache=True)
+def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise, position_table, force_table,
+                       stiffness_poly, sample_time):
+    """Acquisition instant of the cRIO: read every channel, run the position and force loops,
+    and accumulate the Eq. 9.12 feature on true and on measured signals."""
+    torque, _, _, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
+    n = int(memory[M.SAMPLES])
+    sled = ins.linear_encoder_position(instrument_state, rows, levels, x, c)
+    screw_angle = ins.screw_angle_measured(instrument_state, rows, levels, x, c)
+    memory[M.SLED] = sled
+    memory[M.SCREW_ANGLE] = screw_angle
+    memory[M.SLED_SPEED] = ins.sled_speed_measured(instrument_state, rows, levels, x, t)
+    memory[M.CURRENT] = ins.analog_measured(instrument_state, rows, levels, ins.CURRENT_MONITOR, x[S.HALL_CURRENT],
+                                            noise[n, ins.CURRENT_MONITOR])
+    memory[M.TORQUE] = ins.analog_measured(instrument_state, rows, levels, ins.TORQUE_METER, torque,
+                                           noise[n, ins.TORQUE_METER])
+    memory[M.PRELOAD] = ins.analog_measured(instrument_state, rows, levels, ins.PRELOAD_CELL, preload,
+                                            noise[n, ins.PRELOAD_CELL])
+    memory[M.EXTERNAL] = ins.analog_measured(instrument_state, rows, levels, ins.LOAD_CELL, external,
+                                             noise[n, ins.LOAD_CELL])
+    memory[M.DEMAND] = profile_value(position_table, t)
+    command, memory[M.POSITION_INTEGRAL] = pi_step(memory[M.DEMAND] - sled, memory[M.POSITION_INTEGRAL],
+                                                   c[K.POSITION_KP], c[K.POSITION_KI], sample_time,
+                                                   c[K.SPEED_FULL_SCALE])
+    if c[K.SPEED_COMMAND_BITS] > 0.0:
+        command = convert(command, c[K.SPEED_FULL_SCALE], c[K.SPEED_COMMAND_BITS])
+    memory[M.SPEED_COMMAND] = command
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        force_loop(t, c, u, memory, sample_time, force_table)
+    arm = c[K.LEAD_ARM]
+    memory[M.FEATURE_TRUE] += abs(x[S.NUT1_POSITION] - c[K.NUT1_ZERO] - arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]))
+    memory[M.FEATURE_MEASURED] += abs(sled - arm * screw_angle)
+    memory[M.SAMPLES] = n + 1
+
+
+@numba.njit(cache=True)
+def speed_sample(x, c, u, memory, rows, levels, sample_time):
+    """Drive speed-loop instant: resolver speed by differencing, PI to the current demand."""
+    angle = ins.motor_angle_measured(rows, levels, x, c)
+    measured_speed = (angle - memory[M.PREVIOUS_ANGLE]) / sample_time
+    memory[M.PREVIOUS_ANGLE] = angle
+    memory[M.MOTOR_SPEED] = measured_speed
+    u[U.CURRENT_DEMAND], memory[M.SPEED_INTEGRAL] = pi_step(memory[M.SPEED_COMMAND] - measured_speed,
+                                                            memory[M.SPEED_INTEGRAL], c[K.SPEED_KP],
+                                                            c[K.SPEED_KI], sample_time, c[K.MAX_CURRENT])
+
+
+@numba.njit(cache=True)
+def instruments_advance(t, x, c, instrument_state, rows, levels, lookback, steps_to_sample, force_table):
+    """Advance the instruments to time ``t`` (after an integration step)."""
+    if ins.analog_active(levels, lookback, steps_to_sample):
+        # the analog channels need only these three forces, not the ball-groove contacts
+        ins.instruments_step(instrument_state, rows, levels, lookback, steps_to_sample, x, c, t,
+                             transmitted_torque(x, c), preload_between_nuts(x, c), external_force(t, x, c, force_table))
+    else:
+        ins.instruments_step(instrument_state, rows, levels, lookback, steps_to_sample, x, c, t, 0.0, 0.0, 0.0)
 
 
 @numba.njit(cache=True)
 def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, speed_every, position_every,
-             output_every, method, instrument_rows, instrument_levels, noise, output):
+             output_every, method, rows, levels, lookback, noise, memory, output):
     """Integrate ``n_steps`` steps of size ``dt`` from state ``x`` (modified in place).
 
     Parameters
@@ -123,92 +193,39 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
         Speed-loop, position-loop (= acquisition) and output decimation, in steps.
     method : int
         Integrator code (:mod:`twin.engine.integrators`).
-    instrument_rows, instrument_levels, noise : arrays
+    rows, levels, lookback, noise : arrays
         Instruments of the run (:class:`twin.engine.instrumentation.Instruments`).
+    memory : 1-D array
+        Loop memory (layout :class:`twin.engine.layout.M`), holds the feature sums at the end.
     output : 2-D array
         ``(n_steps // output_every + 1, N_SIGNALS)`` buffer, filled row by row.
 
     Returns
     -------
-    (status, bound_code, steps_done, rows_written, feature_sums, feature_samples)
-        ``feature_sums`` holds the Eq. 9.12 sums on true and on measured signals at the
-        acquisition (position-loop) instants: ``|x_n1 - p theta_s / 2 pi|``, both zeroed at t = 0.
+    (status, bound_code, steps_done, rows_written)
     """
     work = np.zeros((5, x.shape[0]))
     u = np.zeros(N_INPUTS)
-    u[U.VALVE_COMMAND] = c[K.VALVE_MID]
-    pneumatics = int(c[K.PNEUMATICS]) == PNEUMATICS_FULL
-    speed_ts = speed_every * dt
-    position_ts = position_every * dt
-    position_integral = 0.0
-    speed_integral = 0.0
-    force_integral = 0.0
-    speed_command = 0.0
-    demand = profile_value(position_table, 0.0)
-    arm = c[K.LEAD_ARM]
-    levels = instrument_levels
-    state = np.zeros((7, 13))
-    torque, _, _, preload, external, _, _ = internal_forces(0.0, x, c, force_table, stiffness_poly)
-    ins.instruments_init(state, instrument_rows, x, c, 0.0, torque, preload, external)
-    analog_stepping = levels[ins.TORQUE_METER] + levels[ins.PRELOAD_CELL] + levels[ins.LOAD_CELL] \
-        + levels[ins.CURRENT_MONITOR] > 0
-    previous_angle = ins.motor_angle_measured(instrument_rows, levels, x, c)
-    measured = np.zeros(8)
-    feature_sums = np.zeros(2)
-    feature_samples = 0
-    sample = 0
-    rows = 0
+    instrument_state = np.zeros((ins.N_INSTRUMENTS, ins.STATE_ROW))
+    controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly)
+    written = 0
     for k in range(n_steps + 1):
         t = k * dt
         if k % position_every == 0:
-            # acquisition instant: controller reads its inputs, the DAQ samples every channel
-            torque, _, _, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
-            sled = ins.linear_encoder_position(state, instrument_rows, levels, x, c)
-            screw_angle = ins.screw_angle_measured(state, instrument_rows, levels, x, c)
-            measured[0] = sled
-            measured[1] = screw_angle
-            measured[2] = ins.sled_speed_measured(state, instrument_rows, levels, x, t)
-            measured[4] = ins.analog_measured(state, instrument_rows, levels, ins.CURRENT_MONITOR, x[S.HALL_CURRENT],
-                                              noise[sample, ins.CURRENT_MONITOR])
-            measured[5] = ins.analog_measured(state, instrument_rows, levels, ins.TORQUE_METER, torque,
-                                              noise[sample, ins.TORQUE_METER])
-            measured[6] = ins.analog_measured(state, instrument_rows, levels, ins.PRELOAD_CELL, preload,
-                                              noise[sample, ins.PRELOAD_CELL])
-            measured[7] = ins.analog_measured(state, instrument_rows, levels, ins.LOAD_CELL, external,
-                                              noise[sample, ins.LOAD_CELL])
-            sample += 1
-            demand = profile_value(position_table, t)
-            command, position_integral = pi_step(demand - sled, position_integral, c[K.POSITION_KP],
-                                                 c[K.POSITION_KI], position_ts, c[K.SPEED_FULL_SCALE])
-            if c[K.SPEED_COMMAND_BITS] > 0.0:
-                command = convert(command, c[K.SPEED_FULL_SCALE], c[K.SPEED_COMMAND_BITS])
-            speed_command = command
-            if pneumatics:
-                force_integral = force_loop(t, c, u, measured[7], force_integral, position_ts, force_table)
-            feature_sums[0] += abs(x[S.NUT1_POSITION] - c[K.NUT1_ZERO] - arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]))
-            feature_sums[1] += abs(sled - arm * screw_angle)
-            feature_samples += 1
+            acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise, position_table,
+                               force_table, stiffness_poly, position_every * dt)
         if k % speed_every == 0:
-            angle = ins.motor_angle_measured(instrument_rows, levels, x, c)
-            measured_speed = (angle - previous_angle) / speed_ts
-            previous_angle = angle
-            measured[3] = measured_speed
-            u[U.CURRENT_DEMAND], speed_integral = pi_step(speed_command - measured_speed, speed_integral,
-                                                          c[K.SPEED_KP], c[K.SPEED_KI], speed_ts, c[K.MAX_CURRENT])
+            speed_sample(x, c, u, memory, rows, levels, speed_every * dt)
         if k % output_every == 0:
-            record(output[rows], t, x, c, u, demand, speed_command, measured, force_table, stiffness_poly)
-            rows += 1
+            record(output[written], t, x, c, u, memory, force_table, stiffness_poly)
+            written += 1
         if k == n_steps:
             break
         step(method, t, x, dt, c, u, force_table, stiffness_poly, work)
         code = guard(x, c)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
-            return status, code, k + 1, rows, feature_sums, feature_samples
-        if analog_stepping:
-            # the instruments need only these three forces, not the ball-groove contacts
-            torque = transmitted_torque(x, c)
-            preload = preload_between_nuts(x, c)
-            external = external_force(t + dt, x, c, force_table)
-        ins.instruments_step(state, instrument_rows, levels, x, c, t + dt, torque, preload, external)
-    return STATUS_OK, 0, n_steps, rows, feature_sums, feature_samples
+            return status, code, k + 1, written
+        instruments_advance(t + dt, x, c, instrument_state, rows, levels, lookback,
+                            (position_every - (k + 1) % position_every) % position_every, force_table)
+    return STATUS_OK, 0, n_steps, written

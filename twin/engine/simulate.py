@@ -13,12 +13,14 @@ from twin.engine.instrumentation import build_instruments, resolve_levels
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.layout import (
     BOUND_REASONS,
+    N_MEMORY,
     N_SIGNALS,
     PNEUMATIC_SIGNALS,
     PNEUMATICS_LEVELS,
     SIGNAL_META,
     STATUS_OK,
     STATUS_TEXT,
+    M,
     Signal,
 )
 from twin.engine.loop import run_loop
@@ -129,14 +131,15 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         DEFAULT_NOISE_SEED if rng is None else rng)
     n_steps = int(round(scene.duration / dt))
     instruments = build_instruments(params.values(), scene.condition("room_temperature"), levels, generator,
-                                    n_steps // position_every + 1)
+                                    n_steps // position_every + 1, dt)
     output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
     x = model.initial_state.copy()
+    memory = np.zeros(N_MEMORY)
     start = time.perf_counter()
-    status, bound, steps_done, rows, feature_sums, feature_samples = run_loop(
+    status, bound, steps_done, rows = run_loop(
         x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
         speed_every, position_every, output_every, INTEGRATORS[integrator], instruments.parameters,
-        instruments.levels, instruments.noise, output)
+        instruments.levels, instruments.lookback, instruments.noise, memory, output)
     wall_time = time.perf_counter() - start
     t_reached = steps_done * dt
     reason = BOUND_REASONS[bound]
@@ -149,10 +152,11 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         for signal in Signal
         if pneumatics == "full" or signal not in PNEUMATIC_SIGNALS
     }
-    ok = status == STATUS_OK and feature_samples > 0
-    for name, total, source in (("backlash_feature_true", feature_sums[0], "true signals"),
-                                ("backlash_feature", feature_sums[1], "the linear encoder and the torque-meter encoder")):
-        data_vars[name] = ((), total / feature_samples if ok else np.nan, {
+    ok = status == STATUS_OK and memory[M.SAMPLES] > 0
+    for name, total, source in (("backlash_feature_true", memory[M.FEATURE_TRUE], "true signals"),
+                                ("backlash_feature", memory[M.FEATURE_MEASURED],
+                                 "the linear encoder and the torque-meter encoder")):
+        data_vars[name] = ((), total / memory[M.SAMPLES] if ok else np.nan, {
             "units": "m", "long_name": f"backlash feature f_b (Eq. 9.12) from {source}",
             "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
     return xr.Dataset(

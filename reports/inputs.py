@@ -1,0 +1,158 @@
+"""Reading and checking the stored files a report is made from.
+
+A report never runs a simulation: it reads ``results.nc`` (written by
+:mod:`campaigns.storage`), ``analysis.nc`` (:mod:`campaigns.analysis`; computed
+in memory from the results when absent) and, optionally, an accuracy data set
+(schema in ``docs/reports.md``). Every problem is a :class:`ReportError` that
+names the file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import xarray as xr
+
+from reports.errors import ReportError
+
+ANALYSIS_NAME = "analysis.nc"
+_RESULTS_VARIABLES = ("status", "failure_reason", "wall_time")
+_ANALYSIS_VARIABLES = ("n_used", "feature_mean", "feature_std", "spearman", "spearman_ci", "prcc", "overlap", "detection_probability")
+_ACCURACY_VARIABLES = ("wall_time", "error")
+
+
+@dataclass(frozen=True)
+class InputFile:
+    """A file the report was made from: its role, name and SHA-256."""
+
+    role: str
+    name: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Everything a report shows, loaded into memory.
+
+    Attributes
+    ----------
+    results : xarray.Dataset
+    analysis : xarray.Dataset
+    accuracy : xarray.Dataset or None
+    spec : dict
+        The campaign spec as stored in ``results.attrs["spec_json"]`` (keys ``spec`` and ``resolved``).
+    files : tuple of InputFile
+    analysis_computed : bool
+        True when the analysis was computed in memory (no ``analysis.nc`` found).
+    """
+
+    results: xr.Dataset
+    analysis: xr.Dataset
+    accuracy: xr.Dataset | None
+    spec: dict
+    files: tuple[InputFile, ...]
+    analysis_computed: bool
+
+
+def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
+    """Open and check the report's input files.
+
+    Parameters
+    ----------
+    results_path : str or Path
+        The campaign's ``results.nc``.
+    analysis_path : str or Path, optional
+        Its ``analysis.nc``; default: ``analysis.nc`` beside the results if it
+        exists, else the analysis is computed in memory (nothing is written).
+    accuracy_path : str or Path, optional
+        A speed-versus-accuracy data set.
+
+    Raises
+    ------
+    ReportError
+        If a file is missing, unreadable, or lacks what the report needs, or if
+        the analysis belongs to another campaign.
+    """
+    results_path = Path(results_path)
+    results = _open(results_path, "campaign results")
+    spec = _check_results(results, results_path)
+    files = [_describe("results", results_path)]
+    if analysis_path is None and (results_path.parent / ANALYSIS_NAME).is_file():
+        analysis_path = results_path.parent / ANALYSIS_NAME
+    if analysis_path is None:
+        from campaigns.analysis import analysis_dataset
+
+        analysis = analysis_dataset(results)
+    else:
+        analysis_path = Path(analysis_path)
+        analysis = _open(analysis_path, "campaign analysis")
+        _check_analysis(analysis, analysis_path, results)
+        files.append(_describe("analysis", analysis_path))
+    accuracy = None
+    if accuracy_path is not None:
+        accuracy_path = Path(accuracy_path)
+        accuracy = _open(accuracy_path, "speed-versus-accuracy")
+        _check_accuracy(accuracy, accuracy_path)
+        files.append(_describe("accuracy", accuracy_path))
+    return Inputs(results, analysis, accuracy, spec, tuple(files), analysis_path is None)
+
+
+def _open(path: Path, what: str) -> xr.Dataset:
+    if not path.exists():
+        raise ReportError(path, f"{what} file not found")
+    if not path.is_file():
+        raise ReportError(path, f"is not a file (expected the {what} netCDF file)")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.load()
+    except Exception as exc:  # netCDF4/HDF5 raise many types for a truncated or foreign file
+        raise ReportError(path, f"cannot be read as a netCDF {what} file ({type(exc).__name__}: {exc}); is it complete?") from exc
+
+
+def _describe(role: str, path: Path) -> InputFile:
+    return InputFile(role, path.name, hashlib.sha256(path.read_bytes()).hexdigest())
+
+
+def _missing(ds: xr.Dataset, names) -> list[str]:
+    return [n for n in names if n not in ds.variables]
+
+
+def _check_results(results: xr.Dataset, path: Path) -> dict:
+    problems = [f"variable {n!r} missing" for n in _missing(results, _RESULTS_VARIABLES)]
+    problems += [f"dimension {d!r} missing" for d in ("dataset", "run") if d not in results.dims]
+    if not any(results[v].attrs.get("role") == "feature" for v in results.data_vars):
+        problems.append("no feature variable (attribute role = 'feature')")
+    try:
+        spec = json.loads(results.attrs["spec_json"])
+        spec["spec"]["datasets"]
+    except KeyError as exc:
+        problems.append(f"spec_json attribute missing or incomplete (no {exc})")
+    except (TypeError, json.JSONDecodeError) as exc:
+        problems.append(f"spec_json attribute is not valid JSON ({exc})")
+    if problems:
+        raise ReportError(path, "not a campaign results file: " + "; ".join(problems))
+    return spec
+
+
+def _check_analysis(analysis: xr.Dataset, path: Path, results: xr.Dataset) -> None:
+    missing = _missing(analysis, _ANALYSIS_VARIABLES)
+    if missing:
+        raise ReportError(path, f"not a campaign analysis file: variable(s) {', '.join(missing)} missing")
+    stored, expected = analysis.attrs.get("source_spec_hash", ""), results.attrs.get("spec_hash", "")
+    if stored and expected and stored != expected:
+        raise ReportError(
+            path,
+            f"analysis of another campaign (spec hash {stored[:16]}, results {expected[:16]}); "
+            "re-run `twin campaign analyze` on these results or pass the matching analysis",
+        )
+
+
+def _check_accuracy(accuracy: xr.Dataset, path: Path) -> None:
+    missing = _missing(accuracy, _ACCURACY_VARIABLES)
+    if missing:
+        raise ReportError(path, f"not a speed-versus-accuracy data set: variable(s) {', '.join(missing)} missing (see docs/reports.md)")
+    if accuracy["wall_time"].ndim != 1 or accuracy["wall_time"].dims != accuracy["error"].dims:
+        raise ReportError(path, "wall_time and error must share one dimension (one entry per solver configuration)")

@@ -1,0 +1,90 @@
+"""The report model: what a report says, independent of how it is rendered.
+
+:mod:`reports.content` builds one :class:`Report` from the stored campaign
+files; :mod:`reports.html` and :mod:`reports.pdf` render the same model, so the
+two documents carry the same sections, tables, figures and numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Paragraph:
+    """Plain text (no markup: renderers escape it)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Callout:
+    """A short verdict set apart from the text.
+
+    ``tone`` is ``"good"`` (a requirement met), ``"bad"`` (not met, or failures)
+    or ``"info"`` (something missing or to keep in mind).
+    """
+
+    text: str
+    tone: str = "info"
+
+
+@dataclass(frozen=True)
+class Heading:
+    """A subsection heading (the section is level 1)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Table:
+    """A numbered table; every cell is already formatted text."""
+
+    number: int
+    caption: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A numbered figure: PNG bytes and a caption that says what to look at."""
+
+    number: int
+    key: str
+    caption: str
+    png: bytes
+
+
+Block = Paragraph | Callout | Heading | Table | Figure
+
+
+@dataclass(frozen=True)
+class Section:
+    """A top-level, numbered section; ``key`` is its stable anchor."""
+
+    key: str
+    title: str
+    blocks: tuple[Block, ...]
+
+
+@dataclass(frozen=True)
+class Report:
+    """A whole report.
+
+    Attributes
+    ----------
+    title, subtitle : str
+    generated_at : str
+        ISO 8601 timestamp (UTC); the only part allowed to differ between two
+        reports of the same input.
+    facts : tuple of (str, str)
+        Key facts of the title page.
+    sections : tuple of Section
+    """
+
+    title: str
+    subtitle: str
+    generated_at: str
+    facts: tuple[tuple[str, str], ...]
+    sections: tuple[Section, ...] = field(default=())
