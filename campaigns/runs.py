@@ -116,11 +116,16 @@ def execute(run_function: RunFunction, request: RunRequest) -> dict:
     start = time.perf_counter()
     try:
         result = run_function(request)
-    except Exception as exc:  # a failing run is data; the campaign goes on
+        wall_time = time.perf_counter() - start
+        return _checked(request, result, wall_time)
+    except Exception as exc:  # a failing run (or a malformed result) is data; the campaign goes on
         last = traceback.extract_tb(exc.__traceback__)[-1]
         reason = f"{type(exc).__name__}: {exc} (at {last.filename}:{last.lineno})"
         return record(request, "error", reason, math.nan, time.perf_counter() - start)
-    wall_time = time.perf_counter() - start
+
+
+def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
+    """The record of a returned result; an "ok" run without every feature finite is "failed"."""
     status = str(result.get("status", "ok"))
     reason = str(result.get("failure_reason", ""))
     features = {f: float(v) for f, v in (result.get("features") or {}).items() if f in request.features}

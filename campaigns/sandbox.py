@@ -92,9 +92,11 @@ class Sandbox:
             return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"), float("nan"))
         start = time.perf_counter()
         try:
-            self._from_child.recv()
+            message = self._from_child.recv()
         except EOFError:
             return self._died(request, start)
+        if message != "started":
+            return record(request, "error", message, float("nan"), float("nan"))
         if not self._from_child.poll(request.wall_time_limit + KILL_GRACE):
             self._kill()
             elapsed = time.perf_counter() - start
@@ -137,5 +139,8 @@ def serve(read_fd: int, write_fd: int) -> None:
             run_function, request = requests.recv()
         except EOFError:
             return
+        except Exception as exc:  # e.g. the run function's module does not import here
+            records.send(f"cannot load the request in the run process: {type(exc).__name__}: {exc}")
+            continue
         records.send("started")
         records.send(execute(run_function, request))

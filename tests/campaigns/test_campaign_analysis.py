@@ -22,7 +22,7 @@ from campaigns.execution import build_request
 from campaigns.runs import execute
 from campaigns.sampling import sample
 from campaigns.testing import synthetic_run
-from conftest import SYNTHETIC_SPEC, load
+from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def _prcc_by_precision_matrix(X, y):

@@ -9,10 +9,11 @@ import xarray as xr
 
 import campaigns
 from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
+from campaigns.runs import execute
 from campaigns.sampling import sample
 from campaigns.sandbox import KILL_GRACE, Sandbox
 from campaigns.testing import SyntheticModel, synthetic_run
-from conftest import SYNTHETIC_SPEC, data_variables, load, write_spec
+from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 FAULTS = {("ds2", 3): "raise", ("ds4", 1): "nan", ("ds6", 2): "hang", ("ds5", 0): "diverge"}
 
@@ -58,6 +59,8 @@ def test_in_process_isolation_records_failures_too(tmp_path):
     records = run_chunk(SyntheticModel(faults={("ds2", 1): "raise", ("ds2", 2): "nan"}), requests, "none")
     assert [r["status"] for r in records] == ["ok", "error", "failed", "ok"]
     assert [r["run_index"] for r in records] == [0, 1, 2, 3]
+    malformed = execute(lambda request: None, requests[0])  # a broken run function is a record too
+    assert malformed["status"] == "error" and malformed["failure_reason"].startswith("AttributeError")
 
 
 def test_sandbox_survives_a_crash_and_a_hang(tmp_path):

@@ -15,7 +15,7 @@ import xarray as xr
 
 import campaigns
 from campaigns.testing import SyntheticModel, synthetic_run
-from conftest import SYNTHETIC_SPEC, data_variables, load, write_spec
+from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 DRIVER = """
 import campaigns

@@ -9,7 +9,7 @@ from scipy import stats
 from campaigns.execution import build_request
 from campaigns.sampling import draw, noise_generator, run_seed_sequence, sample, sample_run
 from campaigns.spec import Distribution
-from conftest import SYNTHETIC_SPEC, load
+from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def test_each_run_replays_alone():

@@ -10,7 +10,7 @@ import pytest
 import campaigns
 from campaigns.spec import HALF_RANGE_SIGMAS, SpecError
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
-from conftest import SYNTHETIC_SPEC, load, write_spec
+from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import xarray as xr
 
-from conftest import SYNTHETIC_SPEC, load
+from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def test_results_round_trip(reference_results, tmp_path):

@@ -13,8 +13,17 @@ from twin.engine.plant import rhs
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
-INTEGRATORS = {"rk4": RK4, "semi_implicit_euler": SEMI_IMPLICIT_EULER}
-ORDER = {"rk4": 4, "semi_implicit_euler": 1}
+ROSENBROCK_W2 = 2
+INTEGRATORS = {"rk4": RK4, "semi_implicit_euler": SEMI_IMPLICIT_EULER, "rosenbrock_w2": ROSENBROCK_W2}
+ORDER = {"rk4": 4, "semi_implicit_euler": 1, "rosenbrock_w2": 2}
+EXPLICIT = ("rk4", "semi_implicit_euler")
+ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
+WORK_VECTORS = 6  # scratch vectors in front of the W-method's matrix in the work array
+
+
+def work_array(n_states: int) -> np.ndarray:
+    """Scratch space of :func:`step`: ``WORK_VECTORS`` vectors, then the W-method's ``n x n`` matrix."""
+    return np.zeros((WORK_VECTORS + n_states, n_states))
 
 _POSITIONS = np.array([p for p, _ in POSITION_VELOCITY_PAIRS], dtype=np.int64)
 _VELOCITIES = np.array([v for _, v in POSITION_VELOCITY_PAIRS], dtype=np.int64)
@@ -24,7 +33,7 @@ _VELOCITIES = np.array([v for _, v in POSITION_VELOCITY_PAIRS], dtype=np.int64)
 def rk4_step(t, x, h, c, u, force_table, stiffness_poly, work):
     """Classical 4th-order Runge-Kutta (Hairer, Norsett & Wanner, *Solving ODEs I*, Table 1.2).
 
-    ``work`` is a (5, n) scratch array: k1..k4 and the stage state.
+    ``work`` is the scratch array of :func:`work_array`: k1..k4 and the stage state.
     """
     k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
     rhs(t, x, c, u, force_table, stiffness_poly, k1)
@@ -62,8 +71,73 @@ def semi_implicit_euler_step(t, x, h, c, u, force_table, stiffness_poly, work):
 
 
 @numba.njit(cache=True)
-def step(method, t, x, h, c, u, force_table, stiffness_poly, work):
+def w_matrix(t, x, h, c, u, force_table, stiffness_poly, work):
+    """``(I - gamma h J)^-1`` with ``J`` by forward differences of the right-hand side.
+
+    Each perturbation is ``sqrt(eps)`` relative to the state's magnitude, with a
+    floor of 1e-12 absolute: the ball-groove deflections are micrometres, so the
+    floor must sit far below them.
+    """
+    n = x.shape[0]
+    f0 = work[5]
+    matrix = work[WORK_VECTORS:WORK_VECTORS + n]
+    rhs(t, x, c, u, force_table, stiffness_poly, f0)
+    column = work[4]
+    for j in range(n):
+        saved = x[j]
+        delta = 1.5e-8 * max(abs(saved), 1e-4)
+        x[j] = saved + delta
+        rhs(t, x, c, u, force_table, stiffness_poly, column)
+        x[j] = saved
+        for i in range(n):
+            matrix[i, j] = -ROS2_GAMMA * h * (column[i] - f0[i]) / delta
+        matrix[j, j] += 1.0
+    matrix[:, :] = np.linalg.inv(matrix)
+
+
+@numba.njit(cache=True)
+def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work):
+    """Two-stage Rosenbrock W-method ROS2 (Verwer, Spee, Blom & Hundsdorfer, SIAM J. Sci. Comput. 20, 1999):
+
+        (I - gamma h J) k1 = f(x),   (I - gamma h J) k2 = f(x + h k1) - 2 k1,
+        x+ = x + h (3/2 k1 + 1/2 k2),   gamma = 1 + 1/sqrt(2).
+
+    Second order for *any* matrix ``J`` (a W-method), L-stable with the exact
+    Jacobian: the stiff contact, load-cell, Hall-filter and friction-regularisation
+    modes are damped instead of limiting the step. The matrix
+    ``(I - gamma h J)^-1`` is refreshed by :func:`w_matrix` when the loop asks.
+    """
+    n = x.shape[0]
+    k1, k2, xs, f = work[0], work[1], work[2], work[3]
+    matrix = work[WORK_VECTORS:WORK_VECTORS + n]
+    rhs(t, x, c, u, force_table, stiffness_poly, f)
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += matrix[i, j] * f[j]
+        k1[i] = acc
+    for i in range(n):
+        xs[i] = x[i] + h * k1[i]
+    rhs(t + h, xs, c, u, force_table, stiffness_poly, f)
+    for i in range(n):
+        f[i] -= 2.0 * k1[i]
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += matrix[i, j] * f[j]
+        k2[i] = acc
+    for i in range(n):
+        x[i] += h * (1.5 * k1[i] + 0.5 * k2[i])
+
+
+@numba.njit(cache=True)
+def step(method, t, x, h, c, u, force_table, stiffness_poly, work, refresh):
+    """Advance ``x`` by one step ``h``; ``refresh`` asks the W-method to rebuild its matrix."""
     if method == RK4:
         rk4_step(t, x, h, c, u, force_table, stiffness_poly, work)
-    else:
+    elif method == SEMI_IMPLICIT_EULER:
         semi_implicit_euler_step(t, x, h, c, u, force_table, stiffness_poly, work)
+    else:
+        if refresh:
+            w_matrix(t, x, h, c, u, force_table, stiffness_poly, work)
+        rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work)

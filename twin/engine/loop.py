@@ -13,7 +13,7 @@ import numpy as np
 from sensors.acquisition import convert
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
-from twin.engine.integrators import step
+from twin.engine.integrators import WORK_VECTORS, step
 from twin.engine.layout import (
     N_INPUTS,
     N_MEASURED,
@@ -184,13 +184,15 @@ def instruments_advance(t, x, c, instrument_state, rows, levels, lookback, steps
 
 @numba.njit(cache=True)
 def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, speed_every, position_every,
-             output_every, method, rows, levels, lookback, noise, memory, output):
+             output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output):
     """Integrate ``n_steps`` steps of size ``dt`` from state ``x`` (modified in place).
 
     Parameters
     ----------
     speed_every, position_every, output_every : int
         Speed-loop, position-loop (= acquisition) and output decimation, in steps.
+    jacobian_every : int
+        Steps between refreshes of the W-method's matrix (unused by explicit methods).
     method : int
         Integrator code (:mod:`twin.engine.integrators`).
     rows, levels, lookback, noise : arrays
@@ -204,7 +206,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
     -------
     (status, bound_code, steps_done, rows_written)
     """
-    work = np.zeros((5, x.shape[0]))
+    work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
     u = np.zeros(N_INPUTS)
     instrument_state = np.zeros((ins.N_INSTRUMENTS, ins.STATE_ROW))
     controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly)
@@ -221,7 +223,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
             written += 1
         if k == n_steps:
             break
-        step(method, t, x, dt, c, u, force_table, stiffness_poly, work)
+        step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0)
         code = guard(x, c)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS

@@ -138,7 +138,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     start = time.perf_counter()
     status, bound, steps_done, rows = run_loop(
         x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
-        speed_every, position_every, output_every, INTEGRATORS[integrator], instruments.parameters,
+        speed_every, position_every, output_every, position_every, INTEGRATORS[integrator], instruments.parameters,
         instruments.levels, instruments.lookback, instruments.noise, memory, output)
     wall_time = time.perf_counter() - start
     t_reached = steps_done * dt

@@ -1,0 +1,76 @@
+"""Campaign reports: HTML and PDF documents generated from the stored campaign files.
+
+Entry point (the ``twin report`` CLI calls it)::
+
+    reports.build_report(results_path, analysis_path=None, out_dir=..., *, accuracy_path=None, generated_at=None)
+
+Data flow: ``results.nc`` (+ ``analysis.nc``, + accuracy data) --:mod:`reports.inputs`-->
+loaded data --:mod:`reports.content`--> one :class:`reports.model.Report` -->
+:mod:`reports.html` and :mod:`reports.pdf`. See ``docs/reports.md``.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+from pathlib import Path
+
+from reports.errors import ReportError
+
+__all__ = ["build_report", "ReportError"]
+
+
+def build_report(
+    results_path: str | Path,
+    analysis_path: str | Path | None = None,
+    out_dir: str | Path = "report",
+    *,
+    accuracy_path: str | Path | None = None,
+    generated_at: datetime | None = None,
+) -> dict[str, Path]:
+    """Write ``report.html`` and ``report.pdf`` of a campaign; no simulation is run.
+
+    Parameters
+    ----------
+    results_path : str or Path
+        The campaign's ``results.nc``.
+    analysis_path : str or Path, optional
+        Its ``analysis.nc``. Default: ``analysis.nc`` beside the results when it
+        exists; otherwise the analysis is computed in memory (nothing is written
+        next to the results).
+    out_dir : str or Path, default "report"
+        Output directory (created if needed).
+    accuracy_path : str or Path, optional
+        A speed-versus-accuracy data set (format in ``docs/reports.md``); without
+        it the report says the section is not available.
+    generated_at : datetime, optional
+        Timestamp recorded in the report; default now (UTC). The same inputs and
+        timestamp give byte-identical HTML.
+
+    Returns
+    -------
+    dict
+        ``{"html": Path, "pdf": Path}``.
+
+    Raises
+    ------
+    ReportError
+        If an input file is missing, unreadable or inconsistent, the output
+        directory cannot be written, or the PDF cannot be compiled.
+    """
+    from reports.content import build
+    from reports.html import render_html
+    from reports.inputs import load_inputs
+    from reports.pdf import render_pdf
+
+    generated_at = (generated_at or datetime.now(timezone.utc)).astimezone(timezone.utc)
+    inputs = load_inputs(results_path, analysis_path, accuracy_path)
+    report = build(inputs, generated_at.isoformat(timespec="seconds"))
+    out_dir = Path(out_dir)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        html = out_dir / "report.html"
+        html.write_text(render_html(report), encoding="utf-8")
+    except OSError as exc:
+        raise ReportError(out_dir, f"cannot write the report there ({exc.strerror or exc})") from exc
+    pdf = render_pdf(report, out_dir / "report.pdf", generated_at)
+    return {"html": html, "pdf": pdf}

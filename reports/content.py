@@ -1,0 +1,637 @@
+"""The report's content: sections, tables, figures and captions from the stored data.
+
+:func:`build` turns the loaded inputs (:mod:`reports.inputs`) into one
+:class:`reports.model.Report`. Every number shown is read from ``results.nc``
+or ``analysis.nc`` (or the accuracy data set); nothing is simulated. Figures
+and tables are numbered in the order they appear, which both renderers keep.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from reports import figures
+from reports.figures import Group, Line, Panel
+from reports.inputs import Inputs
+from reports.model import Callout, Figure, Heading, Paragraph, Report, Section, Table
+from reports.units import axis_label, display_scale, number, quantity
+
+#: Parameters shown in a tornado chart (the strongest by |Spearman ρ|).
+TORNADO_PARAMETERS = 15
+#: Parameter rows of a correlation heat map.
+HEATMAP_PARAMETERS = 25
+#: Parameters in the scatter plots of a feature.
+SCATTER_PARAMETERS = 4
+#: Run indices listed per row of the failed-runs table before "and N more".
+LISTED_RUNS = 12
+#: Two-sided normal quantile of the 95 % band of a correlation under independence.
+_Z95 = 1.96
+#: Trace panels in the order of Figs. 9.6/9.7/9.12: title, quantity (axis label) and the stored variables each draws.
+TRACE_PANELS = (
+    ("Position demand and response", "position", ("position_demand", "nut1_position", "linear_encoder_position")),
+    ("Motor current", "current", ("motor_current", "motor_current_measured", "current_demand")),
+    ("Preload and external force", "force", ("preload_force", "preload_force_measured", "external_force", "external_force_measured", "force_demand")),
+    ("Chamber pressures", "pressure (absolute)", ("chamber1_pressure", "chamber2_pressure")),
+)
+#: Variables of the nut-minus-screw signal of Eq. 9.12 (Fig. 9.11).
+NUT, SCREW = "nut1_position", "screw_equivalent_position"
+SECTION_TITLES = {
+    "summary": "Summary",
+    "distributions": "Feature distributions",
+    "correlations": "Correlations",
+    "scatter": "Feature against the top-ranked parameters",
+    "traces": "Representative traces",
+    "observability": "Observability",
+    "failures": "Failed runs",
+    "speed": "Speed and accuracy",
+    "fidelity": "Fidelity",
+}
+
+
+class _Builder:
+    """Shared state while building: the inputs, the colours of the data sets and the numbering."""
+
+    def __init__(self, inputs: Inputs):
+        self.inputs = inputs
+        self.results, self.analysis, self.spec = inputs.results, inputs.analysis, inputs.spec["spec"]
+        self.datasets = [str(d) for d in self.results["dataset"].values]
+        self.color = {name: f"C{i % 10}" for i, name in enumerate(self.datasets)}
+        self.features = [str(v) for v in self.results.data_vars if self.results[v].attrs.get("role") == "feature"]
+        self.measured = [f for f in self.features if not (f.endswith("_true") and f.removesuffix("_true") in self.features)]
+        self.parameters = [str(v) for v in self.results.data_vars if self.results[v].attrs.get("role") == "sampled"]
+        self._figures = 0
+        self._tables = 0
+
+    def figure(self, key: str, caption: str, png: bytes) -> Figure:
+        self._figures += 1
+        return Figure(self._figures, key, caption, png)
+
+    def table(self, caption: str, header, rows) -> Table:
+        self._tables += 1
+        return Table(self._tables, caption, tuple(header), tuple(tuple(r) for r in rows))
+
+    def true_of(self, feature: str) -> str | None:
+        """The true-signal counterpart of a measured feature, if the campaign stored one."""
+        name = feature + "_true"
+        return name if name in self.features else None
+
+    def used(self, feature: str, dataset: str) -> np.ndarray:
+        """Feature values of the runs the statistics use (status ok, finite value)."""
+        row = self.results.sel(dataset=dataset)
+        values = row[feature].values.astype(float)
+        return values[(row["status"].values == "ok") & np.isfinite(values)]
+
+    def feature_scale(self) -> tuple[float, str]:
+        """One display unit for every feature, so measured and true panels compare directly."""
+        unit = self.results[self.features[0]].attrs.get("units", "")
+        return display_scale(unit, np.concatenate([self.results[f].values.ravel() for f in self.features]))
+
+    def describe(self, dataset: str) -> str:
+        """``ds2 (scene ds2; backlash 80 µm, preload 0 N)``."""
+        entry = next(d for d in self.spec["datasets"] if d["name"] == dataset)
+        scene = entry.get("scene") or self.spec["base"]["scene"]
+        conditions = ", ".join(f"{k.replace('_', ' ')} {quantity(v, _condition_unit(self.results, k))}" for k, v in entry["conditions"].items())
+        return f"{dataset} (scene {scene}" + (f"; {conditions})" if conditions else ")")
+
+    def label(self, name: str) -> str:
+        return self.results[name].attrs.get("long_name", name) if name in self.results else name
+
+
+def _condition_unit(results, key: str) -> str:
+    variable = f"condition_{key}"
+    return results[variable].attrs.get("units", "") if variable in results else ""
+
+
+def build(inputs: Inputs, generated_at: str) -> Report:
+    """The report model of a campaign.
+
+    Parameters
+    ----------
+    inputs : Inputs
+        The loaded results, analysis and optional accuracy data.
+    generated_at : str
+        Timestamp recorded in the report.
+
+    Returns
+    -------
+    Report
+    """
+    b = _Builder(inputs)
+    sections = tuple(
+        Section(key, SECTION_TITLES[key], tuple(make(b)))
+        for key, make in (
+            ("summary", _summary),
+            ("distributions", _distributions),
+            ("correlations", _correlations),
+            ("scatter", _scatter),
+            ("traces", _traces),
+            ("observability", _observability),
+            ("failures", _failures),
+            ("speed", _speed),
+            ("fidelity", _fidelity),
+        )
+    )
+    status = b.results["status"].values
+    facts = (
+        ("Campaign", b.spec["name"]),
+        ("Description", b.spec.get("description") or "–"),
+        ("Runs", f"{status.size} ({int((status == 'ok').sum())} succeeded, {int((status != 'ok').sum())} failed)"),
+        ("Spec hash", b.results.attrs.get("spec_hash", "–")),
+        ("Results created", b.results.attrs.get("date_created", "–")),
+        ("Report generated", generated_at),
+    )
+    return Report(
+        title=f"Monte Carlo campaign report: {b.spec['name']}",
+        subtitle="BenchTwin, ball-screw test bench digital twin (Bertolino 2020, Sec. 9.4)",
+        generated_at=generated_at,
+        facts=facts,
+        sections=sections,
+    )
+
+
+# --- Summary -----------------------------------------------------------------------------------
+
+
+def _summary(b: _Builder):
+    spec, results = b.spec, b.results
+    status = results["status"].values
+    n_failed = int((status != "ok").sum())
+    yield Paragraph(
+        f"Campaign '{spec['name']}' ran the model with parameter set '{spec['base']['parameters']}' on "
+        f"{len(b.datasets)} data set(s) of {results.sizes['run']} runs each ({status.size} runs). "
+        f"Each run drew {len(b.parameters)} uncertain value(s) (Table 9.5 rows of the spec) and computed the "
+        f"feature(s) {', '.join(b.features)}. Everything below is read from the stored files; no simulation was re-run."
+    )
+    yield Callout(
+        f"{status.size - n_failed} of {status.size} runs succeeded; {n_failed} failed"
+        + (" (see Failed runs)." if n_failed else "."),
+        "bad" if n_failed else "good",
+    )
+    solver = spec.get("solver", {})
+    execution = spec.get("execution", {})
+    traces = spec.get("traces", {})
+    bootstrap = json.loads(b.analysis.attrs.get("bootstrap", "{}") or "{}")
+    rows = [
+        ("Campaign", spec["name"]),
+        ("Description", spec.get("description") or "–"),
+        ("Spec hash (SHA-256)", results.attrs.get("spec_hash", "–")),
+        ("Parameter set", spec["base"]["parameters"]),
+        ("Base scene", spec["base"]["scene"]),
+        ("Features", ", ".join(b.features)),
+        ("Runs per data set", str(results.sizes["run"])),
+        ("Root seed", results.attrs.get("root_seed_entropy", str(spec.get("root_seed", "–")))),
+        ("Seeding", results.attrs.get("seeding", "–")),
+        ("Solver", ", ".join(f"{k} = {'model default' if v is None else v}" for k, v in solver.items()) or "model defaults"),
+        ("Execution", ", ".join(f"{k} = {'adaptive' if v is None else v}" for k, v in execution.items()) or "–"),
+        ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, every {traces.get('decimation', 1)}th sample: "
+                        f"{', '.join(traces.get('variables', [])) or 'none'}"),
+        ("Half-range sigmas", number(results.attrs.get("half_range_sigmas"))),
+        ("Results created", results.attrs.get("date_created", "–")),
+        ("Analysis", "computed in memory from results.nc (no analysis.nc given)" if b.inputs.analysis_computed else "analysis.nc"),
+        ("Bootstrap", ", ".join(f"{k} = {v}" for k, v in bootstrap.items()) or "–"),
+    ]
+    rows += [(f"Input file ({f.role})", f"{f.name}, SHA-256 {f.sha256}") for f in b.inputs.files]
+    yield b.table("Campaign specification, solver configuration and provenance.", ("Item", "Value"), rows)
+
+    statuses = sorted(set(status.ravel().tolist()) - {"ok"})
+    wall = results["wall_time"]
+    rows = []
+    for name in b.datasets:
+        s = results["status"].sel(dataset=name).values
+        w = wall.sel(dataset=name).values
+        rows.append(
+            [b.describe(name), str(s.size), str(int((s == "ok").sum()))]
+            + [str(int((s == st).sum())) for st in statuses]
+            + [number(np.nanmedian(w)) if np.isfinite(w).any() else "–", number(np.nansum(w))]
+        )
+    w = wall.values
+    rows.append(["all", str(status.size), str(int((status == "ok").sum()))] + [str(int((status == st).sum())) for st in statuses]
+                + [number(np.nanmedian(w)) if np.isfinite(w).any() else "–", number(np.nansum(w))])
+    yield b.table(
+        "Data sets (scene and conditions), runs per status and wall time. Wall time is machine dependent; "
+        "the total is the sum over runs (the campaign's elapsed time is shorter when workers run in parallel).",
+        ["Data set", "Runs", "ok"] + statuses + ["Median wall time per run [s]", "Total wall time [s]"],
+        rows,
+    )
+
+    rows = []
+    for name in b.parameters:
+        dist = json.loads(results[name].attrs.get("distribution", "{}") or "{}")
+        unit = results[name].attrs.get("units", "")
+        shape = ", ".join(
+            f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "sigma", "low", "high", "value") if key in dist and key != "sigma"
+        )
+        if "sigma" in dist:
+            shape += f", sigma {number(dist['sigma'])}" + (" (log)" if dist.get("kind") == "lognormal" else f" {unit}")
+        rows.append((name, dist.get("kind", "–"), shape, dist.get("source") or "–"))
+    yield b.table("Uncertain parameters (sampled per run), with their resolved distributions in SI units.",
+                  ("Parameter", "Distribution", "Values", "Source"), rows)
+
+    versions = json.loads(results.attrs.get("package_versions", "{}") or "{}")
+    yield b.table("Package versions recorded when the campaign ran.", ("Package", "Version"), sorted(versions.items()))
+
+
+# --- Feature distributions -----------------------------------------------------------------------
+
+
+def _distributions(b: _Builder):
+    factor, unit = b.feature_scale()
+    yield Paragraph(
+        "Probability density of each feature over the successful runs of every data set: a histogram with a Gaussian "
+        "kernel density estimate (Figs. 9.8 and 9.10 of the thesis). The measured feature (from the bench's sensors) "
+        "is drawn beside the true-signal feature (from the model's states): their difference is what the "
+        "instrumentation adds. Failed runs are left out."
+    )
+    for feature in b.measured:
+        true = b.true_of(feature)
+        panels = [Panel(f"{feature} (measured)" if true else feature, axis_label(feature, unit), f"probability density [1/{unit}]",
+                        tuple(Group(d, b.used(feature, d) * factor, b.color[d]) for d in b.datasets))]
+        if true:
+            panels.append(Panel(f"{true} (true signals)", axis_label(true, unit), f"probability density [1/{unit}]",
+                                tuple(Group(d, b.used(true, d) * factor, b.color[d]) for d in b.datasets)))
+        yield b.figure(
+            f"distribution-{feature}",
+            f"{b.label(feature)}: all data sets. Look at how far apart the data sets with and without backlash lie "
+            "compared with the width of each distribution, and at the shift caused by preload or external force.",
+            figures.distributions(panels),
+        )
+    rows = []
+    for name in b.datasets:
+        for feature in b.features:
+            f = b.analysis.sel(dataset=name, feature=feature)
+            rows.append((name, feature, str(int(f["n_used"])), quantity(float(f["feature_mean"]), b.results[feature].attrs.get("units", "")),
+                         quantity(float(f["feature_std"]), b.results[feature].attrs.get("units", ""))))
+    yield b.table("Mean and standard deviation of each feature over the runs used (status ok, finite feature).",
+                  ("Data set", "Feature", "Runs used", "Mean", "Standard deviation"), rows)
+    for name in b.datasets:
+        yield Heading(b.describe(name))
+        for feature in b.measured:
+            true = b.true_of(feature)
+            shown = [feature] + ([true] if true else [])
+            panels = [Panel(("true signals" if f == true else "measured") if true else f, axis_label(f, unit),
+                            f"probability density [1/{unit}]", (Group(name, b.used(f, name) * factor, b.color[name]),)) for f in shown]
+            yield b.figure(
+                f"distribution-{feature}-{name}",
+                f"{b.label(feature)} in data set {b.describe(name)}"
+                + (": measured (left) and from the true signals (right). Compare the widths: the extra spread of the "
+                   "measured feature comes from the sensors' uncertainties." if true else "."),
+                figures.distributions(panels),
+            )
+
+
+# --- Correlations ----------------------------------------------------------------------------------
+
+
+def _ranked(values: np.ndarray) -> np.ndarray:
+    """Indices of the finite entries, strongest magnitude first (ties in parameter order)."""
+    finite = np.flatnonzero(np.isfinite(values))
+    return finite[np.argsort(-np.abs(values[finite]), kind="stable")]
+
+
+def _correlations(b: _Builder):
+    a = b.analysis
+    parameters = [str(p) for p in a["parameter"].values]
+    bootstrap = json.loads(a.attrs.get("bootstrap", "{}") or "{}")
+    yield Paragraph(
+        "Spearman rank correlation between each feature and each sampled value, per data set, over the runs used. "
+        f"Whiskers are {bootstrap.get('confidence', 0.95):.0%} percentile-bootstrap intervals "
+        f"({bootstrap.get('n_boot', 'n')} resamples of the runs); diamonds are the partial rank correlation "
+        "coefficients (PRCC: the dependence left after removing the other parameters' influence). The grey band "
+        "holds correlations that independence would produce 95 % of the time with this many runs "
+        "(±1.96/√(n−1)): a bar whose interval reaches into it is not established."
+    )
+    if not parameters:
+        yield Callout("No sampled parameters: the spec has no uncertainties, so there is nothing to correlate.")
+        return
+    for feature in b.measured:
+        for name in b.datasets:
+            sel = a.sel(dataset=name, feature=feature)
+            rho = sel["spearman"].values
+            order = _ranked(rho)[:TORNADO_PARAMETERS]
+            n = int(sel["n_used"])
+            constant = [parameters[j] for j in np.flatnonzero(~np.isfinite(rho))]
+            if len(order) == 0:
+                yield Callout(f"{feature}, data set {name}: no correlation could be computed ({n} runs used).")
+                continue
+            ci = sel["spearman_ci"]
+            shown = len(order)
+            yield b.figure(
+                f"tornado-{feature}-{name}",
+                f"Correlation of {feature} with the sampled parameters, data set {b.describe(name)}, {n} runs; the "
+                f"{shown} strongest of {np.isfinite(rho).sum()} ranked by |ρ|. The top bars are the tolerances that "
+                "drive the spread of the feature; look for bars clear of the grey band."
+                + (f" Not shown (constant or no variance): {', '.join(constant)}." if constant else ""),
+                figures.tornado(
+                    [parameters[j] for j in order],
+                    rho[order],
+                    ci.sel(bound="lower").values[order],
+                    ci.sel(bound="upper").values[order],
+                    marker=("PRCC", sel["prcc"].values[order]),
+                    band=_Z95 / math.sqrt(n - 1) if n > 1 else None,
+                    xlabel=f"Spearman correlation with {feature} [–]",
+                    title=f"{feature}, {name}",
+                ),
+            )
+    for feature in b.features:
+        rho = a["spearman"].sel(feature=feature).transpose("parameter", "dataset").values
+        strength = np.nanmax(np.where(np.isfinite(rho), np.abs(rho), -1.0), axis=1)
+        order = [j for j in np.argsort(-strength, kind="stable") if strength[j] >= 0][:HEATMAP_PARAMETERS]
+        if not order:
+            continue
+        left = int((strength >= 0).sum()) - len(order)
+        yield b.figure(
+            f"heatmap-{feature}",
+            f"Spearman correlation of {feature} with each parameter (rows, strongest first) in each data set (columns). "
+            "Look for rows that stay strong across data sets (a tolerance that matters whatever the test) and for the "
+            "data set whose column is palest (the test procedure least sensitive to the tolerances)."
+            + (f" The {left} weakest parameters are not shown." if left > 0 else ""),
+            figures.heatmap(rho[order], [parameters[j] for j in order], b.datasets, colorbar_label="Spearman ρ [–]",
+                            xlabel="data set", ylabel="sampled parameter", vmin=-1.0, vmax=1.0, cmap="RdBu_r", center=0.0),
+        )
+    rows = []
+    for feature in b.measured:
+        for name in b.datasets:
+            sel = a.sel(dataset=name, feature=feature)
+            for rank, j in enumerate(_ranked(sel["spearman"].values)[:3], start=1):
+                lo, hi = sel["spearman_ci"].values[j]
+                rows.append((feature, name, str(rank), parameters[j], f"{sel['spearman'].values[j]:+.2f} [{lo:+.2f}, {hi:+.2f}]",
+                             number(sel["prcc"].values[j], 2)))
+    yield b.table("The three strongest parameters per data set: Spearman ρ with its bootstrap interval, and PRCC.",
+                  ("Feature", "Data set", "Rank", "Parameter", "Spearman ρ [interval]", "PRCC"), rows)
+
+
+# --- Scatter plots -----------------------------------------------------------------------------------
+
+
+def _scatter(b: _Builder):
+    a = b.analysis
+    parameters = [str(p) for p in a["parameter"].values]
+    factor, unit = b.feature_scale()
+    yield Paragraph(
+        "The feature against its top-ranked parameters (largest |Spearman ρ| in any data set). Each data set's mean is "
+        "subtracted from its feature values, so data sets with different backlash share one axis and the dependence "
+        "within a data set is visible."
+    )
+    for feature in b.measured:
+        rho = a["spearman"].sel(feature=feature).transpose("parameter", "dataset").values
+        strength = np.nanmax(np.where(np.isfinite(rho), np.abs(rho), -1.0), axis=1) if len(parameters) else np.array([])
+        top = [parameters[j] for j in np.argsort(-strength, kind="stable") if strength[j] >= 0][:SCATTER_PARAMETERS]
+        if not top:
+            yield Callout(f"{feature}: no parameter with a finite correlation, nothing to plot.")
+            continue
+        panels = []
+        for parameter in top:
+            values = b.results[parameter]
+            p_factor, p_unit = display_scale(values.attrs.get("units", ""), values.values)
+            points = []
+            for name in b.datasets:
+                row = b.results.sel(dataset=name)
+                y = row[feature].values.astype(float)
+                mask = (row["status"].values == "ok") & np.isfinite(y)
+                if mask.any():
+                    points.append(Line(name, row[parameter].values[mask] * p_factor, (y[mask] - y[mask].mean()) * factor, b.color[name]))
+            panels.append(Panel(parameter, axis_label(parameter, p_unit), axis_label(f"{feature} − data-set mean", unit), tuple(points)))
+        yield b.figure(
+            f"scatter-{feature}",
+            f"{feature} (minus its data-set mean) against its {len(top)} top-ranked parameters, one colour per data set. "
+            "A clear slope means the tolerance moves the feature; compare the vertical spread it explains with the "
+            "backlash to be detected.",
+            figures.scatter(panels),
+        )
+
+
+# --- Traces --------------------------------------------------------------------------------------------
+
+
+def _trace_run(b: _Builder, dataset: str, variables: list[str]) -> int | None:
+    """The first kept trace of a successful run with data (else of any run with data)."""
+    results = b.results
+    runs = [int(r) for r in results["trace_run"].values]
+    has_data = [r for r in runs if any(np.isfinite(results[v].sel(dataset=dataset, trace_run=r).values).any() for v in variables)]
+    ok = [r for r in has_data if results["status"].sel(dataset=dataset, run=r).item() == "ok"]
+    return (ok or has_data or [None])[0]
+
+
+def _trace_line(b: _Builder, variable: str, dataset: str, run: int, style: str = "-", color: str | None = None,
+                factor: float = 1.0) -> Line:
+    values = b.results[f"trace_{variable}"].sel(dataset=dataset, trace_run=run).values * factor
+    return Line(variable.replace("_", " "), b.results["trace_time"].values, values, color, style)
+
+
+def _traces(b: _Builder):
+    stored = [str(v).removeprefix("trace_") for v in b.results.data_vars if str(v).startswith("trace_")]
+    if not stored or "trace_time" not in b.results.coords:
+        yield Callout("Not available: results.nc holds no traces (set [traces] in the campaign spec to keep some).")
+        return
+    yield Paragraph(
+        "Signals of single runs, decimated as stored in results.nc (Figs. 9.6, 9.7, 9.11 and 9.12 of the thesis): one "
+        "figure per data set from its first successful traced run, then the nut-minus-screw position of every data set."
+    )
+    derived = NUT in stored and SCREW in stored
+    groups = [(title, quantity_name, [v for v in variables if v in stored]) for title, quantity_name, variables in TRACE_PANELS]
+    placed = {v for *_, variables in groups for v in variables} | ({SCREW} if derived else set())
+    groups += [(v.replace("_", " "), v.replace("_", " "), [v]) for v in stored if v not in placed]
+    for name in b.datasets:
+        run = _trace_run(b, name, [f"trace_{v}" for v in stored])
+        if run is None:
+            yield Callout(f"Data set {name}: every kept trace is empty (the traced runs failed before writing data).")
+            continue
+        panels = []
+        for title, quantity_name, variables in groups:
+            if not variables:
+                continue
+            unit = b.results[f"trace_{variables[0]}"].attrs.get("units", "")
+            factor, shown = display_scale(unit, np.concatenate([b.results[f"trace_{v}"].values.ravel() for v in variables]))
+            lines = tuple(_trace_line(b, v, name, run, ("-", "--", ":", "-.")[k % 4], f"C{k}", factor) for k, v in enumerate(variables))
+            panels.append(Panel(title, "time [s]", axis_label(quantity_name, shown), lines))
+            if derived and title.startswith("Position"):
+                panels.append(_nut_minus_screw_panel(b, [(name, run)]))
+        status = b.results["status"].sel(dataset=name, run=run).item()
+        yield b.figure(
+            f"traces-{name}",
+            f"Run {run} of data set {b.describe(name)} (status {status}). Check that the response follows the demand and "
+            "that currents, forces and pressures stay in their expected ranges; peaks mark accelerations.",
+            figures.time_series(panels),
+        )
+    if derived:
+        pairs = [(name, _trace_run(b, name, [f"trace_{NUT}", f"trace_{SCREW}"])) for name in b.datasets]
+        yield b.figure(
+            "traces-nut-minus-screw",
+            "Nut position minus the screw's equivalent position (the integrand of Eq. 9.12, Fig. 9.11) for one run of each "
+            "data set. Look at the gap between data sets with and without backlash at motion reversals.",
+            figures.time_series([_nut_minus_screw_panel(b, [(n, r) for n, r in pairs if r is not None])]),
+        )
+
+
+def _nut_minus_screw_panel(b: _Builder, runs: list[tuple[str, int]]) -> Panel:
+    time = b.results["trace_time"].values
+    differences = {name: (b.results[f"trace_{NUT}"] - b.results[f"trace_{SCREW}"]).sel(dataset=name, trace_run=run).values
+                   for name, run in runs}
+    factor, unit = display_scale("m", np.concatenate(list(differences.values())))
+    lines = tuple(Line(name if len(runs) > 1 else "x_n1 − p·θ_s/2π", time, d * factor, b.color[name]) for name, d in differences.items())
+    return Panel("Nut minus screw equivalent position", "time [s]", axis_label("x_n1 − p·θ_s/2π", unit), lines)
+
+
+# --- Observability -------------------------------------------------------------------------------------
+
+
+def _observability(b: _Builder):
+    a = b.analysis
+    fa = float(a.attrs.get("false_alarm_rate", 0.05))
+    power = float(a.attrs.get("detection_power", 0.95))
+    yield Paragraph(
+        f"Separation between data sets: the detection probability is the fraction of a data set's runs beyond the "
+        f"threshold that flags {fa:.0%} of a reference data set's runs (false alarms); the overlap coefficient is the "
+        "shared area of the two feature histograms (1: indistinguishable, 0: disjoint)."
+    )
+    for feature in b.measured:
+        detection = a["detection_probability"].sel(feature=feature).transpose("dataset", "reference").values
+        yield b.figure(
+            f"separation-{feature}",
+            f"Detection probability of {feature}: runs of the row data set flagged by a threshold set on the column data set "
+            f"at a {fa:.0%} false-alarm rate. Cells near 1 mean the bench tells the two conditions apart; compare the data sets "
+            "with backlash (rows) against those without (columns).",
+            figures.heatmap(detection, b.datasets, b.datasets, colorbar_label="detection probability [–]",
+                            xlabel="reference data set (threshold)", ylabel="tested data set", vmin=0.0, vmax=1.0, cmap="viridis"),
+        )
+        overlap = a["overlap"].sel(feature=feature).transpose("dataset", "reference").values
+        yield b.figure(
+            f"overlap-{feature}",
+            f"Overlap coefficient of the {feature} distributions of each pair of data sets. Low values (dark) mean "
+            "well-separated distributions; the diagonal is 1 by definition.",
+            figures.heatmap(overlap, b.datasets, b.datasets, colorbar_label="overlap coefficient [–]",
+                            xlabel="data set", ylabel="data set", vmin=0.0, vmax=1.0, cmap="magma"),
+        )
+    yield Heading("Minimum detectable backlash")
+    if "sweep_backlash" not in a or "minimum_detectable_backlash" not in a:
+        yield Callout("Not available: the campaign spec has no observability sweep ([observability] sweep), so the "
+                      "minimum detectable backlash cannot be compared with the 1 µm requirement.")
+        return
+    sweep = [str(s) for s in a["sweep_point"].values]
+    backlash = a["sweep_backlash"].values
+    requirement = float(a["minimum_detectable_backlash"].attrs.get("requirement", 1e-6))
+    factor_b, unit = display_scale("m", [requirement])
+    feature_factor, feature_unit = b.feature_scale()
+    yield Paragraph(
+        f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
+        f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash data set "
+        f"is interpolated linearly to where it reaches {power:.0%}: the minimum detectable backlash."
+    )
+    for feature in b.features:
+        mdb = float(a["minimum_detectable_backlash"].sel(feature=feature))
+        meets = bool(a["meets_requirement"].sel(feature=feature))
+        if not math.isfinite(mdb):
+            text, tone = f"{feature}: the detection probability never reaches {power:.0%} along the sweep; the requirement of {quantity(requirement, 'm')} is not met.", "bad"
+        else:
+            text = (f"{feature}: minimum detectable backlash {quantity(mdb, 'm')}, "
+                    + ("meets" if meets else "does not meet") + f" the {quantity(requirement, 'm')} requirement (Table 9.3).")
+            tone = "good" if meets else "bad"
+        yield Callout(text, tone)
+    nonzero = np.sort(backlash[backlash > 0])
+    if len(nonzero):
+        yield Paragraph(
+            f"The result is only as fine as the sweep: when the smallest non-zero level ({quantity(nonzero[0], 'm')}) is "
+            "already detected, the value is an upper bound from the interpolation between 0 and that level. Add data sets "
+            "with backlash near the requirement to resolve it."
+        )
+    curves = [Line(f, backlash * factor_b, a["sweep_detection_probability"].sel(feature=f).values, f"C{k}", "-" if k == 0 else "--")
+              for k, f in enumerate(b.features)]
+    minima = [(f"{f}: minimum detectable {number(float(a['minimum_detectable_backlash'].sel(feature=f)) * factor_b)} {unit}",
+               float(a["minimum_detectable_backlash"].sel(feature=f)) * factor_b, f"C{k}") for k, f in enumerate(b.features)]
+    yield b.figure(
+        "detection-sweep",
+        f"Detection probability against backlash along the sweep, per feature. Where a curve crosses the {power:.0%} line "
+        f"(star) is the minimum detectable backlash; it meets the requirement if the star lies left of the green line.",
+        figures.detection(curves, power=power, false_alarm_rate=float(a.attrs.get("false_alarm_rate", 0.05)),
+                          requirement=(f"requirement {number(requirement * factor_b)} {unit} (Table 9.3)", requirement * factor_b),
+                          minima=minima, xlabel=axis_label("backlash", unit)),
+    )
+    for feature in b.measured:
+        true = b.true_of(feature)
+        shown = [feature] + ([true] if true else [])
+        panels = [Panel(f, axis_label(f, feature_unit), f"probability density [1/{feature_unit}]",
+                        tuple(Group(d, b.used(f, d) * feature_factor, b.color[d]) for d in sweep)) for f in shown]
+        yield b.figure(
+            f"sweep-distribution-{feature}",
+            f"{feature} for the sweep data sets (Fig. 9.10 style). The smallest backlash whose distribution clears the "
+            "zero-backlash one is what the bench can observe.",
+            figures.distributions(panels),
+        )
+
+
+# --- Failed runs ---------------------------------------------------------------------------------------
+
+
+def _failures(b: _Builder):
+    results = b.results
+    status = results["status"].values
+    failed = np.argwhere(status != "ok")
+    if len(failed) == 0:
+        yield Callout("Every run succeeded: no failed runs.", "good")
+        return
+    yield Callout(f"{len(failed)} of {status.size} runs failed. They are left out of every statistic above.", "bad")
+    groups: dict[tuple[str, str, str], list[int]] = {}
+    for d, r in failed:
+        key = (b.datasets[d], str(status[d, r]), str(results["failure_reason"].values[d, r]))
+        groups.setdefault(key, []).append(int(results["run"].values[r]))
+    rows = []
+    for (name, st, reason), runs in groups.items():
+        listed = ", ".join(map(str, runs[:LISTED_RUNS])) + (f" and {len(runs) - LISTED_RUNS} more" if len(runs) > LISTED_RUNS else "")
+        rows.append((name, st, str(len(runs)), listed, reason or "–"))
+    yield b.table("Failed runs grouped by data set, status and reason (run indices within the data set).",
+                  ("Data set", "Status", "Count", "Runs", "Reason"), rows)
+    meanings = json.loads(results["status"].attrs.get("flag_meanings", "{}") or "{}")
+    present = sorted({str(s) for s in status.ravel()} - {"ok"})
+    yield b.table("What each status means.", ("Status", "Meaning"), [(s, meanings.get(s, "–")) for s in present])
+
+
+# --- Speed and accuracy ----------------------------------------------------------------------------------
+
+
+def _speed(b: _Builder):
+    accuracy = b.inputs.accuracy
+    if accuracy is None:
+        yield Callout("Speed-versus-accuracy chart and solver statistics: not available (no accuracy data set was given; "
+                      "see docs/reports.md for its format).")
+        return
+    dim = accuracy["wall_time"].dims[0]
+    labels = [str(v) for v in accuracy[dim].values] if dim in accuracy.coords else [str(i) for i in range(accuracy.sizes[dim])]
+    wall_unit = accuracy["wall_time"].attrs.get("units", "s")
+    error_unit = accuracy["error"].attrs.get("units", "")
+    factor, shown = display_scale(error_unit, accuracy["error"].values)
+    yield b.figure(
+        "speed-accuracy",
+        f"Error against wall time per solver configuration ({accuracy['error'].attrs.get('long_name', 'error')}). The "
+        "configurations toward the lower left are both fast and accurate; the campaign's configuration should be among them.",
+        figures.speed_accuracy(accuracy["wall_time"].values, accuracy["error"].values * factor, labels,
+                               xlabel=axis_label("wall time per run", wall_unit), ylabel=axis_label("|error|", shown)),
+    )
+    columns = [str(v) for v in accuracy.data_vars if accuracy[v].dims == (dim,)]
+    header = [dim] + [f"{c} [{accuracy[c].attrs['units']}]" if accuracy[c].attrs.get("units") else c for c in columns]
+    rows = [[label] + [number(accuracy[c].values[i]) if np.issubdtype(accuracy[c].dtype, np.number) else str(accuracy[c].values[i])
+                       for c in columns] for i, label in enumerate(labels)]
+    yield b.table("Solver statistics per configuration, as stored in the accuracy data set.", header, rows)
+
+
+# --- Fidelity -------------------------------------------------------------------------------------------
+
+
+def _fidelity(b: _Builder):
+    attrs = {k: v for k, v in b.results.attrs.items() if k.startswith("fidelity")}
+    if not attrs:
+        yield Callout("No fidelity configuration or audit is recorded in results.nc (no attribute named fidelity*).")
+        return
+    rows = []
+    for key, value in attrs.items():
+        try:
+            parsed = json.loads(value) if isinstance(value, str) else value
+        except json.JSONDecodeError:
+            parsed = value
+        if isinstance(parsed, dict):
+            rows += [(f"{key}.{k}", v if isinstance(v, str) else json.dumps(v)) for k, v in parsed.items()]
+        else:
+            rows.append((key, parsed if isinstance(parsed, str) else json.dumps(parsed) if isinstance(parsed, (list, bool)) else number(parsed, 6)))
+    yield b.table("Fidelity configuration and audit recorded in results.nc.", ("Attribute", "Value"), rows)
