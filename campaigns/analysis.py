@@ -143,24 +143,40 @@ def detection_probability(reference, test, false_alarm_rate: float = 0.05) -> fl
     return float(np.mean(test < np.quantile(reference, false_alarm_rate)))
 
 
-def minimum_detectable(levels, probabilities, power: float = 0.95) -> float:
-    """Smallest level whose detection probability reaches ``power``, by linear interpolation.
+def minimum_detectable(levels, probabilities, power: float = 0.95) -> tuple[float, float, float]:
+    """Smallest level whose detection probability reaches ``power``, and the sweep levels bracketing it.
 
-    ``levels`` are the swept condition values (the reference included, at its
-    own detection probability, i.e. the false-alarm rate). Returns NaN when no
-    level reaches ``power``. Between the two bracketing levels the result is
-    only as fine as the sweep: when the first non-zero level is already detected,
-    it is an upper bound.
+    ``levels`` are the swept condition values, the reference included (at its
+    own detection probability, i.e. the false-alarm rate). The estimate
+    interpolates linearly between the last level below ``power`` and the first
+    one reaching it; the truth is only known to lie between those two levels.
+
+    Returns
+    -------
+    tuple of float
+        ``(estimate, lower, upper)``; when no level reaches ``power``:
+        ``(nan, largest level, inf)``.
     """
     order = np.argsort(levels)
     levels, probabilities = np.asarray(levels, dtype=float)[order], np.asarray(probabilities, dtype=float)[order]
     reached = np.flatnonzero(probabilities >= power)
     if len(reached) == 0:
-        return math.nan
+        return math.nan, float(levels[-1]), math.inf
     k = reached[0]
     if k == 0:
-        return float(levels[0])
-    return float(np.interp(power, probabilities[k - 1 : k + 1], levels[k - 1 : k + 1]))
+        return float(levels[0]), float(levels[0]), float(levels[0])
+    estimate = float(np.interp(power, probabilities[k - 1 : k + 1], levels[k - 1 : k + 1]))
+    return estimate, float(levels[k - 1]), float(levels[k])
+
+
+def requirement_verdict(lower: float, upper: float, requirement: float = BACKLASH_REQUIREMENT) -> str:
+    """``"yes"`` if the bracket of the minimum detectable level lies at or below ``requirement``,
+    ``"no"`` if at or above it (its lower level is not detected), else ``"undetermined"``."""
+    if upper <= requirement:
+        return "yes"
+    if lower >= requirement:
+        return "no"
+    return "undetermined"
 
 
 def _used(results: xr.Dataset, feature: str) -> xr.DataArray:
@@ -189,7 +205,9 @@ def observability_sweep(
     xarray.Dataset
         ``sweep_backlash(sweep_point)``, ``sweep_detection_probability(sweep_point)``,
         the scalar ``minimum_detectable_backlash`` (the Table 9.3 requirement in its
-        attributes) and the scalar boolean ``meets_requirement``.
+        attributes), ``minimum_detectable_bracket(bound)`` (the sweep levels around
+        it) and ``meets_requirement`` (``"yes"``, ``"no"`` or ``"undetermined"``:
+        the requirement lies inside the bracket, refine the sweep).
     """
     backlash = np.array([float(results["condition_backlash"].sel(dataset=n)) for n in datasets])
     reference_name = datasets[int(np.flatnonzero(backlash == 0.0)[0])]
@@ -200,7 +218,7 @@ def observability_sweep(
 
     reference = values(reference_name)
     probability = np.array([detection_probability(reference, values(n), false_alarm_rate) for n in datasets])
-    minimum = minimum_detectable(backlash, probability, power)
+    minimum, lower, upper = minimum_detectable(backlash, probability, power)
     return xr.Dataset(
         {
             "sweep_backlash": ("sweep_point", backlash, {"units": "m", "long_name": "backlash of the sweep data set"}),
@@ -219,13 +237,21 @@ def observability_sweep(
                     "requirement_source": "Table 9.3: minimum detectable linear backlash 1 µm",
                 },
             ),
+            "minimum_detectable_bracket": (
+                "bound",
+                np.array([lower, upper]),
+                {"units": "m", "long_name": "sweep levels bracketing minimum_detectable_backlash (inf: never detected)"},
+            ),
             "meets_requirement": (
                 (),
-                bool(minimum <= BACKLASH_REQUIREMENT),
-                {"long_name": "minimum_detectable_backlash <= the Table 9.3 requirement (1 µm)"},
+                requirement_verdict(lower, upper),
+                {"long_name": "minimum detectable backlash within the Table 9.3 requirement (1 µm): yes / no / undetermined (the requirement lies inside the bracket: refine the sweep)"},
             ),
         },
-        coords={"sweep_point": ("sweep_point", np.array(datasets, dtype=object), {"long_name": "data set of the sweep"})},
+        coords={
+            "sweep_point": ("sweep_point", np.array(datasets, dtype=object), {"long_name": "data set of the sweep"}),
+            "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
+        },
     )
 
 

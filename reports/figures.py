@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from scipy import stats
 
 #: Pixels per inch of the stored PNGs: sharp on a laptop screen and on paper at the page width.
@@ -89,6 +90,12 @@ def _styled(draw):
     return wrapper
 
 
+def _tidy_x(ax) -> None:
+    """Few x ticks, and scientific notation for tiny or huge values, so tick labels never collide."""
+    ax.xaxis.set_major_locator(MaxNLocator(5))
+    ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4), useOffset=True)
+
+
 def _density(ax, group: Group) -> None:
     values = group.values[np.isfinite(group.values)]
     if len(values) == 0:
@@ -119,6 +126,7 @@ def distributions(panels: list[Panel], height: float = 3.0) -> bytes:
         for group in panel.items:
             _density(ax, group)
         ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
+        _tidy_x(ax)
         ax.legend(loc="best")
     return _png(fig)
 
@@ -173,8 +181,8 @@ def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str,
     for i in range(rows):
         for j in range(cols):
             if np.isfinite(matrix[i, j]):
-                shade = image.norm(matrix[i, j])
-                dark = abs(shade - 0.5) > 0.32 if center is not None else shade > 0.6
+                red, green, blue, _ = image.cmap(image.norm(matrix[i, j]))
+                dark = 0.299 * red + 0.587 * green + 0.114 * blue < 0.5  # perceived luminance of the cell
                 ax.text(j, i, f"{matrix[i, j]:.2f}", ha="center", va="center", fontsize=7, color="white" if dark else "black")
     ax.set_xticks(range(cols), col_labels)
     ax.set_yticks(range(rows), row_labels)
@@ -193,7 +201,9 @@ def scatter(panels: list[Panel]) -> bytes:
     for ax, panel in zip(fig.axes, panels):
         for item in panel.items:
             ax.plot(item.x, item.y, "o", ms=3.0, alpha=0.6, color=item.color, mec="none", label=item.label)
-        ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
+        ax.set(xlabel=panel.xlabel, ylabel=panel.ylabel)
+        ax.set_title(panel.title, fontsize=8)
+        _tidy_x(ax)
     for ax in fig.axes[len(panels):]:
         ax.set_visible(False)
     handles, labels = fig.axes[0].get_legend_handles_labels()
@@ -227,7 +237,7 @@ def detection(curves: list[Line], *, power: float, false_alarm_rate: float, requ
     ``requirement`` is ``(label, value)``; ``minima`` are ``(label, value, colour)`` of the
     minimum detectable backlash per feature (NaN: not reached), in the units of the x axis.
     """
-    fig = _new(1, 1, 3.2)
+    fig = _new(1, 1, 4.0)
     ax = fig.axes[0]
     for line in curves:
         ax.plot(line.x, line.y, "o" + line.style, color=line.color, lw=1.4, label=line.label)
@@ -240,7 +250,7 @@ def detection(curves: list[Line], *, power: float, false_alarm_rate: float, requ
     ax.set_xscale("symlog", linthresh=1.0)
     ax.set_ylim(-0.03, 1.03)
     ax.set(xlabel=xlabel, ylabel="detection probability [–]")
-    ax.legend(loc="lower right", fontsize=7.5)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5, frameon=False)
     return _png(fig)
 
 

@@ -17,6 +17,7 @@ from campaigns.analysis import (
     minimum_detectable,
     overlap_coefficient,
     prcc,
+    requirement_verdict,
 )
 from campaigns.execution import build_request
 from campaigns.runs import execute
@@ -123,9 +124,15 @@ def test_separation_measures_against_normal_closed_forms():
 
 
 def test_minimum_detectable_interpolates_the_sweep():
-    assert minimum_detectable([0.0, 5e-6, 40e-6], [0.05, 0.5, 1.0], 0.95) == pytest.approx(5e-6 + 35e-6 * 0.45 / 0.5)
-    assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == pytest.approx(5e-6)  # order-free
-    assert math.isnan(minimum_detectable([0.0, 5e-6], [0.05, 0.5], 0.95))
+    estimate, lower, upper = minimum_detectable([0.0, 5e-6, 40e-6], [0.05, 0.5, 1.0], 0.95)
+    assert (estimate, lower, upper) == (pytest.approx(5e-6 + 35e-6 * 0.45 / 0.5), 5e-6, 40e-6)
+    assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == (pytest.approx(5e-6), 0.0, 5e-6)  # order-free
+    estimate, lower, upper = minimum_detectable([0.0, 5e-6], [0.05, 0.5], 0.95)
+    assert math.isnan(estimate) and (lower, upper) == (5e-6, math.inf)
+    assert requirement_verdict(0.5e-6, 0.8e-6) == "yes"
+    assert requirement_verdict(5e-6, 40e-6) == "no"
+    assert requirement_verdict(0.0, 5e-6) == "undetermined"
+    assert requirement_verdict(5e-6, math.inf) == "no"
 
 
 def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
@@ -143,7 +150,9 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         assert float(p.sel(sweep_point="ds2")) == 1.0 and float(p.sel(sweep_point="ds6")) == 1.0
         minimum = a["minimum_detectable_backlash"].sel(feature="backlash_feature")
         assert 0 < float(minimum) <= 5e-6 and minimum.attrs["requirement"] == 1e-6
-        assert a["meets_requirement"].dtype == bool
+        bracket = a["minimum_detectable_bracket"].sel(feature="backlash_feature")
+        assert list(bracket.values) == [0.0, 5e-6]  # 5 um already detected: the 1 um verdict needs a finer sweep
+        assert a["meets_requirement"].sel(feature="backlash_feature") == "undetermined"
         assert float(a["overlap"].sel(feature="backlash_feature", dataset="ds2", reference="ds4")) == 0.0
 
 

@@ -303,6 +303,8 @@ class M(IntEnum):
     TORQUE = 14
     PRELOAD = 15
     EXTERNAL = 16
+    LOCAL_ERROR = 17        # largest step-doubling local-error estimate so far, in tolerance units
+    LOCAL_ERROR_STREAK = 18  # consecutive acquisition instants with the estimate above tolerance
 
 
 N_MEMORY = len(M)
@@ -312,7 +314,9 @@ N_MEASURED = M.EXTERNAL - M.SLED + 1
 STATUS_OK = 0
 STATUS_NONFINITE = 1
 STATUS_OUT_OF_BOUNDS = 2
-STATUS_TEXT = {STATUS_OK: "ok", STATUS_NONFINITE: "diverged", STATUS_OUT_OF_BOUNDS: "diverged"}
+STATUS_SOLVER_FAILED = 3  # the scipy reference path's solver gave up
+STATUS_TEXT = {STATUS_OK: "ok", STATUS_NONFINITE: "diverged", STATUS_OUT_OF_BOUNDS: "diverged",
+               STATUS_SOLVER_FAILED: "failed"}
 
 # Bound codes (which physical bound the guard tripped on).
 BOUND_REASONS = {
@@ -324,4 +328,5 @@ BOUND_REASONS = {
     5: "winding temperature beyond 200 degC",
     6: "ball-groove normal approach beyond the Hertzian validity bound",
     7: "chamber pressure outside [0, 2 x supply] (absolute)",
+    8: "finite but wrong: the step-doubling local-error estimate exceeds its tolerance (step beyond stability)",
 }

@@ -182,9 +182,38 @@ def instruments_advance(t, x, c, instrument_state, rows, levels, lookback, steps
         ins.instruments_step(instrument_state, rows, levels, lookback, steps_to_sample, x, c, t, 0.0, 0.0, 0.0)
 
 
+LOCAL_ERROR_PERSISTENCE = 3  # acquisition instants in a row above tolerance before a run is declared wrong
+
+
+@numba.njit(cache=True)
+def local_error(method, t, x, h, c, u, force_table, stiffness_poly, work, scratch, tolerance):
+    """Step-doubling estimate of the local error of one step, in units of ``tolerance``.
+
+    One step of ``h`` against two of ``h/2`` from the same state (Richardson; Hairer,
+    Norsett & Wanner, *Solving ODEs I*, Sec. II.4). Stable steps give estimates far
+    below 1; a step beyond the method's stability limit gives a growing spurious
+    mode, whose local error is of the order of the state itself, long before it
+    reaches NaN or a physical bound: this is how "finite but wrong" runs are caught.
+    ``x`` is left unchanged.
+    """
+    n = x.shape[0]
+    single = scratch[0]
+    double = scratch[1]
+    single[:] = x
+    double[:] = x
+    step(method, t, single, h, c, u, force_table, stiffness_poly, work, False)
+    step(method, t, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False)
+    step(method, t + 0.5 * h, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False)
+    worst = 0.0
+    for j in range(n):
+        scale = tolerance[j] + 1e-2 * abs(double[j])
+        worst = max(worst, abs(single[j] - double[j]) / scale)
+    return worst
+
+
 @numba.njit(cache=True)
 def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, speed_every, position_every,
-             output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output):
+             output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output, tolerance):
     """Integrate ``n_steps`` steps of size ``dt`` from state ``x`` (modified in place).
 
     Parameters
@@ -201,6 +230,9 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
         Loop memory (layout :class:`twin.engine.layout.M`), holds the feature sums at the end.
     output : 2-D array
         ``(n_steps // output_every + 1, N_SIGNALS)`` buffer, filled row by row.
+    tolerance : 1-D array
+        Absolute local-error tolerance per state for the finite-but-wrong guard
+        (:func:`local_error`, checked at every acquisition instant).
 
     Returns
     -------
@@ -210,6 +242,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
     u = np.zeros(N_INPUTS)
     instrument_state = np.zeros((ins.N_INSTRUMENTS, ins.STATE_ROW))
     controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly)
+    scratch = np.zeros((2, x.shape[0]))
     written = 0
     for k in range(n_steps + 1):
         t = k * dt
@@ -225,6 +258,14 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
             break
         step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0)
         code = guard(x, c)
+        if code == 0 and k % position_every == 0:
+            estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance)
+            memory[M.LOCAL_ERROR] = max(memory[M.LOCAL_ERROR], estimate)
+            # A legitimate transient (a new held input, a contact closing) gives a large estimate
+            # that decays within a sample or two; a step beyond stability keeps it up.
+            memory[M.LOCAL_ERROR_STREAK] = memory[M.LOCAL_ERROR_STREAK] + 1.0 if estimate > 1.0 else 0.0
+            if memory[M.LOCAL_ERROR_STREAK] >= LOCAL_ERROR_PERSISTENCE:
+                code = 8
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
             return status, code, k + 1, written

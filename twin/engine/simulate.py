@@ -25,6 +25,8 @@ from twin.engine.layout import (
 )
 from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
+from twin.engine.reference import METHODS as REFERENCE_METHODS
+from twin.engine.reference import local_error_tolerance, run_reference
 from twin.errors import OptionError, SimulationFailed
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import Scene, load_scene
@@ -47,7 +49,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
              integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
              duration: float | None = None, sensors: str | Mapping[str, str] = "full",
              rng: np.random.Generator | int | None = None, curvature: str = "thesis", variable_angle: bool = True,
-             pneumatics: str = "auto", throw: bool = True) -> xr.Dataset:
+             pneumatics: str = "auto", rtol: float = 1e-10, throw: bool = True) -> xr.Dataset:
     """Run one bench test.
 
     Parameters
@@ -56,8 +58,9 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"rk4", "semi_implicit_euler"}
-        Fixed-step method of the compiled loop.
+    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "scipy_radau", "scipy_lsoda", "scipy_bdf", "scipy_rk45"}
+        Fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of
+        the reference path (:mod:`twin.engine.reference`), which ignores ``dt``.
     dt : float
         Integration step [s]; must divide the speed- and position-loop periods.
     output_dt : float
@@ -79,6 +82,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         External-force system: the pneumatic cylinder under the force loop
         (Eqs. 9.9-9.11), an ideal force source, or none. ``"auto"`` is
         ``"full"`` when the scene demands a force and ``"absent"`` otherwise.
+    rtol : float
+        Relative tolerance of the ``scipy_*`` reference path.
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -102,8 +107,11 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     if duration is not None:
         scene = scene.with_duration(duration)
     problems: list[str] = []
-    if integrator not in INTEGRATORS:
-        problems.append(f"integrator: {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+    reference = integrator in REFERENCE_METHODS
+    if integrator not in INTEGRATORS and not reference:
+        problems.append(f"integrator: {integrator!r} is not one of {', '.join([*INTEGRATORS, *REFERENCE_METHODS])}")
+    if not (isinstance(rtol, float) and 1e-14 <= rtol < 1e-2):
+        problems.append(f"rtol: {rtol!r} must be a float in [1e-14, 1e-2)")
     if curvature not in CURVATURE_FORMULAS:
         problems.append(f"curvature: {curvature!r} is not one of {', '.join(CURVATURE_FORMULAS)}")
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
@@ -119,7 +127,10 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     problems += level_problems
     if rng is not None and not isinstance(rng, (np.random.Generator, int)):
         problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
-    speed_every = _steps_per(params.value("drive.speed_loop_sample_time"), dt, "speed-loop period", problems)
+    speed_ts = params.value("drive.speed_loop_sample_time")
+    if reference:
+        dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
+    speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
     position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period", problems)
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
@@ -133,16 +144,24 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     instruments = build_instruments(params.values(), scene.condition("room_temperature"), levels, generator,
                                     n_steps // position_every + 1, dt)
     output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
-    x = model.initial_state.copy()
     memory = np.zeros(N_MEMORY)
+    solver_stats = {}
     start = time.perf_counter()
-    status, bound, steps_done, rows = run_loop(
-        x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
-        speed_every, position_every, output_every, position_every, INTEGRATORS[integrator], instruments.parameters,
-        instruments.levels, instruments.lookback, instruments.noise, memory, output)
+    if reference:
+        status, bound, t_reached, rows, reason, solver_stats = run_reference(
+            model, instruments, n_steps, speed_ts, position_every, output_every, output, memory,
+            REFERENCE_METHODS[integrator], rtol)
+        reason = reason or BOUND_REASONS[bound]
+    else:
+        x = model.initial_state.copy()
+        status, bound, steps_done, rows = run_loop(
+            x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
+            speed_every, position_every, output_every, position_every, INTEGRATORS[integrator],
+            instruments.parameters, instruments.levels, instruments.lookback, instruments.noise, memory, output,
+            local_error_tolerance(model.initial_state.size))
+        t_reached = steps_done * dt
+        reason = BOUND_REASONS[bound]
     wall_time = time.perf_counter() - start
-    t_reached = steps_done * dt
-    reason = BOUND_REASONS[bound]
     if status != STATUS_OK and throw:
         raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
 
@@ -171,11 +190,13 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "screw_lead": params.value("ball_screw.lead"),
             "integrator": integrator,
             "dt": dt,
+            **({"rtol": rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if reference else {}),
             "curvature": curvature,
             "variable_contact_angle": int(variable_angle),
             "pneumatics": pneumatics,
             "sensors": ", ".join(f"{k}={v}" for k, v in levels.items()),
             "noise_seed": "caller generator" if isinstance(rng, np.random.Generator) else str(DEFAULT_NOISE_SEED if rng is None else rng),
             "wall_time": wall_time,
+            "max_local_error": float(memory[M.LOCAL_ERROR]),
         },
     )

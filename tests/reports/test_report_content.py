@@ -1,0 +1,104 @@
+"""The report model: optional sections (accuracy, fidelity, bench traces) and display units."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from reports.content import build
+from reports.inputs import load_inputs
+from reports.model import Callout, Figure, Table
+from reports.units import display_scale, quantity
+
+
+def _section(report, key):
+    return next(s for s in report.sections if s.key == key)
+
+
+def _blocks(section, kind):
+    return [b for b in section.blocks if isinstance(b, kind)]
+
+
+@pytest.fixture(scope="module")
+def inputs(campaign):
+    return load_inputs(campaign)
+
+
+def test_optional_sections_say_not_available(inputs):
+    report = build(inputs, "T")
+    speed, fidelity = _section(report, "speed"), _section(report, "fidelity")
+    assert "not available" in _blocks(speed, Callout)[0].text
+    assert not _blocks(speed, Figure)
+    assert "No fidelity configuration" in _blocks(fidelity, Callout)[0].text
+
+
+def test_speed_accuracy_section_from_an_accuracy_data_set(campaign, tmp_path):
+    path = tmp_path / "accuracy.nc"
+    configurations = ["rk4 dt=6.25e-5", "rk4 dt=3.125e-5", "euler dt=1.5625e-5"]
+    xr.Dataset(
+        {
+            "wall_time": ("configuration", [0.4, 0.8, 1.1], {"units": "s"}),
+            "error": ("configuration", [2e-8, 1e-9, 5e-8], {"units": "m", "long_name": "error of the backlash feature"}),
+            "steps": ("configuration", [160000, 320000, 640000]),
+        },
+        coords={"configuration": configurations},
+    ).to_netcdf(path)
+    speed = _section(build(load_inputs(campaign, accuracy_path=path), "T"), "speed")
+    assert [f.key for f in _blocks(speed, Figure)] == ["speed-accuracy"]
+    (table,) = _blocks(speed, Table)
+    assert table.header == ("configuration", "wall_time [s]", "error [m]", "steps")
+    assert table.rows[1] == ("rk4 dt=3.125e-5", "0.8", "1e-09", "320000")
+
+
+def test_fidelity_attributes_are_shown(inputs):
+    results = inputs.results.assign_attrs(
+        fidelity_config=json.dumps({"sensors": "full", "pneumatics": "auto"}), fidelity_audit="feature error < 1 nm"
+    )
+    fidelity = _section(build(inputs.__class__(**{**inputs.__dict__, "results": results}), "T"), "fidelity")
+    (table,) = _blocks(fidelity, Table)
+    assert table.rows == (("fidelity_config.sensors", "full"), ("fidelity_config.pneumatics", "auto"),
+                          ("fidelity_audit", "feature error < 1 nm"))
+
+
+def test_bench_traces_get_the_thesis_panels(inputs):
+    """Traces named as the bench stores them give Figs. 9.6/9.7/9.11-style panels, and nut minus screw per data set."""
+    results = inputs.results
+    time = results["trace_time"].values
+    shape = (results.sizes["dataset"], results.sizes["trace_run"], len(time))
+    signals = {
+        "position_demand": ("m", 1e-2 * np.sin(time)),
+        "screw_equivalent_position": ("m", 1e-2 * np.sin(time) - 1e-6),
+        "preload_force": ("N", 1000.0 + 0 * time),
+        "external_force": ("N", 4000.0 * (time > 0.5)),
+        "chamber1_pressure": ("Pa", 6e5 + 0 * time),
+        "chamber2_pressure": ("Pa", 3e5 + 0 * time),
+    }
+    extra = {f"trace_{k}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(v, shape), {"units": u}) for k, (u, v) in signals.items()}
+    report = build(inputs.__class__(**{**inputs.__dict__, "results": results.assign(extra)}), "T")
+    keys = [f.key for f in _blocks(_section(report, "traces"), Figure)]
+    assert keys == ["traces-ds2", "traces-ds4", "traces-ds6", "traces-nut-minus-screw"]
+
+
+def test_every_figure_and_table_is_numbered_in_order(inputs):
+    report = build(inputs, "T")
+    figures = [b for s in report.sections for b in s.blocks if isinstance(b, Figure)]
+    tables = [b for s in report.sections for b in s.blocks if isinstance(b, Table)]
+    assert [f.number for f in figures] == list(range(1, len(figures) + 1))
+    assert [t.number for t in tables] == list(range(1, len(tables) + 1))
+    assert all(f.png.startswith(b"\x89PNG") and len(f.caption) > 40 for f in figures)
+
+
+@pytest.mark.parametrize(
+    ("value", "unit", "expected"),
+    [(2.5e-6, "m", "2.5 µm"), (0.012, "m", "12 mm"), (6e5, "Pa", "6 bar"), (4000.0, "N", "4 kN"), (298.15, "K", "298 K"), (0.5, "1", "0.5")],
+)
+def test_quantities_are_shown_with_a_readable_unit(value, unit, expected):
+    assert quantity(value, unit) == expected
+
+
+def test_display_scale_ignores_non_finite_values():
+    assert display_scale("m", [np.nan, 3e-6, -5e-6]) == (1e6, "µm")
+    assert display_scale("m", [np.nan]) == (1.0, "m")
