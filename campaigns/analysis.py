@@ -155,10 +155,13 @@ def minimum_detectable(levels, probabilities, power: float = 0.95) -> tuple[floa
     -------
     tuple of float
         ``(estimate, lower, upper)``; when no level reaches ``power``:
-        ``(nan, largest level, inf)``.
+        ``(nan, largest level, inf)``; all NaN when a probability is unknown
+        (a data set without used runs).
     """
     order = np.argsort(levels)
     levels, probabilities = np.asarray(levels, dtype=float)[order], np.asarray(probabilities, dtype=float)[order]
+    if np.isnan(probabilities).any():
+        return math.nan, math.nan, math.nan
     reached = np.flatnonzero(probabilities >= power)
     if len(reached) == 0:
         return math.nan, float(levels[-1]), math.inf

@@ -64,13 +64,13 @@ def build_report(
 
     generated_at = (generated_at or datetime.now(timezone.utc)).astimezone(timezone.utc)
     inputs = load_inputs(results_path, analysis_path, accuracy_path)
-    report = build(inputs, generated_at.isoformat(timespec="seconds"))
-    out_dir = Path(out_dir)
-    try:
+    out_dir, html = Path(out_dir), Path(out_dir) / "report.html"
+    try:  # before the figures are drawn, so an unwritable destination fails at once
         out_dir.mkdir(parents=True, exist_ok=True)
-        html = out_dir / "report.html"
-        html.write_text(render_html(report), encoding="utf-8")
+        html.touch()
     except OSError as exc:
         raise ReportError(out_dir, f"cannot write the report there ({exc.strerror or exc})") from exc
+    report = build(inputs, generated_at.isoformat(timespec="seconds"))
+    html.write_text(render_html(report), encoding="utf-8")
     pdf = render_pdf(report, out_dir / "report.pdf", generated_at)
     return {"html": html, "pdf": pdf}

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from campaigns.analysis import BACKLASH_REQUIREMENT
 from reports import figures
 from reports.figures import Group, Line, Panel
 from reports.inputs import Inputs
@@ -78,11 +79,14 @@ class _Builder:
         name = feature + "_true"
         return name if name in self.features else None
 
-    def used(self, feature: str, dataset: str) -> np.ndarray:
-        """Feature values of the runs the statistics use (status ok, finite value)."""
+    def used_mask(self, feature: str, dataset: str) -> np.ndarray:
+        """The runs of a data set that the statistics use (status ok, finite feature), as in :mod:`campaigns.analysis`."""
         row = self.results.sel(dataset=dataset)
-        values = row[feature].values.astype(float)
-        return values[(row["status"].values == "ok") & np.isfinite(values)]
+        return (row["status"].values == "ok") & np.isfinite(row[feature].values.astype(float))
+
+    def used(self, feature: str, dataset: str) -> np.ndarray:
+        """Feature values of the runs the statistics use."""
+        return self.results[feature].sel(dataset=dataset).values[self.used_mask(feature, dataset)]
 
     def feature_scale(self) -> tuple[float, str]:
         """One display unit for every feature, so measured and true panels compare directly."""
@@ -93,10 +97,11 @@ class _Builder:
         """``ds2 (scene ds2; backlash 80 µm, preload 0 N)``."""
         entry = next(d for d in self.spec["datasets"] if d["name"] == dataset)
         scene = entry.get("scene") or self.spec["base"]["scene"]
-        conditions = ", ".join(f"{k.replace('_', ' ')} {quantity(v, _condition_unit(self.results, k))}" for k, v in entry["conditions"].items())
+        conditions = ", ".join(f"{k.replace('_', ' ')} {quantity(v, _condition_unit(self.results, k))}" for k, v in entry.get("conditions", {}).items())
         return f"{dataset} (scene {scene}" + (f"; {conditions})" if conditions else ")")
 
     def label(self, name: str) -> str:
+        """The stored long name of a variable (its name when it has none)."""
         return self.results[name].attrs.get("long_name", name) if name in self.results else name
 
 
@@ -221,11 +226,9 @@ def _summary(b: _Builder):
     for name in b.parameters:
         dist = json.loads(results[name].attrs.get("distribution", "{}") or "{}")
         unit = results[name].attrs.get("units", "")
-        shape = ", ".join(
-            f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "sigma", "low", "high", "value") if key in dist and key != "sigma"
-        )
-        if "sigma" in dist:
-            shape += f", sigma {number(dist['sigma'])}" + (" (log)" if dist.get("kind") == "lognormal" else f" {unit}")
+        shape = ", ".join(f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "low", "high", "value") if key in dist)
+        if "sigma" in dist:  # a lognormal's sigma is that of the logarithm, without unit
+            shape += f", sigma {number(dist['sigma'])} (log)" if dist.get("kind") == "lognormal" else f", sigma {quantity(dist['sigma'], unit)}"
         rows.append((name, dist.get("kind", "–"), shape, dist.get("source") or "–"))
     yield b.table("Uncertain parameters (sampled per run), with their resolved distributions in SI units.",
                   ("Parameter", "Distribution", "Values", "Source"), rows)
@@ -291,6 +294,13 @@ def _ranked(values: np.ndarray) -> np.ndarray:
     return finite[np.argsort(-np.abs(values[finite]), kind="stable")]
 
 
+def _ranked_over_datasets(analysis, feature: str) -> np.ndarray:
+    """Parameter indices by their largest |Spearman ρ| in any data set (parameters without one left out)."""
+    rho = np.abs(analysis["spearman"].sel(feature=feature).transpose("parameter", "dataset").values)
+    strongest = np.array([row[np.isfinite(row)].max() if np.isfinite(row).any() else np.nan for row in rho])
+    return _ranked(strongest)
+
+
 def _correlations(b: _Builder):
     a = b.analysis
     parameters = [str(p) for p in a["parameter"].values]
@@ -337,11 +347,11 @@ def _correlations(b: _Builder):
             )
     for feature in b.features:
         rho = a["spearman"].sel(feature=feature).transpose("parameter", "dataset").values
-        strength = np.nanmax(np.where(np.isfinite(rho), np.abs(rho), -1.0), axis=1)
-        order = [j for j in np.argsort(-strength, kind="stable") if strength[j] >= 0][:HEATMAP_PARAMETERS]
-        if not order:
+        ranked = _ranked_over_datasets(a, feature)
+        order = ranked[:HEATMAP_PARAMETERS]
+        if not len(order):
             continue
-        left = int((strength >= 0).sum()) - len(order)
+        left = len(ranked) - len(order)
         yield b.figure(
             f"heatmap-{feature}",
             f"Spearman correlation of {feature} with each parameter (rows, strongest first) in each data set (columns). "
@@ -376,9 +386,7 @@ def _scatter(b: _Builder):
         "within a data set is visible."
     )
     for feature in b.measured:
-        rho = a["spearman"].sel(feature=feature).transpose("parameter", "dataset").values
-        strength = np.nanmax(np.where(np.isfinite(rho), np.abs(rho), -1.0), axis=1) if len(parameters) else np.array([])
-        top = [parameters[j] for j in np.argsort(-strength, kind="stable") if strength[j] >= 0][:SCATTER_PARAMETERS]
+        top = [parameters[j] for j in _ranked_over_datasets(a, feature)[:SCATTER_PARAMETERS]]
         if not top:
             yield Callout(f"{feature}: no parameter with a finite correlation, nothing to plot.")
             continue
@@ -388,11 +396,11 @@ def _scatter(b: _Builder):
             p_factor, p_unit = display_scale(values.attrs.get("units", ""), values.values)
             points = []
             for name in b.datasets:
-                row = b.results.sel(dataset=name)
-                y = row[feature].values.astype(float)
-                mask = (row["status"].values == "ok") & np.isfinite(y)
+                mask = b.used_mask(feature, name)
                 if mask.any():
-                    points.append(Line(name, row[parameter].values[mask] * p_factor, (y[mask] - y[mask].mean()) * factor, b.color[name]))
+                    y = b.results[feature].sel(dataset=name).values[mask]
+                    x = b.results[parameter].sel(dataset=name).values[mask]
+                    points.append(Line(name, x * p_factor, (y - y.mean()) * factor, b.color[name]))
             panels.append(Panel(parameter, axis_label(parameter, p_unit), axis_label(f"{feature} − data-set mean", unit), tuple(points)))
         yield b.figure(
             f"scatter-{feature}",
@@ -415,8 +423,7 @@ def _trace_run(b: _Builder, dataset: str, variables: list[str]) -> int | None:
     return (ok or has_data or [None])[0]
 
 
-def _trace_line(b: _Builder, variable: str, dataset: str, run: int, style: str = "-", color: str | None = None,
-                factor: float = 1.0) -> Line:
+def _trace_line(b: _Builder, variable: str, dataset: str, run: int, style: str, color: str, factor: float) -> Line:
     values = b.results[f"trace_{variable}"].sel(dataset=dataset, trace_run=run).values * factor
     return Line(variable.replace("_", " "), b.results["trace_time"].values, values, color, style)
 
@@ -512,41 +519,43 @@ def _observability(b: _Builder):
         return
     sweep = [str(s) for s in a["sweep_point"].values]
     backlash = a["sweep_backlash"].values
-    requirement = float(a["minimum_detectable_backlash"].attrs.get("requirement", 1e-6))
-    factor_b, unit = display_scale("m", [requirement])
+    requirement = float(a["minimum_detectable_backlash"].attrs.get("requirement", BACKLASH_REQUIREMENT))
+    factor, unit = display_scale("m", [requirement])
     feature_factor, feature_unit = b.feature_scale()
     yield Paragraph(
         f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
         f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash data set "
         f"is interpolated linearly to where it reaches {power:.0%}: the minimum detectable backlash."
     )
+    minimum = {f: float(a["minimum_detectable_backlash"].sel(feature=f)) for f in b.features}
+    probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
     for feature in b.features:
-        mdb = float(a["minimum_detectable_backlash"].sel(feature=feature))
+        if not math.isfinite(minimum[feature]):
+            yield Callout(f"{feature}: the detection probability never reaches {power:.0%} along the sweep; "
+                          f"the {quantity(requirement, 'm')} requirement (Table 9.3) is not met.", "bad")
+            continue
         meets = bool(a["meets_requirement"].sel(feature=feature))
-        if not math.isfinite(mdb):
-            text, tone = f"{feature}: the detection probability never reaches {power:.0%} along the sweep; the requirement of {quantity(requirement, 'm')} is not met.", "bad"
-        else:
-            text = (f"{feature}: minimum detectable backlash {quantity(mdb, 'm')}, "
-                    + ("meets" if meets else "does not meet") + f" the {quantity(requirement, 'm')} requirement (Table 9.3).")
-            tone = "good" if meets else "bad"
-        yield Callout(text, tone)
-    nonzero = np.sort(backlash[backlash > 0])
-    if len(nonzero):
-        yield Paragraph(
-            f"The result is only as fine as the sweep: when the smallest non-zero level ({quantity(nonzero[0], 'm')}) is "
-            "already detected, the value is an upper bound from the interpolation between 0 and that level. Add data sets "
-            "with backlash near the requirement to resolve it."
-        )
-    curves = [Line(f, backlash * factor_b, a["sweep_detection_probability"].sel(feature=f).values, f"C{k}", "-" if k == 0 else "--")
+        yield Callout(f"{feature}: minimum detectable backlash {quantity(minimum[feature], 'm')}, "
+                      + ("meets" if meets else "does not meet") + f" the {quantity(requirement, 'm')} requirement (Table 9.3).",
+                      "good" if meets else "bad")
+    if (backlash > 0).any():
+        smallest = int(np.flatnonzero(backlash == backlash[backlash > 0].min())[0])
+        bounded = [f for f in b.features if probability[f][smallest] >= power]
+        if bounded:
+            yield Paragraph(
+                f"For {', '.join(bounded)} the smallest non-zero level of the sweep ({quantity(backlash[smallest], 'm')}) is "
+                "already detected, so the minimum detectable backlash is an upper bound from the interpolation between "
+                "0 and that level. Add data sets with backlash near the requirement to resolve it."
+            )
+    curves = [Line(f, backlash * factor, probability[f], f"C{k}", "-" if k == 0 else "--") for k, f in enumerate(b.features)]
+    minima = [(f"{f}: minimum detectable {number(minimum[f] * factor)} {unit}", minimum[f] * factor, f"C{k}")
               for k, f in enumerate(b.features)]
-    minima = [(f"{f}: minimum detectable {number(float(a['minimum_detectable_backlash'].sel(feature=f)) * factor_b)} {unit}",
-               float(a["minimum_detectable_backlash"].sel(feature=f)) * factor_b, f"C{k}") for k, f in enumerate(b.features)]
     yield b.figure(
         "detection-sweep",
         f"Detection probability against backlash along the sweep, per feature. Where a curve crosses the {power:.0%} line "
         f"(star) is the minimum detectable backlash; it meets the requirement if the star lies left of the green line.",
-        figures.detection(curves, power=power, false_alarm_rate=float(a.attrs.get("false_alarm_rate", 0.05)),
-                          requirement=(f"requirement {number(requirement * factor_b)} {unit} (Table 9.3)", requirement * factor_b),
+        figures.detection(curves, power=power, false_alarm_rate=fa,
+                          requirement=(f"requirement {number(requirement * factor)} {unit} (Table 9.3)", requirement * factor),
                           minima=minima, xlabel=axis_label("backlash", unit)),
     )
     for feature in b.measured:

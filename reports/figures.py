@@ -99,6 +99,7 @@ def _tidy_x(ax) -> None:
 def _density(ax, group: Group) -> None:
     values = group.values[np.isfinite(group.values)]
     if len(values) == 0:
+        ax.plot([], [], color=group.color, label=f"{group.label} (no successful run)")
         return
     spread = np.ptp(values)
     if spread == 0 or len(values) < 3:
@@ -125,6 +126,8 @@ def distributions(panels: list[Panel], height: float = 3.0) -> bytes:
     for ax, panel in zip(fig.axes, panels):
         for group in panel.items:
             _density(ax, group)
+        if not any(np.isfinite(group.values).any() for group in panel.items):
+            ax.text(0.5, 0.5, "no successful run", transform=ax.transAxes, ha="center", va="center", color="grey")
         ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
         _tidy_x(ax)
         ax.legend(loc="best")

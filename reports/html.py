@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 
 import jinja2
+import markupsafe
 
 from reports.model import Report
 
@@ -16,6 +17,8 @@ _ENVIRONMENT = jinja2.Environment(
     keep_trailing_newline=True,
 )
 _ENVIRONMENT.filters["base64"] = lambda data: base64.b64encode(data).decode("ascii")
+# identifiers such as sensors.load_cell_offset_tempco may break after an underscore
+_ENVIRONMENT.filters["breakable"] = lambda text: markupsafe.escape(text).replace("_", markupsafe.Markup("_<wbr>"))
 _ENVIRONMENT.tests["kind"] = lambda block, name: type(block).__name__ == name
 
 

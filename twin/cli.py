@@ -73,6 +73,18 @@ def cmd_simulate(args) -> int:
     return 0 if ds.attrs["status"] == "ok" else 1
 
 
+def cmd_accuracy(args) -> int:
+    from twin.studies.accuracy import replot, run_accuracy
+
+    if args.replot:
+        paths = replot(args.out)
+    else:
+        paths = run_accuracy(args.out, args.scene, args.duration, quick=args.quick, stability=not args.no_stability)
+    for name, path in paths.items():
+        print(f"wrote {name}: {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -95,6 +107,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="write the run Dataset (netCDF)")
     p.add_argument("--plot", type=Path, help="write an overview plot (PNG/SVG/PDF)")
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("accuracy", help="speed-versus-accuracy study: work-precision chart, stability map, baselines")
+    p.add_argument("--scene", default="nominal", help="scene of the study (default: nominal)")
+    p.add_argument("--duration", type=float, default=1.5, help="simulated time of each run [s] (default 1.5)")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument("--quick", action="store_true", help="short ladders, single timing (a first look)")
+    p.add_argument("--no-stability", action="store_true", help="skip the stability map")
+    p.add_argument("--replot", action="store_true", help="only regenerate the charts from the data in --out")
+    p.set_defaults(func=cmd_accuracy)
     return parser
 
 

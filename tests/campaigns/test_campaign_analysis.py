@@ -133,6 +133,7 @@ def test_minimum_detectable_interpolates_the_sweep():
     assert requirement_verdict(5e-6, 40e-6) == "no"
     assert requirement_verdict(0.0, 5e-6) == "undetermined"
     assert requirement_verdict(5e-6, math.inf) == "no"
+    assert requirement_verdict(*minimum_detectable([0.0, 5e-6], [0.05, math.nan])[1:]) == "undetermined"
 
 
 def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
@@ -162,7 +163,8 @@ def test_analysis_reports_exclusions_by_status():
     from campaigns.storage import build_results
     from campaigns.testing import SyntheticModel
 
-    model = SyntheticModel(faults={("ds2", 0): "raise", ("ds2", 1): "nan"})
+    faults = {("ds2", 0): "raise", ("ds2", 1): "nan"} | {("ds6", i): "diverge" for i in range(10)}
+    model = SyntheticModel(faults=faults)
     chunks = []
     for d in range(len(spec.datasets)):
         records = [execute(model, build_request(spec, samples, d, i)) for i in range(10)]
@@ -182,3 +184,7 @@ def test_analysis_reports_exclusions_by_status():
     assert int(a["n_excluded"].sel(dataset="ds2", feature="backlash_feature_true")) == 2  # whole run excluded
     assert int(a["n_status"].sel(dataset="ds2", status="error")) == 1
     assert int(a["n_status"].sel(dataset="ds2", status="failed")) == 1
+    # a data set without any successful run: NaN statistics, and no verdict on the requirement
+    assert int(a["n_used"].sel(dataset="ds6", feature="backlash_feature")) == 0
+    assert np.isnan(a["spearman"].sel(dataset="ds6")).all()
+    assert (a["meets_requirement"] == "undetermined").all()

@@ -27,63 +27,74 @@ def inputs(campaign):
     return load_inputs(campaign)
 
 
-def test_optional_sections_say_not_available(inputs):
-    report = build(inputs, "T")
+@pytest.fixture(scope="module")
+def report(inputs):
+    return build(inputs, "T")
+
+
+def test_optional_sections_say_not_available(report):
     speed, fidelity = _section(report, "speed"), _section(report, "fidelity")
     assert "not available" in _blocks(speed, Callout)[0].text
     assert not _blocks(speed, Figure)
     assert "No fidelity configuration" in _blocks(fidelity, Callout)[0].text
 
 
-def test_speed_accuracy_section_from_an_accuracy_data_set(campaign, tmp_path):
-    path = tmp_path / "accuracy.nc"
-    configurations = ["rk4 dt=6.25e-5", "rk4 dt=3.125e-5", "euler dt=1.5625e-5"]
+#: Bench-named traces added to the synthetic campaign's results: (units, values over the trace time).
+BENCH_TRACES = {
+    "position_demand": ("m", lambda t: 1e-2 * np.sin(t)),
+    "screw_equivalent_position": ("m", lambda t: 1e-2 * np.sin(t) - 1e-6),
+    "preload_force": ("N", lambda t: 1000.0 + 0 * t),
+    "external_force": ("N", lambda t: 4000.0 * (t > 0.5)),
+    "chamber1_pressure": ("Pa", lambda t: 6e5 + 0 * t),
+    "chamber2_pressure": ("Pa", lambda t: 3e5 + 0 * t),
+}
+
+
+@pytest.fixture(scope="module")
+def extended(campaign, tmp_path_factory):
+    """A report with everything optional: an accuracy data set, fidelity attributes and bench-named traces."""
+    path = tmp_path_factory.mktemp("accuracy") / "accuracy.nc"
     xr.Dataset(
         {
             "wall_time": ("configuration", [0.4, 0.8, 1.1], {"units": "s"}),
             "error": ("configuration", [2e-8, 1e-9, 5e-8], {"units": "m", "long_name": "error of the backlash feature"}),
             "steps": ("configuration", [160000, 320000, 640000]),
         },
-        coords={"configuration": configurations},
+        coords={"configuration": ["rk4 dt=6.25e-5", "rk4 dt=3.125e-5", "euler dt=1.5625e-5"]},
     ).to_netcdf(path)
-    speed = _section(build(load_inputs(campaign, accuracy_path=path), "T"), "speed")
+    inputs = load_inputs(campaign, accuracy_path=path)
+    results = inputs.results
+    time = results["trace_time"].values
+    shape = (results.sizes["dataset"], results.sizes["trace_run"], len(time))
+    traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape), {"units": unit})
+              for name, (unit, values) in BENCH_TRACES.items()}
+    results = results.assign(traces).assign_attrs(
+        fidelity_config=json.dumps({"sensors": "full", "pneumatics": "auto"}), fidelity_audit="feature error < 1 nm"
+    )
+    return build(inputs.__class__(**{**inputs.__dict__, "results": results}), "T")
+
+
+def test_speed_accuracy_section_from_an_accuracy_data_set(extended):
+    speed = _section(extended, "speed")
     assert [f.key for f in _blocks(speed, Figure)] == ["speed-accuracy"]
     (table,) = _blocks(speed, Table)
     assert table.header == ("configuration", "wall_time [s]", "error [m]", "steps")
     assert table.rows[1] == ("rk4 dt=3.125e-5", "0.8", "1e-09", "320000")
 
 
-def test_fidelity_attributes_are_shown(inputs):
-    results = inputs.results.assign_attrs(
-        fidelity_config=json.dumps({"sensors": "full", "pneumatics": "auto"}), fidelity_audit="feature error < 1 nm"
-    )
-    fidelity = _section(build(inputs.__class__(**{**inputs.__dict__, "results": results}), "T"), "fidelity")
-    (table,) = _blocks(fidelity, Table)
+def test_fidelity_attributes_are_shown(extended):
+    (table,) = _blocks(_section(extended, "fidelity"), Table)
     assert table.rows == (("fidelity_config.sensors", "full"), ("fidelity_config.pneumatics", "auto"),
                           ("fidelity_audit", "feature error < 1 nm"))
 
 
-def test_bench_traces_get_the_thesis_panels(inputs):
-    """Traces named as the bench stores them give Figs. 9.6/9.7/9.11-style panels, and nut minus screw per data set."""
-    results = inputs.results
-    time = results["trace_time"].values
-    shape = (results.sizes["dataset"], results.sizes["trace_run"], len(time))
-    signals = {
-        "position_demand": ("m", 1e-2 * np.sin(time)),
-        "screw_equivalent_position": ("m", 1e-2 * np.sin(time) - 1e-6),
-        "preload_force": ("N", 1000.0 + 0 * time),
-        "external_force": ("N", 4000.0 * (time > 0.5)),
-        "chamber1_pressure": ("Pa", 6e5 + 0 * time),
-        "chamber2_pressure": ("Pa", 3e5 + 0 * time),
-    }
-    extra = {f"trace_{k}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(v, shape), {"units": u}) for k, (u, v) in signals.items()}
-    report = build(inputs.__class__(**{**inputs.__dict__, "results": results.assign(extra)}), "T")
-    keys = [f.key for f in _blocks(_section(report, "traces"), Figure)]
+def test_bench_traces_get_the_thesis_panels(extended):
+    """Traces named as the bench stores them give Figs. 9.6/9.7/9.11-style figures, and nut minus screw per data set."""
+    keys = [f.key for f in _blocks(_section(extended, "traces"), Figure)]
     assert keys == ["traces-ds2", "traces-ds4", "traces-ds6", "traces-nut-minus-screw"]
 
 
-def test_every_figure_and_table_is_numbered_in_order(inputs):
-    report = build(inputs, "T")
+def test_every_figure_and_table_is_numbered_in_order(report):
     figures = [b for s in report.sections for b in s.blocks if isinstance(b, Figure)]
     tables = [b for s in report.sections for b in s.blocks if isinstance(b, Table)]
     assert [f.number for f in figures] == list(range(1, len(figures) + 1))
@@ -102,3 +113,17 @@ def test_quantities_are_shown_with_a_readable_unit(value, unit, expected):
 def test_display_scale_ignores_non_finite_values():
     assert display_scale("m", [np.nan, 3e-6, -5e-6]) == (1e6, "µm")
     assert display_scale("m", [np.nan]) == (1.0, "m")
+
+
+def test_a_data_set_without_successful_runs(inputs):
+    """Every figure still draws (warnings are errors in the test suite) and the failures are reported."""
+    from campaigns.analysis import analysis_dataset
+
+    status = inputs.results["status"].copy()
+    status.loc[{"dataset": "ds4"}] = "error"
+    results = inputs.results.assign(status=status)
+    report = build(inputs.__class__(**{**inputs.__dict__, "results": results, "analysis": analysis_dataset(results)}), "T")
+    failures = _section(report, "failures")
+    assert _blocks(failures, Callout)[0].text.startswith("32 of 90 runs failed")
+    assert any(f.key == "distribution-backlash_feature-ds4" for f in _blocks(_section(report, "distributions"), Figure))
+    assert any("never reaches" in c.text for c in _blocks(_section(report, "observability"), Callout))

@@ -52,8 +52,8 @@ def local_error_tolerance(n_states: int) -> np.ndarray:
 
 
 def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, position_ratio: int, output_ratio: int,
-                  output: np.ndarray, memory: np.ndarray, method: str, rtol: float):
-    """Integrate sample interval by sample interval with ``solve_ivp``.
+                  output: np.ndarray, memory: np.ndarray, method: str, rtol: float, x: np.ndarray):
+    """Integrate sample interval by sample interval with ``solve_ivp`` from state ``x`` (updated in place).
 
     Returns
     -------
@@ -61,7 +61,6 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
         ``stats``: ``nfev``, ``njev``, ``nlu``, ``steps`` and ``min_step`` [s] over the run.
     """
     c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
-    x = model.initial_state.copy()
     u = np.zeros(N_INPUTS)
     state = np.zeros((instruments.parameters.shape[0], 13))
     controller_init(memory, u, state, instruments.parameters, instruments.levels, x, c, force_table, poly)
@@ -94,7 +93,7 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
             stats["min_step"] = min(stats["min_step"], float(np.min(np.diff(solution.t))))
         if not solution.success:
             return STATUS_SOLVER_FAILED, 0, t, rows, f"solve_ivp ({method}): {solution.message}", stats
-        x = solution.y[:, -1].copy()
+        x[:] = solution.y[:, -1]
         code = guard(x, c)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS

@@ -21,6 +21,7 @@ from twin.engine.layout import (
     STATUS_OK,
     STATUS_TEXT,
     M,
+    S,
     Signal,
 )
 from twin.engine.loop import run_loop
@@ -49,7 +50,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
              integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
              duration: float | None = None, sensors: str | Mapping[str, str] = "full",
              rng: np.random.Generator | int | None = None, curvature: str = "thesis", variable_angle: bool = True,
-             pneumatics: str = "auto", rtol: float = 1e-10, throw: bool = True) -> xr.Dataset:
+             pneumatics: str = "auto", rtol: float = 1e-10, local_error_guard: bool = True,
+             throw: bool = True) -> xr.Dataset:
     """Run one bench test.
 
     Parameters
@@ -84,6 +86,9 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         ``"full"`` when the scene demands a force and ``"absent"`` otherwise.
     rtol : float
         Relative tolerance of the ``scipy_*`` reference path.
+    local_error_guard : bool
+        The finite-but-wrong guard (:func:`twin.engine.loop.local_error`); switch it off
+        only to demonstrate what it catches.
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -147,18 +152,18 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     memory = np.zeros(N_MEMORY)
     solver_stats = {}
     start = time.perf_counter()
+    x = model.initial_state.copy()
     if reference:
         status, bound, t_reached, rows, reason, solver_stats = run_reference(
             model, instruments, n_steps, speed_ts, position_every, output_every, output, memory,
-            REFERENCE_METHODS[integrator], rtol)
+            REFERENCE_METHODS[integrator], rtol, x)
         reason = reason or BOUND_REASONS[bound]
     else:
-        x = model.initial_state.copy()
         status, bound, steps_done, rows = run_loop(
             x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
             speed_every, position_every, output_every, position_every, INTEGRATORS[integrator],
             instruments.parameters, instruments.levels, instruments.lookback, instruments.noise, memory, output,
-            local_error_tolerance(model.initial_state.size))
+            local_error_tolerance(model.initial_state.size) * (1.0 if local_error_guard else np.inf))
         t_reached = steps_done * dt
         reason = BOUND_REASONS[bound]
     wall_time = time.perf_counter() - start
@@ -178,9 +183,11 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         data_vars[name] = ((), total / memory[M.SAMPLES] if ok else np.nan, {
             "units": "m", "long_name": f"backlash feature f_b (Eq. 9.12) from {source}",
             "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
+    data_vars["final_state"] = ("state", x, {"long_name": "state vector at t_reached (SI units, layout twin.engine.layout.S)"})
     return xr.Dataset(
         data_vars,
-        coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"})},
+        coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"}),
+                "state": ("state", [S(j).name.lower() for j in range(x.size)])},
         attrs={
             "status": STATUS_TEXT[status],
             "failure_reason": reason,

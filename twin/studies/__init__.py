@@ -1,0 +1,1 @@
+"""Studies built on the simulation engine: work-precision, stability limits."""

@@ -1,0 +1,56 @@
+"""The speed-versus-accuracy study behind ``twin accuracy``: runs, stores and charts.
+
+Writes into one directory: ``work_precision.nc`` (+ ``.csv``), ``stability.nc``,
+``control_baseline.csv``, and the charts ``work_precision.png/.svg`` and
+``stability.png/.svg``. :func:`replot` regenerates the charts from the stored data.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import xarray as xr
+
+from twin.studies.charts import stability_chart, work_precision_chart
+from twin.studies.control_baseline import compare
+from twin.studies.stability import stability_map
+from twin.studies.work_precision import STEP_LADDER, TOLERANCE_LADDER, environment, run_study
+
+QUICK = {"steps": STEP_LADDER[:6], "tolerances": TOLERANCE_LADDER[::2], "repeats": 1}
+
+
+def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 1.5, *, quick: bool = False,
+                 stability: bool = True, progress=print) -> dict[str, Path]:
+    """Run the work-precision study (and the stability map and python-control baseline) into ``out_dir``.
+
+    ``quick`` trims the step ladder to 1.25e-4 ... 3.9e-6 s, the tolerance ladder to three
+    values and times each run once (for a first look; the full study takes minutes).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    study = run_study(scene, duration, progress=progress, **(QUICK if quick else {}))
+    study.to_netcdf(out / "work_precision.nc", engine="netcdf4")
+    study.to_dataframe().to_csv(out / "work_precision.csv")
+    baseline = pd.DataFrame(compare())
+    for key, value in environment().items():
+        baseline.attrs[key] = value
+    baseline.to_csv(out / "control_baseline.csv", index=False)
+    progress(baseline.to_string(index=False))
+    if stability:
+        stability_map(progress=progress).to_netcdf(out / "stability.nc", engine="netcdf4")
+    return replot(out)
+
+
+def replot(out_dir: str | Path) -> dict[str, Path]:
+    """Regenerate the charts from the stored study data in ``out_dir``."""
+    out = Path(out_dir)
+    paths = {}
+    with xr.open_dataset(out / "work_precision.nc") as study:
+        work_precision_chart(study.load(), out / "work_precision.png")
+        paths["work_precision"] = out / "work_precision.png"
+    if (out / "stability.nc").exists():
+        with xr.open_dataset(out / "stability.nc") as data:
+            stability_chart(data.load(), out / "stability.png")
+            paths["stability"] = out / "stability.png"
+    return paths

@@ -1,0 +1,94 @@
+"""Charts of the studies: work-precision (error against wall time) and the stability map."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
+import numpy as np  # noqa: E402
+import xarray as xr  # noqa: E402
+
+from twin.studies.work_precision import quantization_floor  # noqa: E402
+
+PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
+                "quantizers_on": "quantizers on (encoders, resolver, converters)"}
+METRIC_LABELS = {"feature_error": "backlash-feature error [um]", "nut_position_error": "max nut-position error [um]",
+                 "current_rms_error": "RMS motor-current error [A]", "pressure_error": "max chamber-pressure error [Pa]"}
+SCALE = {"feature_error": 1e6, "nut_position_error": 1e6, "current_rms_error": 1.0, "pressure_error": 1.0}
+
+
+def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
+                         metrics=("feature_error", "nut_position_error", "current_rms_error"),
+                         sampling_error: float | None = None) -> plt.Figure:
+    """Log error against log wall time, one line per method, one column per panel.
+
+    ``sampling_error`` (optional, [m]) draws the Monte Carlo sampling error of the
+    feature mean (1.96 sigma / sqrt(N)) on the feature rows: a configuration whose
+    error sits well below it cannot change a campaign's conclusions.
+    """
+    panels = [p for p in PANEL_TITLES if p in set(study.panel.values)]
+    metrics = [m for m in metrics if np.isfinite(study[m].values).any()]
+    fig, axes = plt.subplots(len(metrics), len(panels), figsize=(6.2 * len(panels), 3.6 * len(metrics)),
+                             squeeze=False, constrained_layout=True)
+    for col, panel in enumerate(panels):
+        data = study.where(study.panel == panel, drop=True)
+        for row, metric in enumerate(metrics):
+            ax = axes[row, col]
+            for method in dict.fromkeys(data.method.values):
+                runs = data.where((data.method == method) & (data.status == "ok"), drop=True)
+                if runs.sizes["run"] == 0:
+                    continue
+                order = np.argsort(runs.wall_time.values)
+                error = np.maximum(runs[metric].values[order] * SCALE[metric], 1e-16)
+                label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
+                ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
+            if panel == "quantizers_on":
+                floor = quantization_floor(study, metric) * SCALE[metric]
+                if np.isfinite(floor) and floor > 0:
+                    ax.axhline(floor, color="k", ls=":", lw=1, label="quantization-decision floor")
+            if metric == "feature_error" and sampling_error:
+                ax.axhline(sampling_error * 1e6, color="tab:red", ls="--", lw=1,
+                           label="Monte Carlo error 1.96 sigma/sqrt(N)")
+            ax.set_xlabel("wall time of one run [s]")
+            ax.set_ylabel(METRIC_LABELS[metric])
+            ax.grid(True, which="both", alpha=0.3)
+            if row == 0:
+                ax.set_title(PANEL_TITLES[panel], fontsize=10)
+            if row == 0 and col == 0:
+                ax.legend(fontsize=7)
+    fig.suptitle(f"work-precision, scene '{study.attrs.get('scene')}' ({study.attrs.get('duration')} s), "
+                 f"reference {study.attrs.get('reference')}", fontsize=10)
+    _save(fig, path)
+    return fig
+
+
+def stability_chart(stability: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
+    """Measured largest stable step against omega_max, with the theoretical 2.8/omega and 2/omega lines."""
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    omega = stability.omega_max.values
+    grid = np.linspace(omega.min() * 0.9, omega.max() * 1.1, 50)
+    for name, color in (("rk4", "tab:blue"), ("semi_implicit_euler", "tab:orange")):
+        if f"limit_{name}" not in stability:
+            continue
+        factor = float((stability[f"theory_{name}"] * stability.omega_max).values[0])
+        ax.plot(omega, stability[f"limit_{name}"].values * 1e6, "o", color=color, label=f"{name}: measured")
+        ax.plot(grid, factor / grid * 1e6, "-", color=color, lw=1, label=f"{name}: {factor:g}/omega")
+    ax.set_xlabel("largest eigenvalue modulus omega_max at the loaded state [rad/s]")
+    ax.set_ylabel("largest stable step [us]")
+    ax.set_title("stability limits of the explicit methods (preload, force and sled-mass sweeps)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+    return fig
+
+
+def _save(fig: plt.Figure, path: str | Path | None) -> None:
+    if path is None:
+        return
+    path = Path(path)
+    for suffix in (".png", ".svg"):
+        fig.savefig(path.with_suffix(suffix), dpi=120, metadata={"Date": None} if suffix == ".svg" else None)
+    plt.close(fig)

@@ -1,0 +1,80 @@
+"""Second baseline: python-control's ``input_output_response`` on the part of the model it can represent.
+
+python-control cannot connect the continuous plant to the bench's discrete controllers in one
+system ("incompatible timebases", see docs/accuracy.md), so the baseline is the continuous plant
+alone (analog current loop, motor, torsional chain, ball screw, nuts) driven open-loop by a
+current-demand step, wrapped as a ``control.nlsys`` around the same right-hand side. The same
+open-loop problem is integrated by the compiled loop's integrators and by a tight ``scipy_radau``
+solution, and all are timed and compared.
+"""
+
+from __future__ import annotations
+
+import time
+
+import control
+import numba
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import twin
+from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
+from twin.engine.layout import N_INPUTS, S, U
+from twin.engine.model import build_model
+from twin.engine.plant import rhs
+from twin.engine.reference import absolute_tolerance
+
+CURRENT_STEP = 0.5  # A of current demand: ~1.9 N m of motor torque, accelerating the unloaded screw
+DURATION = 0.05     # s
+
+
+@numba.njit(cache=True)
+def _integrate(method, x, c, u, force_table, stiffness_poly, dt, n_steps, record_every, out):
+    work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
+    for k in range(n_steps):
+        if k % record_every == 0:
+            out[k // record_every] = x[S.NUT1_POSITION]
+        step(method, k * dt, x, dt, c, u, force_table, stiffness_poly, work, k == 0)
+    out[n_steps // record_every] = x[S.NUT1_POSITION]
+
+
+def compare(dt: float = 1.5625e-5, output_dt: float = 1e-3) -> list[dict]:
+    """Wall time and max nut-position error of each way of solving the open-loop problem."""
+    scene = twin.load_scene("ds5").with_duration(DURATION)
+    model = build_model(scene, twin.load_parameters(), converters=False, pneumatics="absent")
+    c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
+    inputs = np.zeros(N_INPUTS)
+    inputs[U.CURRENT_DEMAND] = CURRENT_STEP
+    times = np.arange(0.0, DURATION + 0.5 * output_dt, output_dt)
+    derivative = np.zeros(model.initial_state.size)
+
+    def f(t, x):
+        rhs(t, x, c, inputs, force_table, poly, derivative)
+        return derivative.copy()
+
+    start = time.perf_counter()
+    reference = solve_ivp(f, (0.0, DURATION), model.initial_state, method="Radau", t_eval=times, rtol=1e-10,
+                          atol=absolute_tolerance(model.initial_state.size, 1.0))
+    results = [{"method": "scipy_radau (reference)", "wall_time": time.perf_counter() - start, "error": 0.0}]
+    nut = reference.y[S.NUT1_POSITION]
+
+    system = control.nlsys(lambda t, x, u, params: f(t, x), None, inputs=1, states=model.initial_state.size,
+                           outputs=model.initial_state.size, name="bench_plant")
+    start = time.perf_counter()
+    response = control.input_output_response(system, times, np.zeros(times.size), X0=model.initial_state,
+                                             solve_ivp_kwargs={"rtol": 1e-6})
+    results.append({"method": "control.input_output_response (RK45, rtol 1e-6)",
+                    "wall_time": time.perf_counter() - start,
+                    "error": float(np.max(np.abs(response.states[S.NUT1_POSITION] - nut)))})
+
+    every = int(round(output_dt / dt))
+    n_steps = int(round(DURATION / dt))
+    for method in ("rk4", "semi_implicit_euler"):
+        out = np.zeros(n_steps // every + 1)
+        _integrate(INTEGRATORS[method], model.initial_state.copy(), c, inputs, force_table, poly, dt, 1, every, out)
+        start = time.perf_counter()
+        _integrate(INTEGRATORS[method], model.initial_state.copy(), c, inputs, force_table, poly, dt, n_steps,
+                   every, out)
+        results.append({"method": f"compiled {method} (dt {dt:g} s)", "wall_time": time.perf_counter() - start,
+                        "error": float(np.max(np.abs(out - nut)))})
+    return results
