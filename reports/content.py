@@ -339,6 +339,7 @@ def _correlations(b: _Builder):
                     rho[order],
                     ci.sel(bound="lower").values[order],
                     ci.sel(bound="upper").values[order],
+                    interval=f"{bootstrap.get('confidence', 0.95):.0%} bootstrap interval",
                     marker=("PRCC", sel["prcc"].values[order]),
                     band=_Z95 / math.sqrt(n - 1) if n > 1 else None,
                     xlabel=f"Spearman correlation with {feature} [–]",

@@ -9,10 +9,12 @@ those units; the captions live in :mod:`reports.content`.
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 from typing import NamedTuple
 
+import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import TwoSlopeNorm
@@ -45,7 +47,7 @@ class Group(NamedTuple):
 
 
 class Line(NamedTuple):
-    """One curve of a time-series panel."""
+    """A curve or a set of points (time series, scatter, detection curve)."""
 
     label: str
     x: np.ndarray
@@ -78,9 +80,6 @@ def _png(fig: Figure) -> bytes:
 
 def _styled(draw):
     """Run a figure function inside the report's matplotlib style (fonts, grid)."""
-    import functools
-
-    import matplotlib
 
     @functools.wraps(draw)
     def wrapper(*args, **kwargs):
@@ -135,7 +134,7 @@ def distributions(panels: list[Panel], height: float = 3.0) -> bytes:
 
 
 @_styled
-def tornado(labels, estimate, lower, upper, *, marker=None, band: float | None, xlabel: str, title: str) -> bytes:
+def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band: float | None, xlabel: str, title: str) -> bytes:
     """Ranked horizontal bars with confidence intervals, the strongest at the top.
 
     Parameters
@@ -143,6 +142,8 @@ def tornado(labels, estimate, lower, upper, *, marker=None, band: float | None, 
     labels : list of str
     estimate, lower, upper : array_like
         Bar lengths and their interval (same order as ``labels``, already ranked).
+    interval : str
+        Legend label of the interval.
     marker : tuple of (str, array_like), optional
         A second coefficient drawn as diamonds (label, values).
     band : float, optional
@@ -155,7 +156,9 @@ def tornado(labels, estimate, lower, upper, *, marker=None, band: float | None, 
     estimate, lower, upper = (np.asarray(v, dtype=float) for v in (estimate, lower, upper))
     colors = np.where(estimate >= 0, "#c0504d", "#4f81bd")
     ax.barh(y, estimate, color=colors, alpha=0.75, height=0.65, label="Spearman ρ")
-    ax.errorbar(estimate, y, xerr=[estimate - lower, upper - estimate], fmt="none", ecolor="black", capsize=2.5, lw=0.9, label="95 % bootstrap interval")
+    # drawn about the interval's midpoint: a percentile interval need not contain the estimate
+    ax.errorbar((lower + upper) / 2, y, xerr=(upper - lower) / 2, fmt="none", ecolor="black", capsize=2.5, lw=0.9,
+                label=interval)
     if marker is not None:
         ax.plot(np.asarray(marker[1], dtype=float), y, "D", color="black", ms=3.5, mfc="white", label=marker[0])
     if band:

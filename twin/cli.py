@@ -85,6 +85,30 @@ def cmd_accuracy(args) -> int:
     return 0
 
 
+def cmd_campaign_run(args) -> int:
+    import campaigns
+
+    spec = campaigns.load_spec(args.spec, runs=args.runs)
+    out = args.out or Path("out") / spec.name
+    results = campaigns.run_campaign(spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume)
+    print(f"wrote {results}")
+    if args.analyze:
+        print(f"wrote {campaigns.analyze(results)}")
+    if args.report:
+        from reports import build_report
+
+        for kind, path in build_report(results, out_dir=out).items():
+            print(f"wrote {kind} report: {path}")
+    return 0
+
+
+def cmd_campaign_analyze(args) -> int:
+    import campaigns
+
+    print(f"wrote {campaigns.analyze(args.results, args.out)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -116,6 +140,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-stability", action="store_true", help="skip the stability map")
     p.add_argument("--replot", action="store_true", help="only regenerate the charts from the data in --out")
     p.set_defaults(func=cmd_accuracy)
+
+    campaign = sub.add_parser("campaign", help="Monte Carlo campaigns: run a spec, analyse its results")
+    campaign_sub = campaign.add_subparsers(dest="campaign_command", required=True)
+    p = campaign_sub.add_parser("run", help="run a campaign spec (TOML) on a local dask cluster or a scheduler")
+    p.add_argument("spec", type=Path, help="campaign spec, e.g. campaigns/specs/demo.toml")
+    p.add_argument("--runs", type=int, help="runs per data set (overrides the spec)")
+    p.add_argument("--out", type=Path, help="output directory (default: out/<spec name>)")
+    p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--scheduler", help="address of an existing dask scheduler (instead of a local cluster)")
+    p.add_argument("--resume", action="store_true", help="skip finished chunks of an interrupted run")
+    p.add_argument("--analyze", action="store_true", help="also write analysis.nc")
+    p.add_argument("--report", action="store_true", help="also write report.html and report.pdf")
+    p.set_defaults(func=cmd_campaign_run)
+    p = campaign_sub.add_parser("analyze", help="correlations, separation and observability of a results.nc")
+    p.add_argument("results", type=Path, help="results.nc of a campaign")
+    p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
+    p.set_defaults(func=cmd_campaign_analyze)
     return parser
 
 
@@ -124,9 +165,19 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (InputError, SimulationFailed) as exc:
+    except Exception as exc:
+        if not isinstance(exc, _user_errors()):
+            raise
         print(f"twin: error: {exc}", file=sys.stderr)
         return 2
+
+
+def _user_errors() -> tuple[type[Exception], ...]:
+    """Errors that are the user's to fix: reported in one message, without a traceback."""
+    from campaigns.storage import CampaignError
+    from reports.errors import ReportError
+
+    return InputError, SimulationFailed, CampaignError, ReportError, FileNotFoundError
 
 
 if __name__ == "__main__":
