@@ -40,8 +40,8 @@ def build_report(
     out_dir : str or Path, default "report"
         Output directory (created if needed).
     accuracy_path : str or Path, optional
-        A speed-versus-accuracy data set (format in ``docs/reports.md``); without
-        it the report says the section is not available.
+        The speed-versus-accuracy study, ``work_precision.nc`` of ``twin accuracy``;
+        without it the report says the section is not available.
     generated_at : datetime, optional
         Timestamp recorded in the report; default now (UTC). The same inputs and
         timestamp give byte-identical HTML.

@@ -105,6 +105,12 @@ class _Builder:
         return self.results[name].attrs.get("long_name", name) if name in self.results else name
 
 
+def _solver(spec: dict) -> str:
+    """The campaign's solver configuration in words (unset entries are the model's defaults)."""
+    solver = spec.get("solver", {})
+    return ", ".join(f"{k} = {'model default' if v is None else v}" for k, v in solver.items()) or "model defaults"
+
+
 def _condition_unit(results, key: str) -> str:
     variable = f"condition_{key}"
     return results[variable].attrs.get("units", "") if variable in results else ""
@@ -175,7 +181,6 @@ def _summary(b: _Builder):
         + (" (see Failed runs)." if n_failed else "."),
         "bad" if n_failed else "good",
     )
-    solver = spec.get("solver", {})
     execution = spec.get("execution", {})
     traces = spec.get("traces", {})
     bootstrap = json.loads(b.analysis.attrs.get("bootstrap", "{}") or "{}")
@@ -189,7 +194,7 @@ def _summary(b: _Builder):
         ("Runs per data set", str(results.sizes["run"])),
         ("Root seed", results.attrs.get("root_seed_entropy", str(spec.get("root_seed", "–")))),
         ("Seeding", results.attrs.get("seeding", "–")),
-        ("Solver", ", ".join(f"{k} = {'model default' if v is None else v}" for k, v in solver.items()) or "model defaults"),
+        ("Solver", _solver(spec)),
         ("Execution", ", ".join(f"{k} = {'adaptive' if v is None else v}" for k, v in execution.items()) or "–"),
         ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, every {traces.get('decimation', 1)}th sample: "
                         f"{', '.join(traces.get('variables', [])) or 'none'}"),
@@ -202,19 +207,14 @@ def _summary(b: _Builder):
     yield b.table("Campaign specification, solver configuration and provenance.", ("Item", "Value"), rows)
 
     statuses = sorted(set(status.ravel().tolist()) - {"ok"})
-    wall = results["wall_time"]
-    rows = []
-    for name in b.datasets:
-        s = results["status"].sel(dataset=name).values
-        w = wall.sel(dataset=name).values
-        rows.append(
-            [b.describe(name), str(s.size), str(int((s == "ok").sum()))]
-            + [str(int((s == st).sum())) for st in statuses]
-            + [number(np.nanmedian(w)) if np.isfinite(w).any() else "–", number(np.nansum(w))]
-        )
-    w = wall.values
-    rows.append(["all", str(status.size), str(int((status == "ok").sum()))] + [str(int((status == st).sum())) for st in statuses]
+
+    def counts(label: str, s: np.ndarray, w: np.ndarray) -> list[str]:
+        return ([label, str(s.size), str(int((s == "ok").sum()))] + [str(int((s == st).sum())) for st in statuses]
                 + [number(np.nanmedian(w)) if np.isfinite(w).any() else "–", number(np.nansum(w))])
+
+    rows = [counts(b.describe(n), results["status"].sel(dataset=n).values, results["wall_time"].sel(dataset=n).values)
+            for n in b.datasets]
+    rows.append(counts("all", status, results["wall_time"].values))
     yield b.table(
         "Data sets (scene and conditions), runs per status and wall time. Wall time is machine dependent; "
         "the total is the sum over runs (the campaign's elapsed time is shorter when workers run in parallel).",
@@ -230,7 +230,7 @@ def _summary(b: _Builder):
         if "sigma" in dist:  # a lognormal's sigma is that of the logarithm, without unit
             shape += f", sigma {number(dist['sigma'])} (log)" if dist.get("kind") == "lognormal" else f", sigma {quantity(dist['sigma'], unit)}"
         rows.append((name, dist.get("kind", "–"), shape, dist.get("source") or "–"))
-    yield b.table("Uncertain parameters (sampled per run), with their resolved distributions in SI units.",
+    yield b.table("Uncertain parameters (sampled per run) with their resolved distributions; the Source column quotes the spec.",
                   ("Parameter", "Distribution", "Values", "Source"), rows)
 
     versions = json.loads(results.attrs.get("package_versions", "{}") or "{}")
@@ -602,28 +602,44 @@ def _failures(b: _Builder):
 
 
 def _speed(b: _Builder):
-    accuracy = b.inputs.accuracy
-    if accuracy is None:
-        yield Callout("Speed-versus-accuracy chart and solver statistics: not available (no accuracy data set was given; "
-                      "see docs/reports.md for its format).")
+    study = b.inputs.accuracy
+    if study is None:
+        yield Callout("Speed-versus-accuracy chart and solver statistics: not available (no work-precision study was given; "
+                      "run `twin accuracy --out DIR` and pass DIR/work_precision.nc).")
         return
-    dim = accuracy["wall_time"].dims[0]
-    labels = [str(v) for v in accuracy[dim].values] if dim in accuracy.coords else [str(i) for i in range(accuracy.sizes[dim])]
-    wall_unit = accuracy["wall_time"].attrs.get("units", "s")
-    error_unit = accuracy["error"].attrs.get("units", "")
-    factor, shown = display_scale(error_unit, accuracy["error"].values)
+    ok = study["status"].values == "ok"
+    error = study["feature_error"].values.astype(float)
+    factor, unit = display_scale(study["feature_error"].attrs.get("units", "m"), error[ok])
+    panels_of = [str(p) for p in study["panel"].values] if "panel" in study.variables else [""] * study.sizes["run"]
+    methods = list(dict.fromkeys(str(m) for m in study["method"].values))
+    adaptive = np.isnan(study["dt"].values) if "dt" in study.variables else np.zeros(study.sizes["run"], dtype=bool)
+    panels, rows = [], []
+    for panel in dict.fromkeys(panels_of):
+        lines = []
+        for k, method in enumerate(methods):
+            runs = np.flatnonzero([p == panel and str(m) == method for p, m in zip(panels_of, study["method"].values)])
+            good = runs[ok[runs] & (error[runs] > 0)]  # a log axis cannot show an exact zero
+            if len(good):
+                good = good[np.argsort(study["wall_time"].values[good])]
+                label = method + (" (rtol ladder)" if adaptive[good].all() else "")
+                lines.append(Line(label, study["wall_time"].values[good], error[good] * factor, f"C{k % 10}", "-"))
+            if len(runs):
+                best = runs[ok[runs]]
+                rows.append((panel.replace("_", " ") or "–", method, f"{len(best)} of {len(runs)}",
+                             number(study["wall_time"].values[best].min()) if len(best) else "–",
+                             quantity(np.nanmin(error[best]), "m") if len(best) and np.isfinite(error[best]).any() else "–"))
+        panels.append(Panel(panel.replace("_", " "), "wall time of one run [s]", axis_label("backlash-feature error", unit), tuple(lines)))
     yield b.figure(
         "speed-accuracy",
-        f"Error against wall time per solver configuration ({accuracy['error'].attrs.get('long_name', 'error')}). The "
-        "configurations toward the lower left are both fast and accurate; the campaign's configuration should be among them.",
-        figures.speed_accuracy(accuracy["wall_time"].values, accuracy["error"].values * factor, labels,
-                               xlabel=axis_label("wall time per run", wall_unit), ylabel=axis_label("|error|", shown)),
+        f"Work-precision study of scene '{study.attrs.get('scene', '?')}' ({study.attrs.get('duration', '?')} s): error of "
+        f"the backlash feature against the reference ({study.attrs.get('reference', '?')}) versus the wall time of one run, "
+        f"per solver method. Configurations to the lower left are both fast and accurate; the campaign ran with {_solver(b.spec)}.",
+        figures.work_precision(panels),
     )
-    columns = [str(v) for v in accuracy.data_vars if accuracy[v].dims == (dim,)]
-    header = [dim] + [f"{c} [{accuracy[c].attrs['units']}]" if accuracy[c].attrs.get("units") else c for c in columns]
-    rows = [[label] + [number(accuracy[c].values[i]) if np.issubdtype(accuracy[c].dtype, np.number) else str(accuracy[c].values[i])
-                       for c in columns] for i, label in enumerate(labels)]
-    yield b.table("Solver statistics per configuration, as stored in the accuracy data set.", header, rows)
+    yield b.table("Solver methods of the study: successful runs, fastest run and smallest backlash-feature error.",
+                  ("Panel", "Method", "Runs ok", "Fastest run [s]", "Smallest feature error"), rows)
+    yield b.table("Study configuration, machine and the reference solver's statistics, as stored with the study.",
+                  ("Item", "Value"), [(k, v if isinstance(v, str) else number(v, 4)) for k, v in study.attrs.items()])
 
 
 # --- Fidelity -------------------------------------------------------------------------------------------

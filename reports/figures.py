@@ -115,13 +115,13 @@ def _density(ax, group: Group) -> None:
 
 
 @_styled
-def distributions(panels: list[Panel], height: float = 3.0) -> bytes:
+def distributions(panels: list[Panel]) -> bytes:
     """Histograms (probability density) with a Gaussian kernel density per group, panels side by side.
 
     Each panel's ``items`` are :class:`Group` s drawn over each other, each
     with its own bins so that narrow and wide distributions both show.
     """
-    fig = _new(1, len(panels), height)
+    fig = _new(1, len(panels), 3.0)
     for ax, panel in zip(fig.axes, panels):
         for group in panel.items:
             _density(ax, group)
@@ -261,17 +261,16 @@ def detection(curves: list[Line], *, power: float, false_alarm_rate: float, requ
 
 
 @_styled
-def speed_accuracy(wall_time, error, labels, *, xlabel: str, ylabel: str) -> bytes:
-    """Error against wall time per solver configuration (log-log), each point labelled."""
-    fig = _new(1, 1, 3.4)
-    ax = fig.axes[0]
-    wall_time, error = np.asarray(wall_time, dtype=float), np.abs(np.asarray(error, dtype=float))
-    ax.plot(wall_time, error, "o", color="C0")
-    for x, y, label in zip(wall_time, error, labels):
-        ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7.5)
-    positive = (wall_time > 0).all() and (error > 0).all()
-    if positive:
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-    ax.set(xlabel=xlabel, ylabel=ylabel)
+def work_precision(panels: list[Panel]) -> bytes:
+    """Log error against log wall time, one line per solver method, panels side by side with a shared error axis."""
+    fig = _new(1, len(panels), 3.6)
+    for ax in fig.axes[1:]:
+        ax.sharey(fig.axes[0])
+    for ax, panel in zip(fig.axes, panels):
+        for line in panel.items:
+            ax.loglog(line.x, line.y, "o" + line.style, color=line.color, ms=3.5, lw=1.1, label=line.label)
+        ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
+        ax.grid(True, which="both", alpha=0.25)
+    handles = {label: handle for ax in fig.axes for handle, label in zip(*ax.get_legend_handles_labels())}
+    fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(len(handles), 4), frameon=False)
     return _png(fig)

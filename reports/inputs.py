@@ -2,8 +2,8 @@
 
 A report never runs a simulation: it reads ``results.nc`` (written by
 :mod:`campaigns.storage`), ``analysis.nc`` (:mod:`campaigns.analysis`; computed
-in memory from the results when absent) and, optionally, an accuracy data set
-(schema in ``docs/reports.md``). Every problem is a :class:`ReportError` that
+in memory from the results when absent) and, optionally, the speed-versus-accuracy
+study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`twin.studies.work_precision`). Every problem is a :class:`ReportError` that
 names the file.
 """
 
@@ -21,7 +21,8 @@ from reports.errors import ReportError
 ANALYSIS_NAME = "analysis.nc"
 _RESULTS_VARIABLES = ("status", "failure_reason", "wall_time")
 _ANALYSIS_VARIABLES = ("n_used", "feature_mean", "feature_std", "spearman", "spearman_ci", "prcc", "overlap", "detection_probability")
-_ACCURACY_VARIABLES = ("wall_time", "error")
+#: What the report needs of a work-precision study (``work_precision.nc`` of ``twin accuracy``).
+_ACCURACY_VARIABLES = ("wall_time", "feature_error", "status", "method")
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
         Its ``analysis.nc``; default: ``analysis.nc`` beside the results if it
         exists, else the analysis is computed in memory (nothing is written).
     accuracy_path : str or Path, optional
-        A speed-versus-accuracy data set.
+        A speed-versus-accuracy study (``work_precision.nc`` of ``twin accuracy``).
 
     Raises
     ------
@@ -153,6 +154,6 @@ def _check_analysis(analysis: xr.Dataset, path: Path, results: xr.Dataset) -> No
 def _check_accuracy(accuracy: xr.Dataset, path: Path) -> None:
     missing = _missing(accuracy, _ACCURACY_VARIABLES)
     if missing:
-        raise ReportError(path, f"not a speed-versus-accuracy data set: variable(s) {', '.join(missing)} missing (see docs/reports.md)")
-    if accuracy["wall_time"].ndim != 1 or accuracy["wall_time"].dims != accuracy["error"].dims:
-        raise ReportError(path, "wall_time and error must share one dimension (one entry per solver configuration)")
+        raise ReportError(path, f"not a work-precision study (twin accuracy's work_precision.nc): variable(s) {', '.join(missing)} missing")
+    if any(accuracy[v].dims != ("run",) for v in _ACCURACY_VARIABLES):
+        raise ReportError(path, f"{', '.join(_ACCURACY_VARIABLES)} must all lie along the dimension 'run' (one entry per study run)")

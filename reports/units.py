@@ -13,7 +13,7 @@ import numpy as np
 
 #: Units that take an SI prefix.
 _PREFIXABLE = {"m", "N", "A", "s", "V", "W", "N m", "N/m", "rad"}
-_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"))
+_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"), (1e-15, "f"))
 #: Units shown in another unit: SI unit -> (display unit, SI value of one display unit).
 _CONVERTED = {"Pa": ("bar", 1e5)}
 _DIMENSIONLESS = {"", "1"}
@@ -43,10 +43,8 @@ def display_scale(unit: str, values) -> tuple[float, str]:
     if unit not in _PREFIXABLE or magnitude.size == 0 or magnitude.max() == 0:
         return 1.0, unit
     reference = magnitude.max()
-    for size, prefix in _PREFIXES:
-        if reference >= size:
-            return 1.0 / size, prefix + unit
-    return 1e9, "n" + unit
+    size, prefix = next(((size, prefix) for size, prefix in _PREFIXES if reference >= size), _PREFIXES[-1])
+    return 1.0 / size, prefix + unit
 
 
 def axis_label(name: str, unit: str) -> str:

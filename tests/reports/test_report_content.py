@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -52,15 +53,23 @@ BENCH_TRACES = {
 
 @pytest.fixture(scope="module")
 def extended(campaign, tmp_path_factory):
-    """A report with everything optional: an accuracy data set, fidelity attributes and bench-named traces."""
-    path = tmp_path_factory.mktemp("accuracy") / "accuracy.nc"
-    xr.Dataset(
+    """A report with everything optional: a work-precision study, fidelity attributes and bench-named traces."""
+    path = tmp_path_factory.mktemp("accuracy") / "work_precision.nc"
+    nan = float("nan")
+    xr.Dataset(  # the layout of twin accuracy's work_precision.nc
         {
-            "wall_time": ("configuration", [0.4, 0.8, 1.1], {"units": "s"}),
-            "error": ("configuration", [2e-8, 1e-9, 5e-8], {"units": "m", "long_name": "error of the backlash feature"}),
-            "steps": ("configuration", [160000, 320000, 640000]),
+            "wall_time": ("run", [0.4, 0.8, 1.1, 0.1], {"units": "s"}),
+            "status": ("run", ["ok", "ok", "ok", "diverged"]),
+            "feature_error": ("run", [2e-8, 1e-9, 5e-10, nan], {"units": "m"}),
         },
-        coords={"configuration": ["rk4 dt=6.25e-5", "rk4 dt=3.125e-5", "euler dt=1.5625e-5"]},
+        coords={
+            "panel": ("run", ["quantizers_off"] * 4),
+            "method": ("run", ["rk4", "rk4", "scipy_radau", "semi_implicit_euler"]),
+            "dt": ("run", [6.25e-5, 3.125e-5, nan, 2.5e-4]),
+            "rtol": ("run", [nan, nan, 1e-6, nan]),
+        },
+        attrs={"scene": "nominal", "duration": 1.5, "reference": "scipy_radau rtol=1e-10",
+               "quantizers_off_reference_stats": "nfev=1234, njev=56"},
     ).to_netcdf(path)
     inputs = load_inputs(campaign, accuracy_path=path)
     results = inputs.results
@@ -71,15 +80,17 @@ def extended(campaign, tmp_path_factory):
     results = results.assign(traces).assign_attrs(
         fidelity_config=json.dumps({"sensors": "full", "pneumatics": "auto"}), fidelity_audit="feature error < 1 nm"
     )
-    return build(inputs.__class__(**{**inputs.__dict__, "results": results}), "T")
+    return build(dataclasses.replace(inputs, results=results), "T")
 
 
-def test_speed_accuracy_section_from_an_accuracy_data_set(extended):
+def test_speed_accuracy_section_from_a_work_precision_study(extended):
     speed = _section(extended, "speed")
     assert [f.key for f in _blocks(speed, Figure)] == ["speed-accuracy"]
-    (table,) = _blocks(speed, Table)
-    assert table.header == ("configuration", "wall_time [s]", "error [m]", "steps")
-    assert table.rows[1] == ("rk4 dt=3.125e-5", "0.8", "1e-09", "320000")
+    methods, study = _blocks(speed, Table)
+    assert methods.rows == (("quantizers off", "rk4", "2 of 2", "0.4", "1 nm"),
+                            ("quantizers off", "scipy_radau", "1 of 1", "1.1", "500 pm"),
+                            ("quantizers off", "semi_implicit_euler", "0 of 1", "–", "–"))
+    assert ("quantizers_off_reference_stats", "nfev=1234, njev=56") in study.rows
 
 
 def test_fidelity_attributes_are_shown(extended):
@@ -104,7 +115,7 @@ def test_every_figure_and_table_is_numbered_in_order(report):
 
 @pytest.mark.parametrize(
     ("value", "unit", "expected"),
-    [(2.5e-6, "m", "2.5 µm"), (0.012, "m", "12 mm"), (6e5, "Pa", "6 bar"), (4000.0, "N", "4 kN"), (298.15, "K", "298 K"), (0.5, "1", "0.5")],
+    [(2.5e-6, "m", "2.5 µm"), (0.012, "m", "12 mm"), (3e-16, "m", "0.3 fm"), (6e5, "Pa", "6 bar"), (4000.0, "N", "4 kN"), (298.15, "K", "298 K"), (0.5, "1", "0.5")],
 )
 def test_quantities_are_shown_with_a_readable_unit(value, unit, expected):
     assert quantity(value, unit) == expected
@@ -122,7 +133,7 @@ def test_a_data_set_without_successful_runs(inputs):
     status = inputs.results["status"].copy()
     status.loc[{"dataset": "ds4"}] = "error"
     results = inputs.results.assign(status=status)
-    report = build(inputs.__class__(**{**inputs.__dict__, "results": results, "analysis": analysis_dataset(results)}), "T")
+    report = build(dataclasses.replace(inputs, results=results, analysis=analysis_dataset(results)), "T")
     failures = _section(report, "failures")
     assert _blocks(failures, Callout)[0].text.startswith("32 of 90 runs failed")
     assert any(f.key == "distribution-backlash_feature-ds4" for f in _blocks(_section(report, "distributions"), Figure))

@@ -58,11 +58,12 @@ def test_analysis_of_another_campaign(campaign, tmp_path):
     assert info.value.path == path
 
 
-def test_accuracy_without_the_expected_variables(campaign, tmp_path):
-    path = tmp_path / "accuracy.nc"
-    xr.Dataset({"runtime": ("configuration", [1.0, 2.0])}).to_netcdf(path)
-    with pytest.raises(ReportError, match="wall_time, error missing"):
+def test_accuracy_study_without_the_expected_variables(campaign, tmp_path):
+    path = tmp_path / "work_precision.nc"
+    xr.Dataset({"wall_time": ("run", [1.0, 2.0])}).to_netcdf(path)
+    with pytest.raises(ReportError, match="not a work-precision study .*feature_error, status, method missing") as info:
         reports.build_report(campaign, out_dir=tmp_path / "out", accuracy_path=path)
+    assert info.value.path == path
 
 
 def test_output_directory_that_is_a_file(campaign, tmp_path):

@@ -33,7 +33,7 @@ from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import Scene, load_scene
 
 DEFAULT_INTEGRATOR = "rk4"
-DEFAULT_DT = 3.125e-5       # s; see docs/model.md "Step size" (a quarter of the drive's speed-loop period)
+DEFAULT_DT = 6.25e-5         # s; chosen by the speed-versus-accuracy study (docs/accuracy.md)
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
 
