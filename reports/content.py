@@ -88,10 +88,22 @@ class _Builder:
         """Feature values of the runs the statistics use."""
         return self.results[feature].sel(dataset=dataset).values[self.used_mask(feature, dataset)]
 
-    def feature_scale(self) -> tuple[float, str]:
-        """One display unit for every feature, so measured and true panels compare directly."""
-        unit = self.results[self.features[0]].attrs.get("units", "")
-        return display_scale(unit, np.concatenate([self.results[f].values.ravel() for f in self.features]))
+    def pair(self, feature: str) -> list[str]:
+        """A measured feature and, when stored, its true-signal counterpart."""
+        true = self.true_of(feature)
+        return [feature, true] if true else [feature]
+
+    def feature_scale(self, feature: str) -> tuple[float, str]:
+        """One display unit for a feature and its true counterpart, so their panels compare directly."""
+        unit = self.results[feature].attrs.get("units", "")
+        return display_scale(unit, np.concatenate([self.results[f].values.ravel() for f in self.pair(feature)]))
+
+    def distribution_panels(self, feature: str, datasets: list[str]) -> list[Panel]:
+        """Density panels of a feature (measured, then true signals) over the given data sets."""
+        factor, unit = self.feature_scale(feature)
+        titles = {feature: f"{feature} (measured)", self.true_of(feature): f"{self.true_of(feature)} (true signals)"}
+        return [Panel(titles[f] if len(self.pair(feature)) > 1 else f, axis_label(f, unit), f"probability density [1/{unit}]",
+                      tuple(Group(d, self.used(f, d) * factor, self.color[d]) for d in datasets)) for f in self.pair(feature)]
 
     def describe(self, dataset: str) -> str:
         """``ds2 (scene ds2; backlash 80 µm, preload 0 N)``."""
@@ -241,7 +253,6 @@ def _summary(b: _Builder):
 
 
 def _distributions(b: _Builder):
-    factor, unit = b.feature_scale()
     yield Paragraph(
         "Probability density of each feature over the successful runs of every data set: a histogram with a Gaussian "
         "kernel density estimate (Figs. 9.8 and 9.10 of the thesis). The measured feature (from the bench's sensors) "
@@ -249,17 +260,11 @@ def _distributions(b: _Builder):
         "instrumentation adds. Failed runs are left out."
     )
     for feature in b.measured:
-        true = b.true_of(feature)
-        panels = [Panel(f"{feature} (measured)" if true else feature, axis_label(feature, unit), f"probability density [1/{unit}]",
-                        tuple(Group(d, b.used(feature, d) * factor, b.color[d]) for d in b.datasets))]
-        if true:
-            panels.append(Panel(f"{true} (true signals)", axis_label(true, unit), f"probability density [1/{unit}]",
-                                tuple(Group(d, b.used(true, d) * factor, b.color[d]) for d in b.datasets)))
         yield b.figure(
             f"distribution-{feature}",
             f"{b.label(feature)}: all data sets. Look at how far apart the data sets with and without backlash lie "
             "compared with the width of each distribution, and at the shift caused by preload or external force.",
-            figures.distributions(panels),
+            figures.distributions(b.distribution_panels(feature, b.datasets)),
         )
     rows = []
     for name in b.datasets:
@@ -272,16 +277,12 @@ def _distributions(b: _Builder):
     for name in b.datasets:
         yield Heading(b.describe(name))
         for feature in b.measured:
-            true = b.true_of(feature)
-            shown = [feature] + ([true] if true else [])
-            panels = [Panel(("true signals" if f == true else "measured") if true else f, axis_label(f, unit),
-                            f"probability density [1/{unit}]", (Group(name, b.used(f, name) * factor, b.color[name]),)) for f in shown]
             yield b.figure(
                 f"distribution-{feature}-{name}",
                 f"{b.label(feature)} in data set {b.describe(name)}"
                 + (": measured (left) and from the true signals (right). Compare the widths: the extra spread of the "
-                   "measured feature comes from the sensors' uncertainties." if true else "."),
-                figures.distributions(panels),
+                   "measured feature comes from the sensors' uncertainties." if b.true_of(feature) else "."),
+                figures.distributions(b.distribution_panels(feature, [name])),
             )
 
 
@@ -380,13 +381,13 @@ def _correlations(b: _Builder):
 def _scatter(b: _Builder):
     a = b.analysis
     parameters = [str(p) for p in a["parameter"].values]
-    factor, unit = b.feature_scale()
     yield Paragraph(
         "The feature against its top-ranked parameters (largest |Spearman ρ| in any data set). Each data set's mean is "
         "subtracted from its feature values, so data sets with different backlash share one axis and the dependence "
         "within a data set is visible."
     )
     for feature in b.measured:
+        factor, unit = b.feature_scale(feature)
         top = [parameters[j] for j in _ranked_over_datasets(a, feature)[:SCATTER_PARAMETERS]]
         if not top:
             yield Callout(f"{feature}: no parameter with a finite correlation, nothing to plot.")
@@ -522,7 +523,6 @@ def _observability(b: _Builder):
     backlash = a["sweep_backlash"].values
     requirement = float(a["minimum_detectable_backlash"].attrs.get("requirement", BACKLASH_REQUIREMENT))
     factor, unit = display_scale("m", [requirement])
-    feature_factor, feature_unit = b.feature_scale()
     yield Paragraph(
         f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
         f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash data set "
@@ -560,15 +560,11 @@ def _observability(b: _Builder):
                           minima=minima, xlabel=axis_label("backlash", unit)),
     )
     for feature in b.measured:
-        true = b.true_of(feature)
-        shown = [feature] + ([true] if true else [])
-        panels = [Panel(f, axis_label(f, feature_unit), f"probability density [1/{feature_unit}]",
-                        tuple(Group(d, b.used(f, d) * feature_factor, b.color[d]) for d in sweep)) for f in shown]
         yield b.figure(
             f"sweep-distribution-{feature}",
             f"{feature} for the sweep data sets (Fig. 9.10 style). The smallest backlash whose distribution clears the "
             "zero-backlash one is what the bench can observe.",
-            figures.distributions(panels),
+            figures.distributions(b.distribution_panels(feature, sweep)),
         )
 
 

@@ -96,6 +96,17 @@ def w_matrix(t, x, h, c, u, force_table, stiffness_poly, work):
 
 
 @numba.njit(cache=True)
+def _matvec(matrix, vector, out):
+    """``out = matrix @ vector`` without allocating (the W-method's stages)."""
+    n = vector.shape[0]
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += matrix[i, j] * vector[j]
+        out[i] = acc
+
+
+@numba.njit(cache=True)
 def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work):
     """Two-stage Rosenbrock W-method ROS2 (Verwer, Spee, Blom & Hundsdorfer, SIAM J. Sci. Comput. 20, 1999):
 
@@ -111,21 +122,13 @@ def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work):
     k1, k2, xs, f = work[0], work[1], work[2], work[3]
     matrix = work[WORK_VECTORS:WORK_VECTORS + n]
     rhs(t, x, c, u, force_table, stiffness_poly, f)
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += matrix[i, j] * f[j]
-        k1[i] = acc
+    _matvec(matrix, f, k1)
     for i in range(n):
         xs[i] = x[i] + h * k1[i]
     rhs(t + h, xs, c, u, force_table, stiffness_poly, f)
     for i in range(n):
         f[i] -= 2.0 * k1[i]
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += matrix[i, j] * f[j]
-        k2[i] = acc
+    _matvec(matrix, f, k2)
     for i in range(n):
         x[i] += h * (1.5 * k1[i] + 0.5 * k2[i])
 

@@ -1,0 +1,66 @@
+"""Speed against accuracy at the default configuration (issue: speed versus accuracy).
+
+Prints, for the nominal and data-set-2 scenes (10 s): the default configuration's wall time on one
+core (median after compilation), the scipy reference path's wall time and the feature difference
+between them (timed side by side in this run), the python-control baseline on the open-loop plant,
+and the estimated wall time of the thesis study (7 x 1000 runs) on this machine's cores.
+Usage: python benchmarks/speed_accuracy.py [--reference-duration 2.0]
+"""
+
+import argparse
+import os
+import statistics
+import time
+
+import twin
+import twin.engine.simulate
+from twin.studies.control_baseline import compare
+
+
+def median_wall(scene, repeats=5, **options):
+    twin.simulate(scene, duration=0.01, **options)
+    times, ds = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        ds = twin.simulate(scene, **options)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), ds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--reference-duration", type=float, default=2.0,
+                        help="simulated seconds of the side-by-side comparison with the scipy path")
+    args = parser.parse_args()
+    print(f"# {os.cpu_count()} cores; default: {twin.engine.simulate.DEFAULT_INTEGRATOR} "
+          f"dt={twin.engine.simulate.DEFAULT_DT:g} s")
+    walls = []
+    for name in ("nominal", "ds2"):
+        scene = twin.load_scene(name)
+        wall, ds = median_wall(scene)
+        walls.append(wall)
+        print(f"{name:8s} {scene.duration:4.1f} s scene: {wall:.3f} s per run ({scene.duration / wall:.0f}x real time), "
+              f"f_b {float(ds.backlash_feature) * 1e6:.4f} um")
+    for name in ("ds2", "nominal"):
+        scene = twin.load_scene(name).with_duration(args.reference_duration)
+        fast, ds_fast = median_wall(scene, repeats=3, sensors="ideal")
+        start = time.perf_counter()
+        ds_ref = twin.simulate(scene, integrator="scipy_lsoda", rtol=1e-8, sensors="ideal")
+        slow = time.perf_counter() - start
+        start = time.perf_counter()
+        ds_radau = twin.simulate(scene, integrator="scipy_radau", rtol=1e-8, sensors="ideal")
+        radau = time.perf_counter() - start
+        print(f"{name:8s} {args.reference_duration:.1f} s, ideal instruments: default {fast:.3f} s; "
+              f"scipy LSODA rtol 1e-8 {slow:.2f} s ({slow / fast:.0f}x), Radau rtol 1e-8 {radau:.2f} s "
+              f"({radau / fast:.0f}x); feature difference "
+              f"{abs(float(ds_fast.backlash_feature - ds_ref.backlash_feature)) * 1e6:.2e} um (LSODA), "
+              f"{abs(float(ds_fast.backlash_feature - ds_radau.backlash_feature)) * 1e6:.2e} um (Radau)")
+    for row in compare():
+        print(f"open-loop plant 0.05 s: {row['method']:50s} {row['wall_time']:.4f} s, max nut error {row['error']:.2e} m")
+    per_run = statistics.mean(walls)
+    print(f"thesis study estimate: 7000 runs x {per_run:.3f} s / {os.cpu_count()} cores = "
+          f"{7000 * per_run / os.cpu_count() / 60:.1f} min (plus scheduling and storage)")
+
+
+if __name__ == "__main__":
+    main()
