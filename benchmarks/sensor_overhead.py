@@ -29,11 +29,12 @@ def main() -> None:
     args = parser.parse_args()
     scene = twin.load_scene(args.scene)
     print(f"# scene '{scene.name}' ({scene.duration} s), median of {args.repeats} runs after compilation")
-    for integrator in ("rk4", "semi_implicit_euler"):
-        base = median_wall(scene, args.repeats, integrator=integrator, sensors="ideal")
+    for integrator, dt in (("rk4", 6.25e-5), ("semi_implicit_euler", 3.125e-5)):
+        base = median_wall(scene, args.repeats, integrator=integrator, dt=dt, sensors="ideal")
         for level in ("quantized", "full"):
-            wall = median_wall(scene, args.repeats, integrator=integrator, sensors=level)
-            print(f"{integrator:20s} ideal {base:.3f} s   {level:9s} {wall:.3f} s   overhead {100 * (wall / base - 1):5.1f} %")
+            wall = median_wall(scene, args.repeats, integrator=integrator, dt=dt, sensors=level)
+            print(f"{integrator:20s} dt={dt:.4g} ideal {base:.3f} s   {level:9s} {wall:.3f} s   "
+                  f"overhead {100 * (wall / base - 1):5.1f} %")
 
 
 if __name__ == "__main__":

@@ -28,6 +28,8 @@ HEATMAP_PARAMETERS = 25
 SCATTER_PARAMETERS = 4
 #: Run indices listed per row of the failed-runs table before "and N more".
 LISTED_RUNS = 12
+#: Standard deviation, relative to the mean, below which a feature counts as constant (floating-point round-off).
+_ROUND_OFF = 1e-12
 #: Two-sided normal quantile of the 95 % band of a correlation under independence.
 _Z95 = 1.96
 #: Trace panels in the order of Figs. 9.6/9.7/9.12: title, quantity (axis label) and the stored variables each draws.
@@ -101,9 +103,10 @@ class _Builder:
     def distribution_panels(self, feature: str, datasets: list[str]) -> list[Panel]:
         """Density panels of a feature (measured, then true signals) over the given data sets."""
         factor, unit = self.feature_scale(feature)
-        titles = {feature: f"{feature} (measured)", self.true_of(feature): f"{self.true_of(feature)} (true signals)"}
-        return [Panel(titles[f] if len(self.pair(feature)) > 1 else f, axis_label(f, unit), f"probability density [1/{unit}]",
-                      tuple(Group(d, self.used(f, d) * factor, self.color[d]) for d in datasets)) for f in self.pair(feature)]
+        pair = self.pair(feature)
+        return [Panel(f"{f} ({kind})" if len(pair) > 1 else f, axis_label(f, unit), f"probability density [1/{unit}]",
+                      tuple(Group(d, self.used(f, d) * factor, self.color[d]) for d in datasets))
+                for f, kind in zip(pair, ("measured", "true signals"))]
 
     def describe(self, dataset: str) -> str:
         """``ds2 (scene ds2; backlash 80 µm, preload 0 N)``."""
@@ -208,7 +211,7 @@ def _summary(b: _Builder):
         ("Seeding", results.attrs.get("seeding", "–")),
         ("Solver", _solver(spec)),
         ("Execution", ", ".join(f"{k} = {'adaptive' if v is None else v}" for k, v in execution.items()) or "–"),
-        ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, every {traces.get('decimation', 1)}th sample: "
+        ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, decimated by {traces.get('decimation', 1)}: "
                         f"{', '.join(traces.get('variables', [])) or 'none'}"),
         ("Half-range sigmas", number(results.attrs.get("half_range_sigmas"))),
         ("Results created", results.attrs.get("date_created", "–")),
@@ -270,8 +273,10 @@ def _distributions(b: _Builder):
     for name in b.datasets:
         for feature in b.features:
             f = b.analysis.sel(dataset=name, feature=feature)
-            rows.append((name, feature, str(int(f["n_used"])), quantity(float(f["feature_mean"]), b.results[feature].attrs.get("units", "")),
-                         quantity(float(f["feature_std"]), b.results[feature].attrs.get("units", ""))))
+            mean, std, unit = float(f["feature_mean"]), float(f["feature_std"]), b.results[feature].attrs.get("units", "")
+            # a spread at round-off level is a constant feature, not a measurement of scatter
+            spread = "0 (constant)" if std <= _ROUND_OFF * abs(mean) else quantity(std, unit)
+            rows.append((name, feature, str(int(f["n_used"])), quantity(mean, unit), spread))
     yield b.table("Mean and standard deviation of each feature over the runs used (status ok, finite feature).",
                   ("Data set", "Feature", "Runs used", "Mean", "Standard deviation"), rows)
     for name in b.datasets:

@@ -95,16 +95,20 @@ def _tidy_x(ax) -> None:
     ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4), useOffset=True)
 
 
-def _density(ax, group: Group) -> None:
+def _density(ax, group: Group) -> bool:
+    """Draw one group's histogram and kernel density; return whether a density was drawn."""
     values = group.values[np.isfinite(group.values)]
     if len(values) == 0:
         ax.plot([], [], color=group.color, label=f"{group.label} (no successful run)")
-        return
+        return False
     spread = np.ptp(values)
     if spread == 0 or len(values) < 3:
-        # no spread to estimate a density from: mark where every run landed
+        # no spread to estimate a density from: mark where every run landed, away from the axes' edge
         ax.axvline(values[0], color=group.color, lw=2.0, label=f"{group.label} (all {len(values)} runs)")
-        return
+        pad = max(0.05 * abs(values[0]), 1.0)
+        ax.update_datalim([(values[0] - pad, 0.0), (values[0] + pad, 0.0)], updatey=False)
+        ax.autoscale_view(scaley=False)
+        return False
     bins = max(8, min(40, int(math.sqrt(len(values)) * 1.5)))
     ax.hist(values, bins=bins, density=True, color=group.color, alpha=0.3, edgecolor=group.color, linewidth=0.5)
     grid = np.linspace(values.min() - 0.15 * spread, values.max() + 0.15 * spread, 300)
@@ -112,6 +116,7 @@ def _density(ax, group: Group) -> None:
         ax.plot(grid, stats.gaussian_kde(values)(grid), color=group.color, lw=1.6, label=f"{group.label} (n = {len(values)})")
     except np.linalg.LinAlgError:  # (near-)singular data: the histogram alone says it
         ax.plot([], [], color=group.color, label=f"{group.label} (n = {len(values)})")
+    return True
 
 
 @_styled
@@ -119,14 +124,17 @@ def distributions(panels: list[Panel]) -> bytes:
     """Histograms (probability density) with a Gaussian kernel density per group, panels side by side.
 
     Each panel's ``items`` are :class:`Group` s drawn over each other, each
-    with its own bins so that narrow and wide distributions both show.
+    with its own bins so that narrow and wide distributions both show. A group
+    without spread is a vertical line; a panel of such groups has no density scale.
     """
     fig = _new(1, len(panels), 3.0)
     for ax, panel in zip(fig.axes, panels):
-        for group in panel.items:
-            _density(ax, group)
+        densities = [_density(ax, group) for group in panel.items]
         if not any(np.isfinite(group.values).any() for group in panel.items):
             ax.text(0.5, 0.5, "no successful run", transform=ax.transAxes, ha="center", va="center", color="grey")
+        if not any(densities):
+            ax.set_yticks([])
+        ax.set_ylim(bottom=0.0)
         ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
         _tidy_x(ax)
         ax.legend(loc="best")
