@@ -98,7 +98,7 @@ def cmd_campaign_run(args) -> int:
         from reports import build_report
 
         for kind, path in build_report(results, out_dir=out).items():
-            print(f"wrote {kind} report: {path}")
+            print(f"wrote {kind} report: {path.resolve()}")
     return 0
 
 
@@ -106,6 +106,14 @@ def cmd_campaign_analyze(args) -> int:
     import campaigns
 
     print(f"wrote {campaigns.analyze(args.results, args.out)}")
+    return 0
+
+
+def cmd_report(args) -> int:
+    from reports import build_report
+
+    for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy).items():
+        print(f"wrote {kind} report: {path}")
     return 0
 
 
@@ -157,6 +165,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
     p.set_defaults(func=cmd_campaign_analyze)
+
+    p = sub.add_parser("report", help="HTML and PDF report of a campaign's stored results (no simulation)")
+    p.add_argument("results", type=Path, help="results.nc of a campaign")
+    p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, else computed in memory)")
+    p.add_argument("--accuracy", type=Path, help="work_precision.nc of `twin accuracy` (speed-and-accuracy section)")
+    p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
+    p.set_defaults(func=cmd_report)
     return parser
 
 
