@@ -79,7 +79,8 @@ def cmd_accuracy(args) -> int:
     if args.replot:
         paths = replot(args.out)
     else:
-        paths = run_accuracy(args.out, args.scene, args.duration, quick=args.quick, stability=not args.no_stability)
+        paths = run_accuracy(args.out, args.scene, args.duration, quick=args.quick, stability=not args.no_stability,
+                             campaign_runs=args.campaign_runs)
     for name, path in paths.items():
         print(f"wrote {name}: {path}")
     return 0
@@ -146,6 +147,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, help="output directory")
     p.add_argument("--quick", action="store_true", help="short ladders, single timing (a first look)")
     p.add_argument("--no-stability", action="store_true", help="skip the stability map")
+    p.add_argument("--campaign-runs", type=int, default=0,
+                   help="also compare candidate solvers over N sampled runs of data sets 2 and 5 (e.g. 100)")
     p.add_argument("--replot", action="store_true", help="only regenerate the charts from the data in --out")
     p.set_defaults(func=cmd_accuracy)
 

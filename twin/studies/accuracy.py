@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 import xarray as xr
 
-from twin.studies.charts import stability_chart, work_precision_chart
+from twin.studies.charts import campaign_accuracy_chart, stability_chart, work_precision_chart
 from twin.studies.control_baseline import compare
 from twin.studies.stability import stability_map
 from twin.studies.work_precision import STEP_LADDER, TOLERANCE_LADDER, environment, run_study
@@ -21,8 +21,9 @@ QUICK = {"steps": STEP_LADDER[:6], "tolerances": TOLERANCE_LADDER[::2], "repeats
 
 
 def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 1.5, *, quick: bool = False,
-                 stability: bool = True, progress=print) -> dict[str, Path]:
-    """Run the work-precision study (and the stability map and python-control baseline) into ``out_dir``.
+                 stability: bool = True, campaign_runs: int = 0, progress=print) -> dict[str, Path]:
+    """Run the work-precision study (and the stability map, the python-control baseline and,
+    with ``campaign_runs > 0``, the campaign-level comparison) into ``out_dir``.
 
     ``quick`` trims the step ladder to 1.25e-4 ... 3.9e-6 s, the tolerance ladder to three
     values and times each run once (for a first look; the full study takes minutes).
@@ -39,6 +40,10 @@ def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 
     progress(baseline.to_string(index=False))
     if stability:
         stability_map(progress=progress).to_netcdf(out / "stability.nc", engine="netcdf4")
+    if campaign_runs:
+        from campaigns.solver_accuracy import campaign_accuracy
+
+        campaign_accuracy(out / "campaign", runs=campaign_runs)
     return replot(out)
 
 
@@ -53,4 +58,8 @@ def replot(out_dir: str | Path) -> dict[str, Path]:
         with xr.open_dataset(out / "stability.nc") as data:
             stability_chart(data.load(), out / "stability.png")
             paths["stability"] = out / "stability.png"
+    if (out / "campaign" / "campaign_accuracy.nc").exists():
+        with xr.open_dataset(out / "campaign" / "campaign_accuracy.nc") as data:
+            campaign_accuracy_chart(data.load(), out / "campaign_accuracy.png")
+            paths["campaign_accuracy"] = out / "campaign_accuracy.png"
     return paths

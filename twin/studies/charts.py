@@ -85,6 +85,38 @@ def stability_chart(stability: xr.Dataset, path: str | Path | None = None) -> pl
     return fig
 
 
+def campaign_accuracy_chart(comparison: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
+    """Shift of the feature's mean and sigma per candidate solver and data set, against 1.96 sigma/sqrt(N).
+
+    A candidate is good enough for campaigns when its bars sit well below the dashed
+    Monte Carlo sampling-error line of its data set.
+    """
+    datasets = list(comparison.dataset.values)
+    candidates = list(comparison.candidate.values)
+    fig, axes = plt.subplots(1, len(datasets), figsize=(5.5 * len(datasets), 4), squeeze=False,
+                             constrained_layout=True)
+    width = 0.8 / len(candidates)
+    for ax, name in zip(axes[0], datasets):
+        data = comparison.sel(dataset=name)
+        for i, candidate in enumerate(candidates):
+            values = [abs(float(data[v].sel(candidate=candidate))) * 1e6
+                      for v in ("mean_shift", "sigma_shift", "max_paired_difference")]
+            ax.bar(np.arange(3) + i * width, np.maximum(values, 1e-7), width, label=candidate)
+        ax.axhline(float(data.sampling_error[0]) * 1e6, color="tab:red", ls="--", lw=1.2,
+                   label="1.96 sigma / sqrt(N)")
+        ax.set_yscale("log")
+        ax.set_xticks(np.arange(3) + 0.4 - width / 2)
+        ax.set_xticklabels(["|mean shift|", "|sigma shift|", "max paired diff."])
+        ax.set_ylabel("backlash feature [um]")
+        ks = ", ".join(f"{float(k):.2f}" for k in data.ks_distance.values)
+        ax.set_title(f"{name}: N = {int(data.n[0])}, KS distances {ks}", fontsize=9)
+        ax.grid(True, axis="y", which="both", alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(f"campaign-level accuracy against {comparison.attrs.get('reference')}", fontsize=10)
+    _save(fig, path)
+    return fig
+
+
 def _save(fig: plt.Figure, path: str | Path | None) -> None:
     if path is None:
         return
