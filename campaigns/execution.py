@@ -34,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import math
 import statistics
+import time
 from collections import deque
 from pathlib import Path
 
@@ -190,12 +191,15 @@ def run_campaign(
     pending = deque(
         (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
     )
+    executed = len(pending)
+    start = time.perf_counter()
     if pending:
         with _client(workers, scheduler) as client, tqdm(
             total=len(pending), disable=not progress, unit="run", desc=spec.name
         ) as bar:
             _execute(client, spec, samples, pending, run_function, store, bar)
-    return store.assemble(samples)
+    return store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                                    "workers": scheduler or workers})
 
 
 def _execute(client: Client, spec, samples, pending: deque, run_function, store: ChunkStore, bar) -> None:

@@ -215,6 +215,10 @@ def _summary(b: _Builder):
                         f"{', '.join(traces.get('variables', [])) or 'none'}"),
         ("Half-range sigmas", number(results.attrs.get("half_range_sigmas"))),
         ("Results created", results.attrs.get("date_created", "–")),
+        ("Campaign elapsed time", f"{number(results.attrs['execution_wall_time'])} s for "
+                                  f"{results.attrs.get('execution_executed_runs', '–')} runs on "
+                                  f"{results.attrs.get('execution_workers', '–')} worker(s) (last invocation)"
+         if "execution_wall_time" in results.attrs else "–"),
         ("Analysis", "computed in memory from results.nc (no analysis.nc given)" if b.inputs.analysis_computed else "analysis.nc"),
         ("Bootstrap", ", ".join(f"{k} = {v}" for k, v in bootstrap.items()) or "–"),
     ]
