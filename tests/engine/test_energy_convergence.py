@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 from scipy.stats import linregress
 
-import twin
 from twin.engine.energy import mechanical_energy
 from twin.engine.integrators import INTEGRATORS, ORDER, step, work_array
 from twin.engine.layout import N_INPUTS, S

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW
 from twin.engine.layout import N_INPUTS, STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOUNDS, STATUS_SOLVER_FAILED, S
 from twin.engine.loop import acquisition_sample, controller_init, guard, instruments_advance, record, speed_sample
 from twin.engine.plant import rhs
@@ -62,7 +63,7 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
     """
     c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
     u = np.zeros(N_INPUTS)
-    state = np.zeros((instruments.parameters.shape[0], 13))
+    state = np.zeros((N_INSTRUMENTS, STATE_ROW))
     controller_init(memory, u, state, instruments.parameters, instruments.levels, x, c, force_table, poly)
     derivative = np.zeros_like(x)
 
