@@ -1,9 +1,9 @@
-"""Worker-level wall-clock fallback: run each simulation in a killable child process.
+"""Per-run wall-clock timeout: run each simulation in a killable child process.
 
-The run function is asked to respect ``request.wall_time_limit`` itself. That
-cannot be relied on: a compiled (numba) loop does not return to the interpreter,
-so neither a signal handler nor a thread can interrupt it. The only reliable way
-to stop it is to kill the process running it. A :class:`Sandbox` is therefore a
+A run function may respect ``request.wall_time_limit`` itself, but the bench's
+compiled (numba) loop does not return to the interpreter, so neither a signal
+handler nor a thread can interrupt it. The only reliable way to stop it is to
+kill the process running it. A :class:`Sandbox` is therefore a
 long-lived child Python process (one per worker thread) that executes requests
 one at a time; the parent waits at most ``wall_time_limit + KILL_GRACE``
 seconds for each answer and otherwise kills the child, records a ``"timeout"``
