@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import twin
-from twin.engine.instrumentation import SCALE_ORIGIN
 
 MEASURED = ["linear_encoder_position", "screw_angle_measured", "nut_speed_measured", "motor_speed_measured",
             "motor_current_measured", "torque_measured", "preload_force_measured", "external_force_measured"]
@@ -33,7 +32,8 @@ def test_quantized_linear_encoder_is_floor_of_true_position(bench):
     """Ideal edges: the reading is floor quantisation of the true position at every acquisition sample."""
     ds = twin.simulate("ds4", duration=2.0, sensors="quantized")
     res = bench.value("sensors.linear_encoder_resolution")
-    expected = (np.floor((SCALE_ORIGIN + ds.nut1_position.values) / res) - np.floor(SCALE_ORIGIN / res)) * res
+    origin = bench.value("sensors.linear_encoder_scale_origin")
+    expected = (np.floor((origin + ds.nut1_position.values) / res) - np.floor(origin / res)) * res
     np.testing.assert_allclose(ds.linear_encoder_position.values, expected, rtol=0, atol=1e-12)
 
 

@@ -79,11 +79,6 @@ LEVELS = {"ideal": 0, "quantized": 1, "full": 2}
 ROW = max(ENC_SIZE, AN_SIZE, RES_SIZE)
 STATE_ROW = max(ENC_STATE_SIZE, AS_SIZE)
 
-# The linear encoder's scale: the test starts with the sled at the middle of the
-# 320 mm measuring stroke (Table B.4), so the precision error (a function of the
-# absolute scale position) is sampled about mid-scale.
-SCALE_ORIGIN = 0.16  # m
-CURRENT_MONITOR_FULL_SCALE_VOLTS = 10.0  # V at the motor's maximum current (drive analog monitor, assumption)
 
 
 @dataclass(frozen=True)
@@ -142,10 +137,10 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     rows[PRELOAD_CELL, :AN_SIZE] = preload_load_cell_parameters(p, room_temperature=room_temperature)
     rows[LOAD_CELL, :AN_SIZE] = load_cell_parameters(p, room_temperature=room_temperature)
     rows[CURRENT_MONITOR, :AN_SIZE] = analog_parameters(
-        full_scale=p["motor.max_current"], output_full_scale=CURRENT_MONITOR_FULL_SCALE_VOLTS, gain=1.0, offset=0.0,
+        full_scale=p["motor.max_current"], output_full_scale=p["sensors.current_monitor_full_scale"], gain=1.0, offset=0.0,
         tau=0.0, refresh_period=0.0, output_bits=0.0, daq_full_scale=p["sensors.daq_full_scale"],
         daq_bits=p["sensors.daq_bits"],
-        noise_half_width=p["sensors.electrical_noise_half_width"] * CURRENT_MONITOR_FULL_SCALE_VOLTS)
+        noise_half_width=p["sensors.electrical_noise_half_width"] * p["sensors.current_monitor_full_scale"])
     if codes[RESOLVER] < LEVELS["full"]:
         rows[RESOLVER, RES_ACCURACY] = 0.0
         rows[RESOLVER, RES_OFFSET] = 0.0
@@ -181,7 +176,7 @@ def _lookback(rows: np.ndarray, dt: float) -> np.ndarray:
 @numba.njit(cache=True)
 def measurands(x, c, torque, preload, external):
     """True values seen by the instruments, in ``INSTRUMENTS`` order."""
-    return (SCALE_ORIGIN + x[S.NUT1_POSITION] - c[K.NUT1_ZERO], x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO],
+    return (c[K.ENCODER_SCALE_ORIGIN] + x[S.NUT1_POSITION] - c[K.NUT1_ZERO], x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO],
             c[K.RATIO] * x[S.REDUCER_ANGLE], torque, preload, external, x[S.HALL_CURRENT])
 
 

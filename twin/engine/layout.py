@@ -201,6 +201,7 @@ class K(IntEnum):
     FORCE_KP = 114
     FORCE_KI = 115
 
+    ENCODER_SCALE_ORIGIN = 116  # m, scale position of the sled at t = 0 (sensors.linear_encoder_scale_origin)
 
 N_CONSTANTS = len(K)
 

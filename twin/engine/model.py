@@ -173,6 +173,7 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
 
     x0 = preload_equilibrium(c, stiffness_poly, preload)
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
+    c[K.ENCODER_SCALE_ORIGIN] = p["sensors.linear_encoder_scale_origin"]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
     if c[K.PNEUMATICS] == PNEUMATICS_FULL:
         x0 = np.concatenate([x0, pneumatic_constants(c, p, scene)])
