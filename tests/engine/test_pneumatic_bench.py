@@ -101,3 +101,15 @@ def test_absent_pneumatics_with_force_demand_is_an_error():
 def test_auto_selects_full_only_with_force_demand():
     assert twin.simulate("nominal", duration=0.05).attrs["pneumatics"] == "full"
     assert twin.simulate("ds2", duration=0.05).attrs["pneumatics"] == "absent"
+
+
+def test_supply_below_exhaust_is_a_scene_error():
+    scene = twin.load_scene("nominal").with_conditions({"supply_pressure": 5.0e4})
+    with pytest.raises(twin.SceneError, match="conditions.supply_pressure"):
+        twin.simulate(scene)
+
+
+def test_zero_area_or_negative_pressure_parameters_are_rejected(bench):
+    with pytest.raises(twin.ParameterError) as info:
+        bench.with_values({"pneumatics.bore_diameter": 0.0, "pneumatics.atmospheric_pressure": -1.0})
+    assert "pneumatics.bore_diameter" in str(info.value) and "pneumatics.atmospheric_pressure" in str(info.value)

@@ -16,6 +16,7 @@ from twin.physics import hertz
 from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import effective_loaded_balls, groove_centre_distance, helix_angle, nut_axial_force
 from twin.physics.preload import series_stiffness
+from twin.errors import SceneError
 from twin.scenes import Scene
 
 CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}
@@ -188,8 +189,11 @@ def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.
     spool position that holds zero force (the static working point of
     :func:`twin.control.force_loop_design.operating_point`).
     """
-    q = {**p, "pneumatics.supply_pressure": scene.condition("supply_pressure"),
-         "pneumatics.air_temperature": scene.condition("room_temperature")}
+    supply = scene.condition("supply_pressure")
+    if supply <= p["pneumatics.atmospheric_pressure"]:
+        raise SceneError([f"conditions.supply_pressure: {supply:g} Pa must exceed the exhaust (atmospheric) "
+                          f"pressure pneumatics.atmospheric_pressure = {p['pneumatics.atmospheric_pressure']:g} Pa"])
+    q = {**p, "pneumatics.supply_pressure": supply, "pneumatics.air_temperature": scene.condition("room_temperature")}
     pn.validate_pneumatics(q)
     c[K.P_SUPPLY] = q["pneumatics.supply_pressure"]
     c[K.P_ATMOSPHERE] = q["pneumatics.atmospheric_pressure"]

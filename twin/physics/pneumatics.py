@@ -44,6 +44,7 @@ import math
 
 import numba
 
+from twin.errors import ParameterError
 from twin.physics.friction import stribeck_friction
 
 __all__ = [
@@ -735,5 +736,5 @@ def validate_pneumatics(params):
     check(("damper_travel", "stroke"), lambda s, stroke: 2.0 * s < stroke,
           "the two damper travels must fit in the stroke")
     if problems:
-        raise ValueError("invalid pneumatic parameters:\n" + "\n".join(problems))
+        raise ParameterError(problems)
     return problems
