@@ -7,6 +7,7 @@ from scipy.integrate import quad
 
 from twin.engine.layout import K, S
 from twin.engine.model import contact_force
+from twin.engine.plant import nut_relative_position
 from twin.physics.coupling import elasto_backlash_energy
 
 
@@ -37,7 +38,6 @@ def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) 
         + c[K.MASS_NUT2] * x[S.NUT2_SPEED] ** 2
         + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
     )
-    arm = c[K.LEAD_ARM]
     axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + (c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]) / c[K.SHAFT_EA])
     compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     elastic = (
@@ -46,7 +46,6 @@ def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) 
         + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
         + 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
     )
-    for position, angle in ((S.NUT1_POSITION, S.NUT1_ANGLE), (S.NUT2_POSITION, S.NUT2_ANGLE)):
-        dx = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[angle]) - x[position]
-        elastic += contact_energy(c, stiffness_poly, dx)
+    for nut in (0, 1):
+        elastic += contact_energy(c, stiffness_poly, nut_relative_position(x, c, nut))
     return float(kinetic + elastic)

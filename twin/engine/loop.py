@@ -27,7 +27,13 @@ from twin.engine.layout import (
     Signal,
     U,
 )
-from twin.engine.plant import external_force, internal_forces, preload_between_nuts, transmitted_torque
+from twin.engine.plant import (
+    external_force,
+    internal_forces,
+    nut_relative_position,
+    preload_between_nuts,
+    transmitted_torque,
+)
 from twin.physics.ball_screw import contact_geometry
 from twin.physics.pneumatics import hysteresis_play
 from twin.scenes.profiles import profile_value
@@ -49,10 +55,8 @@ def guard(x, c):
         return 4
     if x[S.WINDING_TEMP] > c[K.MAX_TEMPERATURE]:
         return 5
-    arm = c[K.LEAD_ARM]
-    for pos, ang in ((S.NUT1_POSITION, S.NUT1_ANGLE), (S.NUT2_POSITION, S.NUT2_ANGLE)):
-        dx = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[ang]) - x[pos]
-        gap = abs(dx) - 0.5 * c[K.BACKLASH]
+    for nut in (0, 1):
+        gap = abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
         if gap > 0.0:
             approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
             if approach > c[K.MAX_NORMAL_APPROACH]:

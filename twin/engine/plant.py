@@ -35,6 +35,21 @@ def preload_between_nuts(x, c):
 
 
 @numba.njit(cache=True)
+def nut_relative_position(x, c, nut):
+    """``dx_i = x_s + p (theta_s - theta_ni) / (2 pi) - x_ni`` of nut ``nut`` (0 master, 1 slave), Eq. 9.5
+    in the sign convention of :mod:`twin.physics.ball_screw`."""
+    position, angle = (S.NUT1_POSITION, S.NUT1_ANGLE) if nut == 0 else (S.NUT2_POSITION, S.NUT2_ANGLE)
+    return x[S.SCREW_AXIAL] + c[K.LEAD_ARM] * (x[S.SCREW_ANGLE] - x[angle]) - x[position]
+
+
+@numba.njit(cache=True)
+def nut_relative_velocity(x, c, nut):
+    """Time derivative of :func:`nut_relative_position` (Eq. 9.5, second line)."""
+    speed, angular = (S.NUT1_SPEED, S.NUT1_ANGULAR_SPEED) if nut == 0 else (S.NUT2_SPEED, S.NUT2_ANGULAR_SPEED)
+    return x[S.SCREW_AXIAL_SPEED] + c[K.LEAD_ARM] * (x[S.SCREW_SPEED] - x[angular]) - x[speed]
+
+
+@numba.njit(cache=True)
 def internal_forces(t, x, c, force_table, stiffness_poly):
     """Coupling forces of the mechanical chain at state ``x``.
 
@@ -44,16 +59,11 @@ def internal_forces(t, x, c, force_table, stiffness_poly):
         ``T_tm`` [N m] (Sec. 9.3), screw-on-nut axial forces [N] (Eqs. 9.4-9.6),
         preload magnitude [N], external force [N], per-sphere normal loads [N].
     """
-    arm = c[K.LEAD_ARM]
     variable = c[K.VARIABLE_ANGLE] > 0.5
-    dx1 = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[S.NUT1_ANGLE]) - x[S.NUT1_POSITION]
-    dv1 = x[S.SCREW_AXIAL_SPEED] + arm * (x[S.SCREW_SPEED] - x[S.NUT1_ANGULAR_SPEED]) - x[S.NUT1_SPEED]
-    dx2 = x[S.SCREW_AXIAL] + arm * (x[S.SCREW_ANGLE] - x[S.NUT2_ANGLE]) - x[S.NUT2_POSITION]
-    dv2 = x[S.SCREW_AXIAL_SPEED] + arm * (x[S.SCREW_SPEED] - x[S.NUT2_ANGULAR_SPEED]) - x[S.NUT2_SPEED]
-    f1, p1, _ = nut_axial_force(dx1, dv1, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
+    f1, p1, _ = nut_axial_force(nut_relative_position(x, c, 0), nut_relative_velocity(x, c, 0), c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
                                 stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
                                 c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
-    f2, p2, _ = nut_axial_force(dx2, dv2, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
+    f2, p2, _ = nut_axial_force(nut_relative_position(x, c, 1), nut_relative_velocity(x, c, 1), c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
                                 stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
                                 c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
     return (transmitted_torque(x, c), f1, f2, preload_between_nuts(x, c), external_force(t, x, c, force_table),
