@@ -96,7 +96,8 @@ def simulate_run(request: RunRequest) -> dict:
     scene = _scene(request.scene).with_conditions(request.conditions)
     params = _parameters(request.parameters).with_values(request.parameter_values)
     options = {k: v for k, v in request.solver.items() if v is not None}
-    ds = twin.simulate(scene, params, throw=False, rng=request.noise_rng(), **options)
+    ds = twin.simulate(scene, params, throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None,
+                       **options)
     trace = None
     if request.trace_variables:
         kept = [v for v in request.trace_variables if v in ds]
@@ -107,4 +108,5 @@ def simulate_run(request: RunRequest) -> dict:
         "t_reached": float(ds.attrs.get("t_reached", math.nan)),
         "features": {f: float(ds[f]) for f in request.features if f in ds},
         "trace": trace,
+        "fidelity": ds.attrs.get("fidelity", ""),
     }

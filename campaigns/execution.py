@@ -119,6 +119,7 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
         solver=spec.solver.model_dump(),
         features=tuple(spec.features),
         trace_variables=tuple(spec.traces.variables) if traced else (),
+        outputs=tuple(spec.features) + (tuple(spec.traces.variables) if spec.traces.runs_per_dataset else ()),
         trace_decimation=spec.traces.decimation,
         wall_time_limit=spec.execution.timeout,
     )
@@ -173,7 +174,8 @@ def run_campaign(
     Returns
     -------
     Path
-        The ``results.nc`` file.
+        The ``results.nc`` file, with the fidelity audit of :mod:`campaigns.fidelity_audit`
+        in its ``fidelity_audit*`` attributes (its full-fidelity runs in ``out_dir/fidelity_audit``).
 
     Raises
     ------
@@ -198,8 +200,13 @@ def run_campaign(
             total=len(pending), disable=not progress, unit="run", desc=spec.name
         ) as bar:
             _execute(client, spec, samples, pending, run_function, store, bar)
-    return store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                    "workers": scheduler or workers})
+    results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                                       "workers": scheduler or workers})
+    from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
+
+    audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
+                   run_function=run_function)
+    return results
 
 
 def _execute(client: Client, spec, samples, pending: deque, run_function, store: ChunkStore, bar) -> None:

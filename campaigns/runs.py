@@ -13,7 +13,9 @@ keys
     ``{name: float}`` for every feature of the spec;
 ``trace`` (optional)
     an :class:`xarray.Dataset` with a ``time`` coordinate, only when
-    ``request.trace_variables`` is not empty.
+    ``request.trace_variables`` is not empty;
+``fidelity`` (optional)
+    the model configuration the run used (``twin.simulate``'s ``attrs["fidelity"]``).
 
 The function must be picklable (a module-level function or an instance of a
 module-level class) so it can travel to dask workers. It should stop by itself
@@ -72,6 +74,9 @@ class RunRequest:
         Features to return.
     trace_variables : tuple of str
         Time series to return (decimated by ``trace_decimation``); empty: none.
+    outputs : tuple of str
+        Everything any run of the campaign returns (features and trace variables), so the
+        model's automatic fidelity is the same for every run of a data set.
     wall_time_limit : float
         Wall-clock budget of the run [s].
     """
@@ -87,6 +92,7 @@ class RunRequest:
     solver: dict[str, Any]
     features: tuple[str, ...]
     trace_variables: tuple[str, ...] = ()
+    outputs: tuple[str, ...] = ()
     trace_decimation: int = 1
     wall_time_limit: float = math.inf
 
@@ -95,7 +101,8 @@ class RunRequest:
         return noise_generator(self.root_seed, self.dataset_index, self.run_index)
 
 
-def record(request: RunRequest, status: str, reason: str, t_reached: float, wall_time: float, features=None, trace=None) -> dict:
+def record(request: RunRequest, status: str, reason: str, t_reached: float, wall_time: float, features=None, trace=None,
+           fidelity: str = "") -> dict:
     """The stored record of one run (``features`` default to NaN)."""
     values = {f: math.nan for f in request.features}
     values.update(features or {})
@@ -108,6 +115,7 @@ def record(request: RunRequest, status: str, reason: str, t_reached: float, wall
         "wall_time": float(wall_time),
         "features": values,
         "trace": trace,
+        "fidelity": fidelity,
     }
 
 
@@ -136,4 +144,5 @@ def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
             status, reason = "failed", "; ".join(problems)
     if status not in STATUSES:
         status, reason = "error", f"run function returned unknown status {status!r}: {reason}"
-    return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"))
+    return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"),
+                  str(result.get("fidelity", "")))

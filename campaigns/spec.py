@@ -128,11 +128,46 @@ class Base(_Strict):
 
 
 class Solver(_Strict):
-    """Options passed to the simulation (``twin.simulate``)."""
+    """Options passed to the simulation (``twin.simulate``).
+
+    ``fidelity`` is ``"auto"`` (default: each subsystem at the cheapest level the
+    scene and the campaign's features and traces allow), ``"full"``, or a table
+    ``{subsystem = level}`` (see ``twin fidelity levels``).
+    """
 
     integrator: str = "rk4"
     dt: float | None = Field(default=None, gt=0)
     output_dt: float | None = Field(default=None, gt=0)
+    fidelity: str | dict[str, str] = "auto"
+
+    @field_validator("fidelity")
+    @classmethod
+    def _known_fidelity(cls, fidelity):
+        from twin.fidelity.levels import SUBSYSTEMS
+
+        if isinstance(fidelity, str):
+            if fidelity not in ("auto", "full"):
+                raise ValueError(f"{fidelity!r} is not auto, full or a table {{subsystem = level}}")
+            return fidelity
+        problems = []
+        for name, level in fidelity.items():
+            allowed = ("auto", "full") if name == "default" else (
+                ("auto", *SUBSYSTEMS[name].level_names) if name in SUBSYSTEMS else None)
+            if allowed is None:
+                problems.append(f"unknown subsystem {name!r}; known: default, {', '.join(SUBSYSTEMS)}")
+            elif level not in allowed:
+                problems.append(f"{name}: level {level!r} is not one of {', '.join(allowed)}")
+        if problems:
+            raise ValueError("; ".join(problems))
+        return fidelity
+
+
+class FidelityAudit(_Strict):
+    """After the campaign, re-run the first ``runs`` runs of every data set at full fidelity
+    (same parameters, same noise) and compare the features (:mod:`campaigns.fidelity_audit`).
+    ``0`` skips it; it is also skipped when the campaign already runs at full fidelity."""
+
+    runs: int = Field(default=10, ge=0)
 
 
 class Execution(_Strict):
@@ -334,6 +369,7 @@ class CampaignSpec(_Strict):
     features: list[str] = Field(min_length=1)
     base: Base = Base()
     solver: Solver = Solver()
+    fidelity_audit: FidelityAudit = FidelityAudit()
     execution: Execution = Execution()
     traces: Traces = Traces()
     datasets: list[Dataset] = Field(min_length=1)

@@ -115,6 +115,7 @@ class ChunkStore:
             "failure_reason": np.array([r["failure_reason"] for r in records], dtype=str),
             "t_reached": np.array([r["t_reached"] for r in records]),
             "wall_time": np.array([r["wall_time"] for r in records]),
+            "fidelity": np.array([r.get("fidelity", "") for r in records], dtype=str),
         }
         for f in self.spec.features:
             arrays[f"feature/{f}"] = np.array([r["features"][f] for r in records])
@@ -203,12 +204,14 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     trace_time = np.full(trace_len, math.nan)
     trace_units = {v: "" for v in spec.traces.variables}
     traces = {v: np.full((shape[0], k_traces, trace_len), math.nan) for v in spec.traces.variables}
+    fidelity: list[set[str]] = [set() for _ in spec.datasets]
     for c in chunks:
         d, runs = int(c["dataset_index"]), c["run"]
         filled[d, runs] = True
         status[d, runs] = c["status"].astype(object)
         reason[d, runs] = c["failure_reason"].astype(object)
         t_reached[d, runs], wall_time[d, runs] = c["t_reached"], c["wall_time"]
+        fidelity[d].update(str(f) for f in c.get("fidelity", ()) if str(f))
         for f in spec.features:
             features[f][d, runs] = c[f"feature/{f}"]
         if "trace_run" in c:
@@ -263,5 +266,7 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
         "date_created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "fidelity_requested": json.dumps(spec.solver.fidelity),
+        **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity) if used},
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

@@ -28,3 +28,4 @@ def make_scene(duration, position=(), force=(), *, preload=0.0, backlash=0.0, co
 @pytest.fixture(scope="session")
 def scene_factory():
     return make_scene
+

@@ -21,6 +21,23 @@ def _parse_assignment(text: str) -> tuple[str, float]:
         raise argparse.ArgumentTypeError(f"--set {name}: value {value!r} is not a number") from None
 
 
+def _parse_fidelity(text: str) -> str | dict[str, str]:
+    """``auto``, ``full`` or ``subsystem=level,...`` (``default=full`` sets the others)."""
+    if "=" not in text:
+        return text
+    choices = {}
+    for item in text.split(","):
+        name, sep, level = item.partition("=")
+        if not sep or not name.strip() or not level.strip():
+            raise argparse.ArgumentTypeError(f"--fidelity expects auto, full or subsystem=level,..., got {text!r}")
+        choices[name.strip()] = level.strip()
+    return choices
+
+
+def _parse_outputs(text: str) -> list[str]:
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
 def _scene_and_params(args) -> tuple[twin.Scene, twin.ParameterSet]:
     """Apply ``--set`` overrides: ``scene.<condition>=v`` to the scene, anything else to the parameters."""
     overrides = dict(args.set or [])
@@ -50,18 +67,24 @@ def cmd_scenes(args) -> int:
 
 def cmd_simulate(args) -> int:
     scene, params = _scene_and_params(args)
-    options = {"integrator": args.integrator, "throw": False, "sensors": args.sensors,
-               "pneumatics": args.pneumatics, "rng": args.seed}
+    if args.duration is not None:
+        scene = scene.with_duration(args.duration)
+    options = {"integrator": args.integrator, "throw": False, "fidelity": args.fidelity, "outputs": args.outputs,
+               "rng": args.seed}
     if args.dt is not None:
         options["dt"] = args.dt
-    if args.duration is not None:
-        options["duration"] = args.duration
+    if args.explain_fidelity:
+        from twin.fidelity import resolve_fidelity
+
+        print(f"fidelity of scene {scene.name}:")
+        print(resolve_fidelity(scene, params, args.fidelity, args.outputs).explain())
     ds = twin.simulate(scene, params, **options)
     print(f"scene {scene.name}: status {ds.attrs['status']}"
           + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok" else "")
           + f", wall time {ds.attrs['wall_time']:.3f} s")
     print(f"backlash feature (Eq. 9.12): measured {float(ds['backlash_feature']) * 1e6:.4f} um, "
           f"true signals {float(ds['backlash_feature_true']) * 1e6:.4f} um")
+    print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
     if args.out:
         ds.to_netcdf(args.out, engine="netcdf4")
         print(f"wrote {args.out}")
@@ -110,6 +133,28 @@ def cmd_campaign_analyze(args) -> int:
     return 0
 
 
+def cmd_fidelity_levels(args) -> int:
+    from twin.fidelity import SUBSYSTEMS
+
+    for subsystem in SUBSYSTEMS.values():
+        print(f"{subsystem.name}: {subsystem.description}")
+        for level in subsystem.levels:
+            removed = f" [removes {len(level.removes_states)} states]" if level.removes_states else ""
+            print(f"    {level.name:15s} {level.description}{removed}")
+    return 0
+
+
+def cmd_fidelity_audit(args) -> int:
+    from campaigns.fidelity_audit import audit_scene
+
+    result = audit_scene(args.scene, args.out or Path("out") / f"fidelity_audit_{Path(args.scene).stem}",
+                         runs=args.runs, spec_path=args.spec, workers=args.workers)
+    print(result.attrs["fidelity_auto"])
+    for line in result.attrs["summary"].splitlines():
+        print(line)
+    return 0
+
+
 def cmd_report(args) -> int:
     from reports import build_report
 
@@ -133,9 +178,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS))
     p.add_argument("--dt", type=float, help="integration step [s]")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
-    p.add_argument("--sensors", default="full", choices=["full", "quantized", "ideal"], help="instrument fidelity")
-    p.add_argument("--pneumatics", default="auto", choices=["auto", "full", "ideal", "absent"],
-                   help="external-force system (auto: full pneumatics when the scene demands a force)")
+    p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",
+                   help="subsystem fidelity (see `twin fidelity levels`; default auto: the cheapest the scene allows)")
+    p.add_argument("--outputs", type=_parse_outputs, metavar="NAME,...",
+                   help="signals and features the run must produce (default: the scene's outputs)")
+    p.add_argument("--explain-fidelity", action="store_true", help="print each subsystem's level and why")
     p.add_argument("--seed", type=int, default=0, help="seed of the electrical noise")
     p.add_argument("--out", type=Path, help="write the run Dataset (netCDF)")
     p.add_argument("--plot", type=Path, help="write an overview plot (PNG/SVG/PDF)")
@@ -168,6 +215,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
     p.set_defaults(func=cmd_campaign_analyze)
+
+    fidelity = sub.add_parser("fidelity", help="fidelity levels and the audit of the automatic choice")
+    fidelity_sub = fidelity.add_subparsers(dest="fidelity_command", required=True)
+    p = fidelity_sub.add_parser("levels", help="list every subsystem's fidelity levels")
+    p.set_defaults(func=cmd_fidelity_levels)
+    p = fidelity_sub.add_parser("audit", help="auto against full fidelity on the same sampled runs of a scene")
+    p.add_argument("scene", help="built-in scene name or a scene TOML file")
+    p.add_argument("--runs", type=int, default=50, help="sampled runs (default 50)")
+    p.add_argument("--spec", type=Path, default=Path(__file__).resolve().parent.parent / "campaigns" / "specs" / "thesis_backlash.toml",
+                   help="campaign spec whose uncertainty table is sampled (default: the thesis study)")
+    p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--out", type=Path, help="output directory (default: out/fidelity_audit_<scene>)")
+    p.set_defaults(func=cmd_fidelity_audit)
 
     p = sub.add_parser("report", help="HTML and PDF report of a campaign's stored results (no simulation)")
     p.add_argument("results", type=Path, help="results.nc of a campaign")

@@ -70,9 +70,12 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
     ax.set_xlabel("time [s]")
 
     ax = axes[2, 1]
-    ax.plot(t, ds["winding_temperature"] - 273.15, lw=1.0)
+    if "winding_temperature" in ds:
+        ax.plot(t, ds["winding_temperature"] - 273.15, lw=1.0)
+        ax.set_title("(f) winding temperature")
+    else:
+        ax.set_title("(f) winding temperature: not modelled (motor_thermal=frozen)")
     ax.set_ylabel("winding temperature [degC]")
-    ax.set_title("(f) winding temperature")
     ax.set_xlabel("time [s]")
 
     fig.suptitle(f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}, backlash feature "

@@ -5,6 +5,8 @@ import pytest
 from scipy.stats import linregress
 
 from twin.engine.energy import mechanical_energy
+from bench_helpers import plant_fidelity
+from twin.fidelity import resolve_fidelity
 from twin.engine.integrators import INTEGRATORS, ORDER, step, work_array
 from twin.engine.layout import N_INPUTS, S
 from twin.engine.model import build_model
@@ -28,7 +30,8 @@ DURATION = 0.02  # s: several periods of the slowest mechanical mode (~350 Hz to
 def _free_motion(bench, scene_factory, method, dt):
     """Integrate the plant alone from a preloaded equilibrium kicked by initial velocities."""
     params = bench.with_values(LOSSLESS)
-    model = build_model(scene_factory(DURATION, preload=1000.0), params, converters=False)
+    scene = scene_factory(DURATION, preload=1000.0)
+    model = build_model(scene, params, resolve_fidelity(scene, params, plant_fidelity(scene)))
     x = model.initial_state.copy()
     x[S.SCREW_SPEED] = 2.0
     x[S.NUT1_SPEED] = 2e-3
@@ -40,7 +43,7 @@ def _free_motion(bench, scene_factory, method, dt):
     held_inputs = np.zeros(N_INPUTS)  # no current demand; the load system is absent
     for k in range(int(round(DURATION / dt))):
         step(code, k * dt, x, dt, model.constants, held_inputs, model.force_table, model.stiffness_poly, work,
-             k % 4 == 0)
+             k % 4 == 0, model.active, model.pairs)
     return x, energy_0, mechanical_energy(x, model.constants, model.stiffness_poly)
 
 

@@ -13,7 +13,7 @@ MEASURED = ["linear_encoder_position", "screw_angle_measured", "nut_speed_measur
 
 @pytest.fixture(scope="module")
 def ds1_full():
-    return twin.simulate("ds1", duration=2.0, rng=np.random.default_rng(7))
+    return twin.simulate("ds1", duration=2.0, rng=np.random.default_rng(7), fidelity="full")
 
 
 def test_measured_signals_present_with_units(ds1_full):
@@ -23,14 +23,14 @@ def test_measured_signals_present_with_units(ds1_full):
 
 
 def test_ideal_instruments_give_the_true_feature():
-    ds = twin.simulate("ds2", duration=2.0, sensors="ideal")
+    ds = twin.simulate("ds2", duration=2.0, fidelity={"encoders": "ideal", "analog_sensors": "ideal"})
     assert float(ds.backlash_feature) == float(ds.backlash_feature_true)
     np.testing.assert_array_equal(ds.linear_encoder_position.values, ds.nut1_position.values)
 
 
 def test_quantized_linear_encoder_is_floor_of_true_position(bench):
     """Ideal edges: the reading is floor quantisation of the true position at every acquisition sample."""
-    ds = twin.simulate("ds4", duration=2.0, sensors="quantized")
+    ds = twin.simulate("ds4", duration=2.0, fidelity={"encoders": "quantized"})
     res = bench.value("sensors.linear_encoder_resolution")
     origin = bench.value("sensors.linear_encoder_scale_origin")
     expected = (np.floor((origin + ds.nut1_position.values) / res) - np.floor(origin / res)) * res
@@ -38,16 +38,16 @@ def test_quantized_linear_encoder_is_floor_of_true_position(bench):
 
 
 def test_torque_meter_encoder_resolution(bench):
-    ds = twin.simulate("ds4", duration=1.5, sensors="quantized")
+    ds = twin.simulate("ds4", duration=1.5, fidelity={"encoders": "quantized"})
     res = 2 * math.pi / (4 * bench.value("sensors.torque_meter_encoder_pulses_per_turn"))
     error = ds.screw_angle_measured - ds.screw_angle
     assert float(error.max()) <= 1e-12 and float(error.min()) >= -res - 1e-12
 
 
 def test_same_seed_same_noise_other_seed_other_noise():
-    a = twin.simulate("ds5", duration=0.5, rng=123)
-    b = twin.simulate("ds5", duration=0.5, rng=np.random.default_rng(123))
-    c = twin.simulate("ds5", duration=0.5, rng=124)
+    a = twin.simulate("ds5", duration=0.5, rng=123, fidelity="full")
+    b = twin.simulate("ds5", duration=0.5, rng=np.random.default_rng(123), fidelity="full")
+    c = twin.simulate("ds5", duration=0.5, rng=124, fidelity="full")
     np.testing.assert_array_equal(a.torque_measured.values, b.torque_measured.values)
     assert not np.array_equal(a.preload_force_measured.values, c.preload_force_measured.values)
 
@@ -67,7 +67,7 @@ def test_feature_sees_backlash_through_the_encoders():
     assert float(ds.backlash_feature) > 5e-6
 
 
-def test_unknown_instrument_or_level_is_an_error():
+def test_unknown_subsystem_or_level_is_an_error():
     with pytest.raises(twin.OptionError) as info:
-        twin.simulate("ds4", sensors={"laser": "full", "resolver": "perfect"})
-    assert "sensors.laser" in str(info.value) and "sensors.resolver" in str(info.value)
+        twin.simulate("ds4", fidelity={"laser": "full", "encoders": "perfect"})
+    assert "fidelity.laser" in str(info.value) and "fidelity.encoders" in str(info.value)

@@ -11,12 +11,12 @@ SUPPLY = 7.0e5  # Pa absolute, the scenes' nominal supply
 
 
 # The loop's own dynamics: the load cell without its electrical noise (see test_load_cell_noise_in_force_loop).
-QUIET = {"load_cell": "quantized"}
+QUIET = "quantized"  # analog sensors without noise
 
 
-def _run(scene_factory, force, supply=SUPPLY, duration=2.5, position=(), sensors=QUIET):
+def _run(scene_factory, force, supply=SUPPLY, duration=2.5, position=(), analog=QUIET):
     scene = scene_factory(duration, position=position, force=force).with_conditions({"supply_pressure": supply})
-    return twin.simulate(scene, pneumatics="full", output_dt=1.25e-4, sensors=sensors)
+    return twin.simulate(scene, fidelity={"default": "full", "analog_sensors": analog}, output_dt=1.25e-4)
 
 
 STEP = [{"kind": "hold", "end": 1.0}, {"kind": "smooth_step", "end": 1.05, "to": 4000.0}]
@@ -75,7 +75,7 @@ def test_unreachable_force_saturates_without_windup(scene_factory, bench):
 def test_moving_nut_force_error_bounded(scene_factory):
     """While the sled follows the Fig. 9.6a profile with 4 kN applied, the force error stays below
     10 % of the demand (measured: 275 N peak, from the piston seal friction at speed reversals)."""
-    ds = twin.simulate("nominal", pneumatics="full", sensors=QUIET)
+    ds = twin.simulate("nominal", fidelity={"default": "full", "analog_sensors": QUIET})
     error = (ds.force_demand - ds.external_force).sel(time=slice(1.5, None))
     assert float(np.abs(error).max()) < 400.0
     assert float(np.sqrt((error**2).mean())) < 100.0
@@ -85,7 +85,7 @@ def test_load_cell_noise_in_force_loop(scene_factory, bench):
     """The load cell's electrical noise (Table 9.5, +/-2.5 %FS uniform on the 20 kN channel) enters the
     force loop: the true force then fluctuates by roughly sigma_noise * sqrt(f_loop / f_Nyquist),
     and its mean still holds the demand."""
-    ds = _run(scene_factory, STEP, sensors="full")
+    ds = _run(scene_factory, STEP, analog="full")
     steady = ds.external_force.sel(time=slice(1.5, None))
     sigma_noise = bench.value("sensors.electrical_noise_half_width") * bench.value("sensors.load_cell_nominal_force") / 3**0.5
     expected = sigma_noise * (10.0 / 500.0) ** 0.5
@@ -94,13 +94,8 @@ def test_load_cell_noise_in_force_loop(scene_factory, bench):
 
 
 def test_absent_pneumatics_with_force_demand_is_an_error():
-    with pytest.raises(OptionError, match="pneumatics"):
-        twin.simulate("nominal", pneumatics="absent")
-
-
-def test_auto_selects_full_only_with_force_demand():
-    assert twin.simulate("nominal", duration=0.05).attrs["pneumatics"] == "full"
-    assert twin.simulate("ds2", duration=0.05).attrs["pneumatics"] == "absent"
+    with pytest.raises(OptionError, match="fidelity.pneumatics"):
+        twin.simulate("nominal", fidelity={"pneumatics": "absent"})
 
 
 def test_supply_below_exhaust_is_a_scene_error():

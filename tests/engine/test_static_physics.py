@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 import twin
+from bench_helpers import plant_fidelity
 from twin.engine.model import build_model, contact_position_for_force
+from twin.fidelity import resolve_fidelity
 
 SETTLE = 0.3  # s averaged at the end of each run, after the transients (loop bandwidths >= 6 Hz)
 
@@ -20,7 +22,7 @@ def _final(ds, name):
 def test_static_hold_screw_torque_and_motor_current(bench, scene_factory, force):
     """Holding a constant external force at rest: T = F p / (2 pi) and i = T / (tau eta k_t), within friction."""
     scene = scene_factory(1.5, force=[{"kind": "hold", "end": 0.1}, {"kind": "smooth_step", "end": 0.3, "to": force}])
-    ds = twin.simulate(scene, bench, sensors="ideal")
+    ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene))
     p = bench.values()
     arm = p["ball_screw.lead"] / (2 * math.pi)
     # The screw resists the force: with +theta_s advancing the nut along +x the torque is -F p/2pi.
@@ -39,7 +41,8 @@ def test_static_hold_screw_torque_and_motor_current(bench, scene_factory, force)
 @pytest.mark.parametrize("configuration, sign", [("O", 1.0), ("X", -1.0)])
 def test_preload_balanced_by_both_nuts(bench, scene_factory, configuration, sign):
     """1000 N preload, no external force: each nut's contact carries the preload, in opposite directions."""
-    ds = twin.simulate(scene_factory(0.5, preload=1000.0, configuration=configuration), bench, sensors="ideal")
+    scene = scene_factory(0.5, preload=1000.0, configuration=configuration)
+    ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene))
     assert _final(ds, "preload_force") == pytest.approx(1000.0, rel=1e-3)
     assert _final(ds, "nut1_contact_force") == pytest.approx(sign * 1000.0, rel=1e-3)
     assert _final(ds, "nut2_contact_force") == pytest.approx(-sign * 1000.0, rel=1e-3)
@@ -59,7 +62,7 @@ def test_external_force_redistributes_preload(bench, scene_factory, external):
     preload = 1000.0
     scene = scene_factory(1.2, force=[{"kind": "hold", "end": 0.1}, {"kind": "smooth_step", "end": 0.3, "to": external}],
                           preload=preload)
-    ds = twin.simulate(scene, bench, sensors="ideal")
+    ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene))
     f_pr = _final(ds, "preload_force")
     f1, f2 = _final(ds, "nut1_contact_force"), _final(ds, "nut2_contact_force")
     assert f_pr == pytest.approx(preload, rel=0.05)  # soft spring: the preload barely changes
@@ -76,13 +79,13 @@ def test_backlash_hysteresis_width_and_nut_dwell(bench, scene_factory):
     scene = scene_factory(4.5, position=[{"kind": "hold", "end": 0.25},
                                          {"kind": "sinusoid", "end": 4.25, "amplitude": 1e-3, "frequency": 0.5, "phase": 0.0}],
                           backlash=backlash)
-    ds = twin.simulate(scene, bench, sensors="ideal", output_dt=1.25e-4)
+    ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene), output_dt=1.25e-4)
     relative = (ds.nut1_position - ds.screw_equivalent_position - ds.screw_axial_position).sel(time=slice(1.0, None))
     width = float(relative.max() - relative.min())
     # Elastic part: the Hertz deflection (soft at low load) under the largest contact force on each
     # side of the loop, which arises when the screw re-engages the dwelling nut. The damping share of
     # that force makes the deflection slightly smaller, never larger.
-    model = build_model(scene, bench, converters=False)
+    model = build_model(scene, bench, resolve_fidelity(scene, bench, plant_fidelity(scene)))
     force = ds.nut1_contact_force.sel(time=slice(1.0, None))
     elastic = sum(abs(contact_position_for_force(model.constants, model.stiffness_poly, f)) - backlash / 2
                   for f in (float(force.max()), float(force.min())))

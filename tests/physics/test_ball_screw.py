@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from twin.engine.layout import CONTACT_CONSTANT_ANGLE, CONTACT_LINEAR, CONTACT_VARIABLE_ANGLE
 from twin.physics.ball_screw import contact_geometry, groove_centre_distance, helix_angle, nut_axial_force
 
 A0 = groove_centre_distance(1.5875e-3, 0.528)
@@ -15,8 +16,11 @@ K_CONST = np.array([5.27e9])  # constant stiffness polynomial
 Z = 22.0
 
 
-def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0):
-    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z, variable)
+def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0, linear_stiffness=None):
+    """Axial nut force at the contact level: variable or constant angle Hertz, or linear if a stiffness is given."""
+    model = CONTACT_LINEAR if linear_stiffness is not None else (CONTACT_VARIABLE_ANGLE if variable else CONTACT_CONSTANT_ANGLE)
+    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z,
+                           model, linear_stiffness or 0.0)
 
 
 def test_helix_angle_matches_table_7_5():
@@ -49,6 +53,18 @@ def test_force_is_gradient_of_energy(variable):
 def test_hertz_three_halves_law_constant_angle():
     f1, f2 = force(2e-6, variable=False)[0], force(4e-6, variable=False)[0]
     assert f2 / f1 == pytest.approx(2**1.5, rel=1e-12)
+
+
+def test_linear_contact_is_an_elasto_backlash_spring():
+    """The linear level is proportional to the interference beyond the half gap (Ch. 5 elasto-backlash), and its
+    secant stiffness K delta^0.5 reproduces the Hertz force at that deflection exactly."""
+    backlash, dx = 20e-6, 14e-6
+    delta_n = (dx - 0.5 * backlash) * COS_HELIX * math.sin(ALPHA0)
+    secant = K_CONST[0] * delta_n**0.5
+    linear = force(dx, backlash=backlash, linear_stiffness=secant)[0]
+    assert linear == pytest.approx(force(dx, backlash=backlash, variable=False)[0], rel=1e-12)
+    assert force(0.5 * backlash + 2 * (dx - 0.5 * backlash), backlash=backlash, linear_stiffness=secant)[0] == pytest.approx(2 * linear, rel=1e-12)
+    assert force(9e-6, backlash=backlash, linear_stiffness=secant)[0] == 0.0
 
 
 def test_backlash_gap_transmits_nothing_and_is_symmetric():

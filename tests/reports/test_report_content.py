@@ -37,7 +37,8 @@ def test_optional_sections_say_not_available(report):
     speed, fidelity = _section(report, "speed"), _section(report, "fidelity")
     assert "not available" in _blocks(speed, Callout)[0].text
     assert not _blocks(speed, Figure)
-    assert "No fidelity configuration" in _blocks(fidelity, Callout)[0].text
+    (table,) = _blocks(fidelity, Table)  # the synthetic model reports no fidelity: the audit says why it did not run
+    assert ("fidelity_audit", "not run (the run function reports no fidelity)") in table.rows
 
 
 #: Bench-named traces added to the synthetic campaign's results: (units, values over the trace time).
@@ -78,7 +79,8 @@ def extended(campaign, tmp_path_factory):
     traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape), {"units": unit})
               for name, (unit, values) in BENCH_TRACES.items()}
     results = results.assign(traces).assign_attrs(
-        fidelity_config=json.dumps({"sensors": "full", "pneumatics": "auto"}), fidelity_audit="feature error < 1 nm"
+        fidelity_ds1="pneumatics=full, current_loop=ideal", fidelity_audit="passed",
+        fidelity_audit_ds1="speedup x1.40; backlash_feature: mean shift +0.0010 um -> pass",
     )
     return build(dataclasses.replace(inputs, results=results), "T")
 
@@ -95,8 +97,9 @@ def test_speed_accuracy_section_from_a_work_precision_study(extended):
 
 def test_fidelity_attributes_are_shown(extended):
     (table,) = _blocks(_section(extended, "fidelity"), Table)
-    assert table.rows == (("fidelity_config.sensors", "full"), ("fidelity_config.pneumatics", "auto"),
-                          ("fidelity_audit", "feature error < 1 nm"))
+    assert table.rows == (("fidelity_requested", "auto"), ("fidelity_audit", "passed"),
+                          ("fidelity_ds1", "pneumatics=full, current_loop=ideal"),
+                          ("fidelity_audit_ds1", "speedup x1.40; backlash_feature: mean shift +0.0010 um -> pass"))
 
 
 def test_bench_traces_get_the_thesis_panels(extended):

@@ -7,6 +7,7 @@ import xarray as xr
 from scipy.stats import linregress
 
 import twin
+from bench_helpers import plant_fidelity
 from twin.engine.integrators import ORDER
 from twin.studies.accuracy import replot
 from twin.studies.stability import THEORY, largest_stable_step, loaded_scene, loaded_state
@@ -36,8 +37,8 @@ def test_closed_loop_order_on_smooth_scene(bench, smooth_scene, method, steps):
     sample instants shared by every step size, so the plant ODE is smooth between them.
     Measured slopes: RK4 4.2 (4.5 at 31 us, pre-asymptotic), semi-implicit Euler 1.01, W-method 1.98."""
     params = bench.with_values(SMOOTH)
-    reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7, sensors="ideal")
-    errs = [_final_error(twin.simulate(smooth_scene, params, integrator=method, dt=h, sensors="ideal"), reference)
+    reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7, fidelity=plant_fidelity(smooth_scene))
+    errs = [_final_error(twin.simulate(smooth_scene, params, integrator=method, dt=h, fidelity=plant_fidelity(smooth_scene)), reference)
             for h in steps]
     slope = linregress(np.log(steps), np.log(errs)).slope
     assert slope == pytest.approx(ORDER[method], abs=0.3)
@@ -50,8 +51,8 @@ def test_observed_order_on_full_scene():
     torsional play switch at slightly different instants for different steps. Asserted: a drop of
     at least 2^3 over the first halving, and the floor below 1e-5."""
     scene = twin.load_scene("nominal").with_duration(1.2)
-    reference = twin.simulate(scene, integrator="rk4", dt=9.765625e-7, sensors="ideal")
-    errs = [_final_error(twin.simulate(scene, integrator="rk4", dt=h, sensors="ideal"), reference)
+    reference = twin.simulate(scene, integrator="rk4", dt=9.765625e-7, fidelity=plant_fidelity(scene))
+    errs = [_final_error(twin.simulate(scene, integrator="rk4", dt=h, fidelity=plant_fidelity(scene)), reference)
             for h in (3.125e-5, 1.5625e-5, 7.8125e-6)]
     assert errs[0] / errs[1] > 8.0
     assert max(errs[1:]) < 1e-5
@@ -60,9 +61,9 @@ def test_observed_order_on_full_scene():
 def test_guard_catches_nan_blow_up():
     """RK4 at the 125 us drive period exceeds its stability limit (~1e-4 s): without the local-error
     check the state goes to NaN, and the guard stops the run there with that reason."""
-    ds = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, sensors="ideal", local_error_guard=False, throw=False)
+    ds = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), local_error_guard=False, throw=False)
     assert ds.attrs["status"] == "diverged" and "non-finite" in ds.attrs["failure_reason"]
-    guarded = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, sensors="ideal", throw=False)
+    guarded = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), throw=False)
     assert "finite but wrong" in guarded.attrs["failure_reason"]
     assert guarded.attrs["t_reached"] < ds.attrs["t_reached"]  # caught before the NaN
 
@@ -71,12 +72,12 @@ def test_guard_catches_finite_but_wrong():
     """Semi-implicit Euler at 62.5 us on the loaded nominal scene is past its ~55 us limit: the run stays
     finite and ends 'ok' with a feature 5 um off (50.2 instead of 55.4 um). The step-doubling guard
     flags it."""
-    unguarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, sensors="ideal",
+    unguarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"),
                               local_error_guard=False, throw=False)
-    right = twin.simulate("nominal", integrator="rk4", dt=3.125e-5, sensors="ideal")
+    right = twin.simulate("nominal", integrator="rk4", dt=3.125e-5, fidelity=plant_fidelity("nominal"))
     assert unguarded.attrs["status"] == "ok"
     assert abs(float(unguarded.backlash_feature - right.backlash_feature)) > 1e-6
-    guarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, sensors="ideal", throw=False)
+    guarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"), throw=False)
     assert guarded.attrs["status"] == "diverged" and "finite but wrong" in guarded.attrs["failure_reason"]
 
 
@@ -88,8 +89,8 @@ def test_guard_quiet_on_stable_runs():
 
 def test_reference_path_matches_compiled_loop():
     """scipy Radau with the same sampled-data logic and RK4 agree on the feature to 1e-4 um."""
-    reference = twin.simulate("ds7", integrator="scipy_lsoda", rtol=1e-9, duration=0.6, sensors="ideal")
-    compiled = twin.simulate("ds7", integrator="rk4", duration=0.6, sensors="ideal")
+    reference = twin.simulate("ds7", integrator="scipy_lsoda", rtol=1e-9, duration=0.6, fidelity=plant_fidelity("ds7"))
+    compiled = twin.simulate("ds7", integrator="rk4", duration=0.6, fidelity=plant_fidelity("ds7"))
     assert float(compiled.backlash_feature) == pytest.approx(float(reference.backlash_feature), abs=1e-10)
     assert reference.attrs["solver_nfev"] > 0 and reference.attrs["solver_steps"] > 0
 

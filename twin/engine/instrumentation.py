@@ -63,6 +63,7 @@ from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
 from twin.engine.layout import K, S
+from twin.engine.plant import sensed_current
 
 LINEAR_ENCODER = 0
 TORQUE_METER_ENCODER = 1
@@ -92,25 +93,21 @@ class Instruments:
     names: dict[str, str]    # instrument -> level name
 
 
-def resolve_levels(sensors: str | Mapping[str, str]) -> tuple[dict[str, str], list[str]]:
-    """Expand the ``sensors`` option (one level, or a per-instrument mapping) and list its problems."""
-    problems = []
-    if isinstance(sensors, str):
-        chosen = {name: sensors for name in INSTRUMENTS}
-    else:
-        chosen = {name: "full" for name in INSTRUMENTS}
-        for name, level in dict(sensors).items():
-            if name not in INSTRUMENTS:
-                problems.append(f"sensors.{name}: unknown instrument; allowed: {', '.join(INSTRUMENTS)}")
-            chosen[name] = level
-    for name, level in chosen.items():
-        if level not in LEVELS:
-            problems.append(f"sensors.{name}: level {level!r} is not one of {', '.join(LEVELS)}")
-    return chosen, problems
+# Fidelity subsystem (twin.fidelity) -> the instruments whose level it sets.
+INSTRUMENT_GROUPS = {
+    "encoders": ("linear_encoder", "torque_meter_encoder", "resolver"),
+    "analog_sensors": ("torque_meter", "preload_load_cell", "load_cell", "current_monitor"),
+}
+
+
+def instrument_levels(fidelity) -> dict[str, str]:
+    """Instrument -> level name, from the ``encoders`` and ``analog_sensors`` levels of a
+    :class:`twin.fidelity.Fidelity`."""
+    return {name: fidelity.level(group) for group, names in INSTRUMENT_GROUPS.items() for name in names}
 
 
 def build_instruments(p: Mapping[str, float], room_temperature: float, levels: Mapping[str, str],
-                      rng: np.random.Generator, n_samples: int, dt: float) -> Instruments:
+                      rng: np.random.Generator, n_samples: int, dt: float, torque_meter_refresh: bool = True) -> Instruments:
     """Pack the instruments of one run (parameters from the ``sensors`` group of ``p``).
 
     Parameters
@@ -120,13 +117,15 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     room_temperature : float
         Scene room temperature [K]: drives every temperature effect.
     levels : mapping
-        Instrument -> level name (see :func:`resolve_levels`).
+        Instrument -> level name (see :func:`instrument_levels`).
     rng : numpy.random.Generator
         Source of the electrical noise (one column per analog channel, drawn in a fixed order).
     n_samples : int
         Number of acquisition samples of the run.
     dt : float
         Integration step [s] (sets how many steps before a reading a memoryless channel is stepped).
+    torque_meter_refresh : bool
+        Model the torque meter's 1 kHz sample-and-hold (True) or read it continuously.
     """
     codes = np.array([LEVELS[levels[name]] for name in INSTRUMENTS], dtype=np.int64)
     rows = np.zeros((len(INSTRUMENTS), ROW))
@@ -134,6 +133,8 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(p, fidelity=int(codes[TORQUE_METER_ENCODER]))
     rows[RESOLVER, :RES_SIZE] = resolver_parameters(p)
     rows[TORQUE_METER, :AN_SIZE] = torque_meter_parameters(p, room_temperature=room_temperature)
+    if not torque_meter_refresh:
+        rows[TORQUE_METER, AN_REFRESH_PERIOD] = 0.0
     rows[PRELOAD_CELL, :AN_SIZE] = preload_load_cell_parameters(p, room_temperature=room_temperature)
     rows[LOAD_CELL, :AN_SIZE] = load_cell_parameters(p, room_temperature=room_temperature)
     rows[CURRENT_MONITOR, :AN_SIZE] = analog_parameters(
@@ -177,7 +178,7 @@ def _lookback(rows: np.ndarray, dt: float) -> np.ndarray:
 def measurands(x, c, torque, preload, external):
     """True values seen by the instruments, in ``INSTRUMENTS`` order."""
     return (c[K.ENCODER_SCALE_ORIGIN] + x[S.NUT1_POSITION] - c[K.NUT1_ZERO], x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO],
-            c[K.RATIO] * x[S.REDUCER_ANGLE], torque, preload, external, x[S.HALL_CURRENT])
+            c[K.RATIO] * x[S.REDUCER_ANGLE], torque, preload, external, sensed_current(x, c))
 
 
 @numba.njit(cache=True)

@@ -28,7 +28,7 @@ class S(IntEnum):
     NUT2_ANGULAR_SPEED = 15
     HALL_CURRENT = 16      # first-order Hall sensor output [A]
     CURRENT_PI = 17        # analog current-PI integrator [V]
-    # pneumatic load system (Eqs. 9.9-9.11), present only at the "full" pneumatics fidelity
+    # pneumatic load system (Eqs. 9.9-9.11), integrated only at the "full" pneumatics fidelity
     SPOOL_POSITION = 18    # normalised valve spool position [-1, 1]
     SPOOL_SPEED = 19
     CHAMBER1_PRESSURE = 20  # cap side [Pa, absolute]
@@ -38,7 +38,9 @@ class S(IntEnum):
 
 
 N_STATES = len(S)
-N_CORE_STATES = S.SPOOL_POSITION  # states without the pneumatic system
+# A fidelity level can remove states (twin.fidelity): the integrators then advance only the
+# model's ``active`` indices; the others hold a fixed value (the frozen temperature, a rigid
+# guide's zero roll angle) and the right-hand side does not compute their derivatives.
 
 # (position, velocity) pairs: the semi-implicit Euler integrator updates the
 # velocity first and moves the position with the new velocity.
@@ -123,7 +125,7 @@ class K(IntEnum):
     CONTACT_DAMPING = 43
     LOADED_BALLS = 44
     BACKLASH = 45
-    VARIABLE_ANGLE = 46       # 1.0 = Eq. 9.4 variable angle, 0.0 = constant angle
+    CONTACT_MODEL = 46        # CONTACT_* code below (fidelity "contact")
     # nuts and guides
     MASS_NUT1 = 47
     MASS_NUT2 = 48
@@ -202,8 +204,21 @@ class K(IntEnum):
     FORCE_KI = 115
 
     ENCODER_SCALE_ORIGIN = 116  # m, scale position of the sled at t = 0 (sensors.linear_encoder_scale_origin)
+    # fidelity levels of the plant (twin.fidelity)
+    THERMAL_DYNAMIC = 117     # 1.0 = Eq. 9.2 integrated, 0.0 = winding frozen at the start temperature
+    CURRENT_LOOP_FULL = 118   # 1.0 = RL winding, Hall sensor and analog PI; 0.0 = ideal torque source
+    CURRENT_LOOP_TAU = 119    # s, time constant of the ideal current loop (1 / (2 pi bandwidth))
+    NUT_ROTATION = 120        # 1.0 = nut roll on the guides integrated, 0.0 = rigid guides
+    LINEAR_CONTACT_STIFFNESS = 121  # N/m per sphere along the normal, the "linear" contact level
 
 N_CONSTANTS = len(K)
+
+# Contact-model codes (constant K.CONTACT_MODEL).
+CONTACT_CONSTANT_ANGLE = 0  # Hertz at the design angle alpha_0
+CONTACT_VARIABLE_ANGLE = 1  # Hertz with the Eq. 9.4 load-dependent angle
+CONTACT_LINEAR = 2          # linear normal stiffness at the design angle (elasto-backlash of Ch. 5)
+CONTACT_LEVELS = {"constant_angle": CONTACT_CONSTANT_ANGLE, "variable_angle": CONTACT_VARIABLE_ANGLE,
+                  "linear": CONTACT_LINEAR}
 
 
 class Signal(IntEnum):
@@ -244,6 +259,11 @@ class Signal(IntEnum):
 
 
 N_SIGNALS = len(Signal)
+
+# Scalar features of a run (Eq. 9.12), computed by the loop alongside the signals.
+FEATURES = ("backlash_feature", "backlash_feature_true")
+# Everything a scene or a campaign may ask a run to produce.
+OUTPUT_NAMES = tuple(signal.name.lower() for signal in Signal) + FEATURES
 
 # name -> (units, long name) for the xarray Dataset (CF-style attributes).
 SIGNAL_META = {

@@ -8,21 +8,22 @@ from twin.engine.layout import N_INPUTS
 from twin.engine.plant import rhs
 
 
-def jacobian(model, x: np.ndarray, t: float = 0.0, u: np.ndarray | None = None) -> np.ndarray:
-    """Central-difference Jacobian ``df/dx`` at ``(t, x)`` with held inputs ``u`` (default zero)."""
+def jacobian(model, y: np.ndarray, t: float = 0.0, u: np.ndarray | None = None) -> np.ndarray:
+    """Central-difference Jacobian ``df/dy`` of the integrated states ``y`` (``model.active``) at ``t``
+    with held inputs ``u`` (default zero)."""
     u = np.zeros(N_INPUTS) if u is None else u
-    n = x.size
-    plus, minus = np.zeros(n), np.zeros(n)
-    matrix = np.zeros((n, n))
-    probe = x.copy()
-    for j in range(n):
-        delta = 1e-7 * max(abs(x[j]), 1e-5)
-        probe[j] = x[j] + delta
+    active = model.active
+    probe = model.full_state(y)
+    plus, minus = np.zeros(probe.size), np.zeros(probe.size)
+    matrix = np.zeros((active.size, active.size))
+    for j, state in enumerate(active):
+        delta = 1e-7 * max(abs(y[j]), 1e-5)
+        probe[state] = y[j] + delta
         rhs(t, probe, model.constants, u, model.force_table, model.stiffness_poly, plus)
-        probe[j] = x[j] - delta
+        probe[state] = y[j] - delta
         rhs(t, probe, model.constants, u, model.force_table, model.stiffness_poly, minus)
-        probe[j] = x[j]
-        matrix[:, j] = (plus - minus) / (2 * delta)
+        probe[state] = y[j]
+        matrix[:, j] = (plus[active] - minus[active]) / (2 * delta)
     return matrix
 
 

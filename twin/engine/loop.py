@@ -32,6 +32,7 @@ from twin.engine.plant import (
     internal_forces,
     nut_relative_position,
     preload_between_nuts,
+    sensed_current,
     transmitted_torque,
 )
 from twin.physics.ball_screw import contact_geometry
@@ -140,7 +141,7 @@ def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise
     memory[M.SLED] = sled
     memory[M.SCREW_ANGLE] = screw_angle
     memory[M.SLED_SPEED] = ins.sled_speed_measured(instrument_state, rows, levels, x, t)
-    memory[M.CURRENT] = ins.analog_measured(instrument_state, rows, levels, ins.CURRENT_MONITOR, x[S.HALL_CURRENT],
+    memory[M.CURRENT] = ins.analog_measured(instrument_state, rows, levels, ins.CURRENT_MONITOR, sensed_current(x, c),
                                             noise[n, ins.CURRENT_MONITOR])
     memory[M.TORQUE] = ins.analog_measured(instrument_state, rows, levels, ins.TORQUE_METER, torque,
                                            noise[n, ins.TORQUE_METER])
@@ -191,7 +192,7 @@ LOCAL_ERROR_PERSISTENCE = 3  # checks in a row above tolerance before a run is d
 
 
 @numba.njit(cache=True)
-def local_error(method, t, x, h, c, u, force_table, stiffness_poly, work, scratch, tolerance):
+def local_error(method, t, x, h, c, u, force_table, stiffness_poly, work, scratch, tolerance, active, pairs):
     """Step-doubling estimate of the local error of one step, in units of ``tolerance``.
 
     One step of ``h`` against two of ``h/2`` from the same state (Richardson; Hairer,
@@ -201,28 +202,30 @@ def local_error(method, t, x, h, c, u, force_table, stiffness_poly, work, scratc
     reaches NaN or a physical bound: this is how "finite but wrong" runs are caught.
     ``x`` is left unchanged.
     """
-    n = x.shape[0]
     single = scratch[0]
     double = scratch[1]
     single[:] = x
     double[:] = x
-    step(method, t, single, h, c, u, force_table, stiffness_poly, work, False)
-    step(method, t, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False)
-    step(method, t + 0.5 * h, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False)
+    step(method, t, single, h, c, u, force_table, stiffness_poly, work, False, active, pairs)
+    step(method, t, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False, active, pairs)
+    step(method, t + 0.5 * h, double, 0.5 * h, c, u, force_table, stiffness_poly, work, False, active, pairs)
     worst = 0.0
-    for j in range(n):
+    for j in active:
         scale = tolerance[j] + 1e-2 * abs(double[j])
         worst = max(worst, abs(single[j] - double[j]) / scale)
     return worst
 
 
 @numba.njit(cache=True)
-def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, speed_every, position_every,
-             output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output, tolerance):
+def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n_steps, dt, speed_every,
+             position_every, output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output,
+             tolerance):
     """Integrate ``n_steps`` steps of size ``dt`` from state ``x`` (modified in place).
 
     Parameters
     ----------
+    active, pairs : int arrays
+        Integrated states and their (position, velocity) pairs (:class:`twin.engine.model.Model`).
     speed_every, position_every, output_every : int
         Speed-loop, position-loop (= acquisition) and output decimation, in steps.
     jacobian_every : int
@@ -261,10 +264,11 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, n_steps, dt, spe
             written += 1
         if k == n_steps:
             break
-        step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0)
+        step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0, active, pairs)
         code = guard(x, c)
         if code == 0 and k % (LOCAL_ERROR_EVERY * position_every) == 0:
-            estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance)
+            estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance,
+                                   active, pairs)
             memory[M.LOCAL_ERROR] = max(memory[M.LOCAL_ERROR], estimate)
             # A legitimate transient (a new held input, a contact closing) gives a large estimate
             # that decays within a sample or two; a step beyond stability keeps it up.

@@ -10,11 +10,28 @@ from scipy.optimize import brentq
 
 from twin.control.design import screw_inertia, torsional_stiffness
 from twin.control.force_loop_design import operating_point
-from twin.engine.layout import N_CONSTANTS, N_CORE_STATES, PNEUMATICS_FULL, PNEUMATICS_LEVELS, K, S
+from twin.engine.layout import (
+    CONTACT_LEVELS,
+    CONTACT_LINEAR,
+    N_CONSTANTS,
+    N_STATES,
+    PNEUMATICS_FULL,
+    PNEUMATICS_LEVELS,
+    POSITION_VELOCITY_PAIRS,
+    K,
+    S,
+)
+from twin.fidelity import Fidelity
 from twin.parameters import ParameterSet
 from twin.physics import hertz
 from twin.physics import pneumatics as pn
-from twin.physics.ball_screw import effective_loaded_balls, groove_centre_distance, helix_angle, nut_axial_force
+from twin.physics.ball_screw import (
+    effective_loaded_balls,
+    groove_centre_distance,
+    helix_angle,
+    nut_axial_force,
+    stiffness_at,
+)
 from twin.physics.preload import series_stiffness
 from twin.errors import SceneError
 from twin.scenes import Scene
@@ -44,10 +61,18 @@ class Model:
     position_table: np.ndarray
     force_table: np.ndarray
     stiffness_poly: np.ndarray
+    active: np.ndarray   # indices (layout S) of the integrated states; the others hold their initial value
+    pairs: np.ndarray    # (m, 2) integrated (position, velocity) index pairs, for the semi-implicit Euler step
+    fidelity: Fidelity
+
+    def full_state(self, integrated: np.ndarray) -> np.ndarray:
+        """The full-layout state with the integrated states set to ``integrated``."""
+        x = self.initial_state.copy()
+        x[self.active] = integrated
+        return x
 
 
-def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis", variable_angle: bool = True,
-                converters: bool = True, pneumatics: str = "ideal") -> Model:
+def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curvature: str = "thesis") -> Model:
     """Derive the model constants (layout :class:`K`) and the initial equilibrium state.
 
     Parameters
@@ -56,16 +81,10 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
         Test procedure (conditions and demand profiles).
     params : ParameterSet
         Component parameters.
+    fidelity : Fidelity
+        Level of every subsystem (:func:`twin.fidelity.resolve_fidelity`).
     curvature : {"thesis", "iso"}
         Groove curvature formulas: Eqs. 3.20/3.27 (thesis) or Eqs. 3.21/3.28 (ISO 3408-4).
-    variable_angle : bool
-        Variable contact angle of Eq. 9.4 (True) or constant ``alpha_0``.
-    converters : bool
-        Quantisation of the controller's output converters (the drive's analog speed
-        input, the valve-command D/A) on (True) or ideal.
-    pneumatics : {"full", "ideal", "absent"}
-        Load system: valve, chambers and piston under the force loop; an ideal
-        force source following the force demand; or no external force.
     """
     p = params.values()
     c = np.zeros(N_CONSTANTS)
@@ -88,6 +107,9 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.CURRENT_KP] = p["controller.current_kp"]
     c[K.CURRENT_KI] = p["controller.current_ki"]
     c[K.CURRENT_AW_TIME] = p["drive.current_antiwindup_time"]
+    c[K.CURRENT_LOOP_FULL] = 1.0 if fidelity.level("current_loop") == "full" else 0.0
+    c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
+    c[K.THERMAL_DYNAMIC] = 1.0 if fidelity.level("motor_thermal") == "dynamic" else 0.0
     c[K.THERMAL_RESISTANCE] = p["motor.thermal_resistance"]
     c[K.THERMAL_TAU] = p["motor.thermal_time_constant"]
     c[K.HEAT_TRANSFER] = p["motor.heat_transfer_coefficient"]
@@ -112,8 +134,67 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.SHAFT_LENGTH_0] = p["ball_screw.bearing_to_nut_distance"]
     c[K.SCREW_AXIAL_DAMPING] = p["ball_screw.screw_axial_damping"]
     # ball-screw contact (Eqs. 9.4-9.6, 5.5, Sec. 7.3)
+    stiffness_poly = contact_constants(c, p, curvature)
+    c[K.CONTACT_MODEL] = CONTACT_LEVELS[fidelity.level("contact")]
+    if c[K.CONTACT_MODEL] == CONTACT_LINEAR:
+        c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
+    c[K.BACKLASH] = scene.condition("backlash")
+    # nuts, guides (Eq. 9.8, Eq. 7.63)
+    c[K.MASS_NUT1] = p["sled.master_mass"]
+    c[K.MASS_NUT2] = p["sled.slave_mass"]
+    c[K.J_NUT] = p["sled.nut_rotational_inertia"]
+    c[K.GUIDE_ROLL_STIFFNESS] = p["sled.guide_roll_stiffness"]
+    c[K.GUIDE_ROLL_DAMPING] = p["sled.guide_roll_damping"]
+    c[K.GUIDE_FRICTION_STATIC] = p["sled.guide_friction_static"]
+    c[K.GUIDE_FRICTION_DYNAMIC] = p["sled.guide_friction_dynamic"]
+    c[K.GUIDE_FRICTION_RATE] = p["sled.guide_friction_stribeck_rate"]
+    c[K.GUIDE_FRICTION_VISCOUS] = p["sled.guide_viscous_friction"]
+    c[K.SLAVE_FRICTION_FRACTION] = p["sled.slave_friction_fraction"]
+    c[K.NUT_ROTATION] = 1.0 if fidelity.level("nut_rotation") == "on" else 0.0
+    # preload (Secs. 9.2-9.3)
+    preload = scene.condition("preload")
+    c[K.PRELOAD_STIFFNESS] = series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"]) if preload > 0 else 0.0
+    c[K.PRELOAD_DAMPING] = p["preload.damping"] if preload > 0 else 0.0
+    c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
+    c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
+    c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
+    # digital loops (Table B.3, controller.toml)
+    c[K.SPEED_KP] = p["controller.speed_kp"]
+    c[K.SPEED_KI] = p["controller.speed_ki"]
+    c[K.MAX_CURRENT] = p["motor.max_current"]
+    c[K.POSITION_KP] = p["controller.position_kp"]
+    c[K.POSITION_KI] = p["controller.position_ki"]
+    c[K.SPEED_FULL_SCALE] = p["drive.speed_command_full_scale"]
+    converters = fidelity.level("output_converters") == "quantized"
+    if converters:
+        c[K.SPEED_COMMAND_BITS] = p["drive.analog_input_bits"] + 1.0  # 11 bits + sign (Table B.3)
+    # divergence guard
+    c[K.STROKE_LIMIT] = p["sled.stroke_limit"]
+    c[K.MAX_MOTOR_SPEED] = MAX_MOTOR_SPEED_FACTOR * MOTOR_MAX_PERMISSIBLE_SPEED
+    c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
+    c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
+
+    c[K.PNEUMATICS] = PNEUMATICS_LEVELS[fidelity.level("pneumatics")]
+    if converters:
+        c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
+
+    x0 = preload_equilibrium(c, stiffness_poly, preload)
+    c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
+    c[K.ENCODER_SCALE_ORIGIN] = p["sensors.linear_encoder_scale_origin"]
+    c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
+    if c[K.PNEUMATICS] == PNEUMATICS_FULL:
+        x0[S.SPOOL_POSITION:] = pneumatic_constants(c, p, scene)
+    active = fidelity.active_states
+    pairs = np.array([pair for pair in POSITION_VELOCITY_PAIRS if pair[0] in active], dtype=np.int64).reshape(-1, 2)
+    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly, active, pairs, fidelity)
+
+
+def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.ndarray:
+    """Fill the ball-groove contact constants (Eqs. 9.4-9.6, 5.5, Sec. 7.3) into ``c`` and
+    return the polynomial fit of the Hertz stiffness ``K(sin alpha)``."""
     lead = p["ball_screw.lead"]
     ball_radius = p["ball_screw.ball_radius"]
+    pitch_radius = p["ball_screw.pitch_radius"]
     alpha_e = helix_angle(lead, pitch_radius)
     alpha_0 = p["ball_screw.contact_angle"]
     c[K.LEAD_ARM] = lead / (2.0 * math.pi)
@@ -133,52 +214,17 @@ def build_model(scene: Scene, params: ParameterSet, *, curvature: str = "thesis"
     c[K.SIN_ALPHA_SPAN] = SIN_ALPHA_MAX - sin_min
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
-    c[K.BACKLASH] = scene.condition("backlash")
-    c[K.VARIABLE_ANGLE] = 1.0 if variable_angle else 0.0
-    # nuts, guides (Eq. 9.8, Eq. 7.63)
-    c[K.MASS_NUT1] = p["sled.master_mass"]
-    c[K.MASS_NUT2] = p["sled.slave_mass"]
-    c[K.J_NUT] = p["sled.nut_rotational_inertia"]
-    c[K.GUIDE_ROLL_STIFFNESS] = p["sled.guide_roll_stiffness"]
-    c[K.GUIDE_ROLL_DAMPING] = p["sled.guide_roll_damping"]
-    c[K.GUIDE_FRICTION_STATIC] = p["sled.guide_friction_static"]
-    c[K.GUIDE_FRICTION_DYNAMIC] = p["sled.guide_friction_dynamic"]
-    c[K.GUIDE_FRICTION_RATE] = p["sled.guide_friction_stribeck_rate"]
-    c[K.GUIDE_FRICTION_VISCOUS] = p["sled.guide_viscous_friction"]
-    c[K.SLAVE_FRICTION_FRACTION] = p["sled.slave_friction_fraction"]
-    # preload (Secs. 9.2-9.3)
-    preload = scene.condition("preload")
-    c[K.PRELOAD_STIFFNESS] = series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"]) if preload > 0 else 0.0
-    c[K.PRELOAD_DAMPING] = p["preload.damping"] if preload > 0 else 0.0
-    c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
-    c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
-    c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
-    # digital loops (Table B.3, controller.toml)
-    c[K.SPEED_KP] = p["controller.speed_kp"]
-    c[K.SPEED_KI] = p["controller.speed_ki"]
-    c[K.MAX_CURRENT] = p["motor.max_current"]
-    c[K.POSITION_KP] = p["controller.position_kp"]
-    c[K.POSITION_KI] = p["controller.position_ki"]
-    c[K.SPEED_FULL_SCALE] = p["drive.speed_command_full_scale"]
-    if converters:
-        c[K.SPEED_COMMAND_BITS] = p["drive.analog_input_bits"] + 1.0  # 11 bits + sign (Table B.3)
-    # divergence guard
-    c[K.STROKE_LIMIT] = p["sled.stroke_limit"]
-    c[K.MAX_MOTOR_SPEED] = MAX_MOTOR_SPEED_FACTOR * MOTOR_MAX_PERMISSIBLE_SPEED
-    c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
-    c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
+    return stiffness_poly
 
-    c[K.PNEUMATICS] = PNEUMATICS_LEVELS[pneumatics]
-    if converters:
-        c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
 
-    x0 = preload_equilibrium(c, stiffness_poly, preload)
-    c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
-    c[K.ENCODER_SCALE_ORIGIN] = p["sensors.linear_encoder_scale_origin"]
-    c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
-    if c[K.PNEUMATICS] == PNEUMATICS_FULL:
-        x0 = np.concatenate([x0, pneumatic_constants(c, p, scene)])
-    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly)
+def secant_contact_stiffness(c: np.ndarray, stiffness_poly: np.ndarray, load: float) -> float:
+    """Linear normal stiffness per sphere [N/m] that gives the Hertz deflection at the axial nut load
+    ``load`` [N] at the design angle: ``P / delta`` with ``delta = (P / K)^(2/3)`` (Eq. 7.28), so the
+    linear contact (the elasto-backlash law of Ch. 5) is exact at the scene's peak load."""
+    sin_alpha = math.sin(c[K.CONTACT_ANGLE_0])
+    normal_load = load / (c[K.LOADED_BALLS] * sin_alpha * c[K.COS_HELIX])
+    hertz_stiffness = stiffness_at(stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN], sin_alpha)
+    return normal_load / (normal_load / hertz_stiffness) ** (2.0 / 3.0)
 
 
 def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.ndarray:
@@ -260,7 +306,7 @@ def contact_force(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: 
     """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N]."""
     return nut_axial_force(relative_position, 0.0, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE],
                            c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-                           0.0, c[K.LOADED_BALLS], c[K.VARIABLE_ANGLE] > 0.5)[0]
+                           0.0, c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])[0]
 
 
 def contact_position_for_force(c: np.ndarray, stiffness_poly: np.ndarray, force: float) -> float:
@@ -283,9 +329,10 @@ def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: floa
     equals the scene value (Secs. 9.2-9.3: the preload is set by tightening the
     caps and read on the load cell). Master nut: ``f_1 = s F_pr``; slave:
     ``f_2 = -s F_pr`` (Eq. 9.8 with ``s = +1`` for O, ``-1`` for X); screw axial
-    force ``f_1 + f_2 = 0``; nut rotations balance the guides' roll stiffness.
+    force ``f_1 + f_2 = 0``; nut rotations balance the guides' roll stiffness (zero with rigid guides,
+    the ``nut_rotation = "off"`` fidelity).
     """
-    x = np.zeros(N_CORE_STATES)
+    x = np.zeros(N_STATES)
     x[S.WINDING_TEMP] = c[K.AMBIENT]
     if preload <= 0.0:
         return x
@@ -293,7 +340,7 @@ def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: floa
     arm = c[K.LEAD_ARM]
     for force, pos, ang in ((orientation * preload, S.NUT1_POSITION, S.NUT1_ANGLE),
                             (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
-        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS]
+        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS] if c[K.NUT_ROTATION] > 0.5 else 0.0
         x[pos] = -arm * x[ang] - contact_position_for_force(c, stiffness_poly, force)
     c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     return x

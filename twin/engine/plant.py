@@ -50,6 +50,24 @@ def nut_relative_velocity(x, c, nut):
 
 
 @numba.njit(cache=True)
+def nut_contact(x, c, stiffness_poly, nut):
+    """Axial force on nut ``nut`` and its per-sphere normal load (Eqs. 9.4-9.6) at the contact fidelity
+    ``K.CONTACT_MODEL``."""
+    force, normal, _ = nut_axial_force(
+        nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
+        c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+        c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
+    return force, normal
+
+
+@numba.njit(cache=True)
+def sensed_current(x, c):
+    """Current seen by the Hall sensor [A]: its filter state, or the current itself when the ideal
+    current loop has no sensor dynamics."""
+    return x[S.HALL_CURRENT] if c[K.CURRENT_LOOP_FULL] > 0.5 else x[S.CURRENT]
+
+
+@numba.njit(cache=True)
 def internal_forces(t, x, c, force_table, stiffness_poly):
     """Coupling forces of the mechanical chain at state ``x``.
 
@@ -59,13 +77,8 @@ def internal_forces(t, x, c, force_table, stiffness_poly):
         ``T_tm`` [N m] (Sec. 9.3), screw-on-nut axial forces [N] (Eqs. 9.4-9.6),
         preload magnitude [N], external force [N], per-sphere normal loads [N].
     """
-    variable = c[K.VARIABLE_ANGLE] > 0.5
-    f1, p1, _ = nut_axial_force(nut_relative_position(x, c, 0), nut_relative_velocity(x, c, 0), c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
-                                stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-                                c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
-    f2, p2, _ = nut_axial_force(nut_relative_position(x, c, 1), nut_relative_velocity(x, c, 1), c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0],
-                                stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-                                c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], variable)
+    f1, p1 = nut_contact(x, c, stiffness_poly, 0)
+    f2, p2 = nut_contact(x, c, stiffness_poly, 1)
     return (transmitted_torque(x, c), f1, f2, preload_between_nuts(x, c), external_force(t, x, c, force_table),
             p1, p2)
 
@@ -121,8 +134,24 @@ def current_loop_voltage(x, c, current_demand):
 
 
 @numba.njit(cache=True)
+def drive_electronics_rhs(x, c, current_demand, dxdt):
+    """Full current loop: winding current (Eq. 9.1), Hall sensor and analog PI with back-calculation anti-windup."""
+    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
+    resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
+    dxdt[S.CURRENT] = current_derivative(voltage, x[S.CURRENT], x[S.REDUCER_SPEED], resistance,
+                                         c[K.INDUCTANCE], c[K.SPEED_CONSTANT], c[K.RATIO])
+    dxdt[S.CURRENT_PI] = (c[K.CURRENT_KI] * (current_demand - x[S.HALL_CURRENT])
+                          + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME])
+    dxdt[S.HALL_CURRENT] = (x[S.CURRENT] - x[S.HALL_CURRENT]) / c[K.HALL_TAU]
+
+
+@numba.njit(cache=True)
 def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     """Write ``dx/dt`` of the bench into ``dxdt``.
+
+    Only the derivatives of the states the fidelity levels keep (``K.CURRENT_LOOP_FULL``,
+    ``K.THERMAL_DYNAMIC``, ``K.NUT_ROTATION``, ``K.PNEUMATICS``) are written; the
+    integrators advance only those (:attr:`twin.engine.model.Model.active`).
 
     Parameters
     ----------
@@ -140,19 +169,17 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
         Output.
     """
     ratio = c[K.RATIO]
-    current_demand = u[U.CURRENT_DEMAND]
-    # --- drive electronics and motor (Eqs. 9.1, 9.2; analog PI with back-calculation anti-windup)
-    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
-    resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
-    dxdt[S.CURRENT] = current_derivative(voltage, x[S.CURRENT], x[S.REDUCER_SPEED], resistance,
-                                         c[K.INDUCTANCE], c[K.SPEED_CONSTANT], ratio)
-    dxdt[S.CURRENT_PI] = (c[K.CURRENT_KI] * (current_demand - x[S.HALL_CURRENT])
-                          + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME])
-    dxdt[S.HALL_CURRENT] = (x[S.CURRENT] - x[S.HALL_CURRENT]) / c[K.HALL_TAU]
-    dxdt[S.WINDING_TEMP] = winding_temperature_derivative(
-        x[S.WINDING_TEMP], c[K.AMBIENT], resistance * x[S.CURRENT] ** 2, c[K.THERMAL_RESISTANCE],
-        c[K.THERMAL_TAU], c[K.HEAT_TRANSFER], c[K.MOTOR_AREA], c[K.EMISSIVITY],
-    )
+    if c[K.CURRENT_LOOP_FULL] > 0.5:
+        drive_electronics_rhs(x, c, u[U.CURRENT_DEMAND], dxdt)
+    else:
+        # ideal torque source: a first-order lag at the loop's closed-loop bandwidth
+        dxdt[S.CURRENT] = (u[U.CURRENT_DEMAND] - x[S.CURRENT]) / c[K.CURRENT_LOOP_TAU]
+    if c[K.THERMAL_DYNAMIC] > 0.5:
+        resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
+        dxdt[S.WINDING_TEMP] = winding_temperature_derivative(
+            x[S.WINDING_TEMP], c[K.AMBIENT], resistance * x[S.CURRENT] ** 2, c[K.THERMAL_RESISTANCE],
+            c[K.THERMAL_TAU], c[K.HEAT_TRANSFER], c[K.MOTOR_AREA], c[K.EMISSIVITY],
+        )
 
     torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
 
@@ -195,12 +222,13 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     dxdt[S.NUT2_SPEED] = (f2 - guide_2 + orientation * preload) / c[K.MASS_NUT2]
 
     # --- nut rotation restrained by the linear guides (Sec. 9.3): contact torque (p/2pi) f_i
-    k_roll = c[K.GUIDE_ROLL_STIFFNESS]
-    c_roll = c[K.GUIDE_ROLL_DAMPING]
-    dxdt[S.NUT1_ANGLE] = x[S.NUT1_ANGULAR_SPEED]
-    dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 - k_roll * x[S.NUT1_ANGLE] - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
-    dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
-    dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 - k_roll * x[S.NUT2_ANGLE] - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
+    if c[K.NUT_ROTATION] > 0.5:
+        k_roll = c[K.GUIDE_ROLL_STIFFNESS]
+        c_roll = c[K.GUIDE_ROLL_DAMPING]
+        dxdt[S.NUT1_ANGLE] = x[S.NUT1_ANGULAR_SPEED]
+        dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 - k_roll * x[S.NUT1_ANGLE] - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
+        dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
+        dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 - k_roll * x[S.NUT2_ANGLE] - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
 
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
         pneumatics_rhs(x, c, u[U.VALVE_COMMAND], external, dxdt)

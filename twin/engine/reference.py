@@ -39,17 +39,17 @@ _ATOL_BY_STATE = {
 }
 
 
-def absolute_tolerance(n_states: int, scale: float) -> np.ndarray:
-    """Per-state absolute tolerances, multiplied by ``scale`` (1 at ``rtol`` = 1e-10)."""
-    return np.array([_ATOL_BY_STATE[S(j)] for j in range(n_states)]) * scale
+def absolute_tolerance(scale: float) -> np.ndarray:
+    """Absolute tolerances of every state (layout ``S``), multiplied by ``scale`` (1 at ``rtol`` = 1e-10)."""
+    return np.array([_ATOL_BY_STATE[state] for state in S]) * scale
 
 
 LOCAL_ERROR_SCALE = 1e8  # guard tolerance = reference atol x 1e8: 10 um, 1e-4 rad, 1e-2 m/s, 1e-2 A, 1e4 Pa
 
 
-def local_error_tolerance(n_states: int) -> np.ndarray:
+def local_error_tolerance() -> np.ndarray:
     """Absolute tolerances of the compiled loop's finite-but-wrong guard (:func:`twin.engine.loop.local_error`)."""
-    return absolute_tolerance(n_states, LOCAL_ERROR_SCALE)
+    return absolute_tolerance(LOCAL_ERROR_SCALE)
 
 
 def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, position_ratio: int, output_ratio: int,
@@ -66,12 +66,15 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
     state = np.zeros((N_INSTRUMENTS, STATE_ROW))
     controller_init(memory, u, state, instruments.parameters, instruments.levels, x, c, force_table, poly)
     derivative = np.zeros_like(x)
+    active = model.active
+    probe = x.copy()  # the states the fidelity removed keep their values here
 
     def f(t, y):
-        rhs(t, y, c, u, force_table, poly, derivative)
-        return derivative.copy()
+        probe[active] = y
+        rhs(t, probe, c, u, force_table, poly, derivative)
+        return derivative[active]
 
-    atol = absolute_tolerance(x.size, rtol / 1e-10)
+    atol = absolute_tolerance(rtol / 1e-10)[active]
     stats = {"nfev": 0, "njev": 0, "nlu": 0, "steps": 0, "min_step": np.inf}
     rows = 0
     for j in range(n_speed_samples + 1):
@@ -85,7 +88,7 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
             rows += 1
         if j == n_speed_samples:
             break
-        solution = solve_ivp(f, (t, t + speed_ts), x, method=method, rtol=rtol, atol=atol)
+        solution = solve_ivp(f, (t, t + speed_ts), x[active], method=method, rtol=rtol, atol=atol)
         stats["nfev"] += int(solution.nfev)
         stats["njev"] += int(solution.njev)
         stats["nlu"] += int(solution.nlu)
@@ -94,7 +97,7 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
             stats["min_step"] = min(stats["min_step"], float(np.min(np.diff(solution.t))))
         if not solution.success:
             return STATUS_SOLVER_FAILED, 0, t, rows, f"solve_ivp ({method}): {solution.message}", stats
-        x[:] = solution.y[:, -1]
+        x[active] = solution.y[:, -1]
         code = guard(x, c)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS

@@ -4,19 +4,17 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
 
-from twin.engine.instrumentation import build_instruments, resolve_levels
+from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.layout import (
     BOUND_REASONS,
     N_MEMORY,
     N_SIGNALS,
-    PNEUMATIC_SIGNALS,
-    PNEUMATICS_LEVELS,
     SIGNAL_META,
     STATUS_OK,
     STATUS_TEXT,
@@ -28,7 +26,8 @@ from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
-from twin.errors import OptionError, SimulationFailed
+from twin.errors import InputError, OptionError, SimulationFailed
+from twin.fidelity import resolve_fidelity
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import Scene, load_scene
 
@@ -48,9 +47,9 @@ def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
 
 def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
              integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
-             duration: float | None = None, sensors: str | Mapping[str, str] = "full",
-             rng: np.random.Generator | int | None = None, curvature: str = "thesis", variable_angle: bool = True,
-             pneumatics: str = "auto", rtol: float = 1e-10, local_error_guard: bool = True,
+             duration: float | None = None, fidelity: str | Mapping[str, str] = "auto",
+             outputs: Sequence[str] | None = None, rng: np.random.Generator | int | None = None,
+             curvature: str = "thesis", rtol: float = 1e-10, local_error_guard: bool = True,
              throw: bool = True) -> xr.Dataset:
     """Run one bench test.
 
@@ -69,21 +68,22 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
         Override of the scene's duration [s].
-    sensors : {"full", "quantized", "ideal"} or mapping
-        Fidelity of the instruments (:mod:`twin.engine.instrumentation`): one level
-        for all, or ``{instrument: level}`` (others "full"). ``"ideal"`` also makes
-        the controller's output converters ideal (no quantisation anywhere).
+    fidelity : "auto", "full" or mapping
+        Level of every subsystem (:mod:`twin.fidelity`): ``"auto"`` models no more than
+        the scene's demands, duration and ``outputs`` need (rules in
+        ``twin/fidelity/rules.toml``); ``"full"`` is the most detailed model; a mapping
+        ``{subsystem: level}`` sets some and leaves the others to its ``"default"``
+        entry (``"auto"`` unless given). The choice and its reasons are in
+        ``attrs["fidelity"]`` and ``attrs["fidelity_reasons"]``.
+    outputs : sequence of str, optional
+        Signals and features the caller needs (:data:`twin.engine.layout.OUTPUT_NAMES`);
+        ``None`` takes the scene's ``outputs`` (all, if it names none). Signals a
+        reduced level does not compute are left out of the result.
     rng : numpy.random.Generator, int or None
         Source of the electrical noise (Table 9.5); an int seeds a new Generator;
         ``None`` uses seed 0. Same generator state, same noise.
     curvature : {"thesis", "iso"}
         Groove curvature formulas (Eqs. 3.20/3.27 or 3.21/3.28).
-    variable_angle : bool
-        Eq. 9.4 variable contact angle (True) or constant design angle.
-    pneumatics : {"auto", "full", "ideal", "absent"}
-        External-force system: the pneumatic cylinder under the force loop
-        (Eqs. 9.9-9.11), an ideal force source, or none. ``"auto"`` is
-        ``"full"`` when the scene demands a force and ``"absent"`` otherwise.
     rtol : float
         Relative tolerance of the ``scipy_*`` reference path.
     local_error_guard : bool
@@ -122,14 +122,12 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
         problems.append(f"dt: {dt!r} must be a step in (0, 1e-3] s")
         dt = 1e-3
-    if pneumatics == "auto":
-        pneumatics = "full" if scene.has_force_demand else "absent"
-    if pneumatics not in PNEUMATICS_LEVELS:
-        problems.append(f"pneumatics: {pneumatics!r} is not one of auto, {', '.join(PNEUMATICS_LEVELS)}")
-    elif pneumatics == "absent" and scene.has_force_demand:
-        problems.append(f"pneumatics: 'absent' cannot apply the force demand of scene '{scene.name}'; use 'full' or 'ideal'")
-    levels, level_problems = resolve_levels(sensors)
-    problems += level_problems
+    resolved = None
+    if curvature in CURVATURE_FORMULAS:
+        try:
+            resolved = resolve_fidelity(scene, params, fidelity, outputs, curvature)
+        except InputError as exc:
+            problems += exc.problems
     if rng is not None and not isinstance(rng, (np.random.Generator, int)):
         problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
     speed_ts = params.value("drive.speed_loop_sample_time")
@@ -141,13 +139,14 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     if problems:
         raise OptionError(problems)
 
-    model = build_model(scene, params, curvature=curvature, variable_angle=variable_angle,
-                        converters=sensors != "ideal", pneumatics=pneumatics)
+    model = build_model(scene, params, resolved, curvature=curvature)
     generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
         DEFAULT_NOISE_SEED if rng is None else rng)
     n_steps = int(round(scene.duration / dt))
+    levels = instrument_levels(resolved)
     instruments = build_instruments(params.values(), scene.condition("room_temperature"), levels, generator,
-                                    n_steps // position_every + 1, dt)
+                                    n_steps // position_every + 1, dt,
+                                    torque_meter_refresh=resolved.level("torque_meter_refresh") == "modelled")
     output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
     memory = np.zeros(N_MEMORY)
     solver_stats = {}
@@ -160,10 +159,10 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         reason = reason or BOUND_REASONS[bound]
     else:
         status, bound, steps_done, rows = run_loop(
-            x, model.constants, model.position_table, model.force_table, model.stiffness_poly, n_steps, dt,
-            speed_every, position_every, output_every, position_every, INTEGRATORS[integrator],
-            instruments.parameters, instruments.levels, instruments.lookback, instruments.noise, memory, output,
-            local_error_tolerance(model.initial_state.size) * (1.0 if local_error_guard else np.inf))
+            x, model.constants, model.position_table, model.force_table, model.stiffness_poly, model.active,
+            model.pairs, n_steps, dt, speed_every, position_every, output_every, position_every,
+            INTEGRATORS[integrator], instruments.parameters, instruments.levels, instruments.lookback,
+            instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf))
         t_reached = steps_done * dt
         reason = BOUND_REASONS[bound]
     wall_time = time.perf_counter() - start
@@ -171,10 +170,11 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
 
     time_axis = np.arange(rows) * output_every * dt
+    removed = set(resolved.removed_signals)
     data_vars = {
         signal.name.lower(): ("time", output[:rows, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
         for signal in Signal
-        if pneumatics == "full" or signal not in PNEUMATIC_SIGNALS
+        if signal.name.lower() not in removed
     }
     ok = status == STATUS_OK and memory[M.SAMPLES] > 0
     for name, total, source in (("backlash_feature_true", memory[M.FEATURE_TRUE], "true signals"),
@@ -183,11 +183,12 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         data_vars[name] = ((), total / memory[M.SAMPLES] if ok else np.nan, {
             "units": "m", "long_name": f"backlash feature f_b (Eq. 9.12) from {source}",
             "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
-    data_vars["final_state"] = ("state", x, {"long_name": "state vector at t_reached (SI units, layout twin.engine.layout.S)"})
+    data_vars["final_state"] = ("state", x[model.active], {
+        "long_name": "integrated states at t_reached (SI units, layout twin.engine.layout.S)"})
     return xr.Dataset(
         data_vars,
         coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"}),
-                "state": ("state", [S(j).name.lower() for j in range(x.size)])},
+                "state": ("state", [S(j).name.lower() for j in model.active])},
         attrs={
             "status": STATUS_TEXT[status],
             "failure_reason": reason,
@@ -199,9 +200,9 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "dt": dt,
             **({"rtol": rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if reference else {}),
             "curvature": curvature,
-            "variable_contact_angle": int(variable_angle),
-            "pneumatics": pneumatics,
-            "sensors": ", ".join(f"{k}={v}" for k, v in levels.items()),
+            "fidelity": resolved.summary(),
+            "fidelity_reasons": "\n".join(f"{k}: {v}" for k, v in resolved.reasons.items()),
+            "integrated_states": int(model.active.size),
             "noise_seed": "caller generator" if isinstance(rng, np.random.Generator) else str(DEFAULT_NOISE_SEED if rng is None else rng),
             "wall_time": wall_time,
             "max_local_error": float(memory[M.LOCAL_ERROR]),

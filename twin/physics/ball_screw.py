@@ -88,7 +88,7 @@ def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
 @numba.njit(cache=True)
 def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance,
                     contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h,
-                    loaded_balls, variable_angle):
+                    loaded_balls, contact_model, linear_stiffness):
     """Axial force of the screw on one nut (Eqs. 9.4-9.6, 7.28, 7.29, 7.54, 5.5).
 
     Parameters
@@ -109,8 +109,12 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         ``b_h`` of Eq. 7.54.
     loaded_balls : float
         ``Z_eff``.
-    variable_angle : bool
-        False freezes the contact angle at ``alpha_0`` (cheaper, for scenes that do not need it).
+    contact_model : int
+        0: Hertz at the constant angle ``alpha_0``; 1: Hertz with the variable angle of
+        Eq. 9.4; 2: linear normal stiffness ``linear_stiffness`` at ``alpha_0`` (the
+        elasto-backlash law of Sec. 5; codes in :mod:`twin.engine.layout`).
+    linear_stiffness : float
+        Normal stiffness per sphere of the linear law [N/m].
 
     Returns
     -------
@@ -123,13 +127,13 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         return 0.0, 0.0, math.sin(contact_angle_0)
     side = 1.0 if relative_position > 0.0 else -1.0
     delta_a = gap * cos_helix
-    if variable_angle:
+    if contact_model == 1:
         delta_n, sin_alpha = contact_geometry(delta_a, centre_distance, contact_angle_0)
     else:
         sin_alpha = math.sin(contact_angle_0)
         delta_n = delta_a * sin_alpha
     stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
-    elastic = elastic_force(stiffness, delta_n)
+    elastic = linear_stiffness * delta_n if contact_model == 2 else elastic_force(stiffness, delta_n)
     approach_rate = side * relative_velocity * cos_helix * sin_alpha
     normal = elastic + saturated_damping_force(elastic, damping_coefficient(damping_b_h, stiffness), approach_rate)
     return side * loaded_balls * normal * sin_alpha * cos_helix, normal, sin_alpha

@@ -18,6 +18,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from twin.engine.layout import OUTPUT_NAMES
 from twin.errors import SceneError
 from twin.scenes.profiles import compile_profile
 
@@ -31,7 +32,7 @@ CONDITIONS: dict[str, tuple[str, Any, str]] = {
     "supply_pressure": ("Pa", lambda v: v > 0, "> 0 (absolute)"),
 }
 PRELOAD_CONFIGURATIONS = ("O", "X")
-_TOP_FIELDS = {"base", "name", "description", "duration", "conditions", "position_demand", "force_demand"}
+_TOP_FIELDS = {"base", "name", "description", "duration", "conditions", "position_demand", "force_demand", "outputs"}
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,10 @@ class Scene:
         ``preload`` [N], ``preload_configuration`` ("O" separates the nuts,
         "X" draws them together), ``backlash`` [m] (total axial play of each
         nut), ``room_temperature`` [K], ``supply_pressure`` [Pa, absolute].
+    outputs : tuple of str
+        Signals and features the test must produce (:data:`twin.engine.layout.OUTPUT_NAMES`);
+        empty means all of them. The automatic fidelity (:mod:`twin.fidelity`) models
+        only what these need.
     """
 
     name: str
@@ -58,6 +63,7 @@ class Scene:
     position_demand: list = field(default_factory=list)
     force_demand: list = field(default_factory=list)
     conditions: Mapping[str, Any] = field(default_factory=dict)
+    outputs: tuple[str, ...] = ()
 
     def __post_init__(self):
         problems = validate_scene(self)
@@ -93,6 +99,7 @@ class Scene:
             "conditions": dict(self.conditions),
             "position_demand": list(self.position_demand),
             "force_demand": list(self.force_demand),
+            "outputs": list(self.outputs),
         }
 
 
@@ -116,6 +123,11 @@ def validate_scene(scene: Scene) -> list[str]:
             problems.append(f"conditions.{name}: {value:g} {unit} is out of range; allowed: {allowed}")
     missing = [c for c in [*CONDITIONS, "preload_configuration"] if c not in scene.conditions]
     problems += [f"conditions.{c}: missing" for c in missing]
+    if not isinstance(scene.outputs, tuple) or not all(isinstance(o, str) for o in scene.outputs):
+        problems.append(f"outputs: must be a list of output names, got {scene.outputs!r}")
+    else:
+        problems += [f"outputs: {o!r} is not a signal or feature of the bench; allowed: {', '.join(OUTPUT_NAMES)}"
+                     for o in scene.outputs if o not in OUTPUT_NAMES]
     for name in ("position_demand", "force_demand"):
         segments = getattr(scene, name)
         if not isinstance(segments, list):
@@ -139,6 +151,7 @@ def scene_from_dict(data: Mapping[str, Any], default_name: str = "scene") -> Sce
         position_demand=list(data.get("position_demand", [])),
         force_demand=list(data.get("force_demand", [])),
         conditions=dict(data.get("conditions", {})),
+        outputs=tuple(data.get("outputs", [])) if isinstance(data.get("outputs", []), list) else data["outputs"],
     )
 
 

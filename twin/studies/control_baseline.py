@@ -23,58 +23,68 @@ from twin.engine.layout import N_INPUTS, S, U
 from twin.engine.model import build_model
 from twin.engine.plant import rhs
 from twin.engine.reference import absolute_tolerance
+from twin.fidelity import IDEAL_INSTRUMENTS, resolve_fidelity
+
+# The plant alone: full detail, no load system, no sensors in the way.
+OPEN_LOOP_FIDELITY = {"default": "full", **IDEAL_INSTRUMENTS, "pneumatics": "absent"}
 
 CURRENT_STEP = 0.5  # A of current demand: ~1.9 N m of motor torque, accelerating the unloaded screw
 DURATION = 0.05     # s
 
 
 @numba.njit(cache=True)
-def _integrate(method, x, c, u, force_table, stiffness_poly, dt, n_steps, record_every, out):
+def _integrate(method, x, c, u, force_table, stiffness_poly, active, pairs, dt, n_steps, record_every, out):
     work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
     for k in range(n_steps):
         if k % record_every == 0:
             out[k // record_every] = x[S.NUT1_POSITION]
-        step(method, k * dt, x, dt, c, u, force_table, stiffness_poly, work, k == 0)
+        step(method, k * dt, x, dt, c, u, force_table, stiffness_poly, work, k == 0, active, pairs)
     out[n_steps // record_every] = x[S.NUT1_POSITION]
 
 
 def compare(dt: float = 1.5625e-5, output_dt: float = 1e-3) -> list[dict]:
     """Wall time and max nut-position error of each way of solving the open-loop problem."""
     scene = twin.load_scene("ds5").with_duration(DURATION)
-    model = build_model(scene, twin.load_parameters(), converters=False, pneumatics="absent")
+    params = twin.load_parameters()
+    model = build_model(scene, params, resolve_fidelity(scene, params, OPEN_LOOP_FIDELITY))
     c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
     inputs = np.zeros(N_INPUTS)
     inputs[U.CURRENT_DEMAND] = CURRENT_STEP
     times = np.arange(0.0, DURATION + 0.5 * output_dt, output_dt)
     derivative = np.zeros(model.initial_state.size)
+    probe = model.initial_state.copy()
+    active = model.active
+    y0 = model.initial_state[active]
+    nut_index = int(np.flatnonzero(active == S.NUT1_POSITION)[0])
 
-    def f(t, x):
-        rhs(t, x, c, inputs, force_table, poly, derivative)
-        return derivative.copy()
+    def f(t, y):
+        probe[active] = y
+        rhs(t, probe, c, inputs, force_table, poly, derivative)
+        return derivative[active]
 
     start = time.perf_counter()
-    reference = solve_ivp(f, (0.0, DURATION), model.initial_state, method="Radau", t_eval=times, rtol=1e-10,
-                          atol=absolute_tolerance(model.initial_state.size, 1.0))
+    reference = solve_ivp(f, (0.0, DURATION), y0, method="Radau", t_eval=times, rtol=1e-10,
+                          atol=absolute_tolerance(1.0)[active])
     results = [{"method": "scipy_radau (reference)", "wall_time": time.perf_counter() - start, "error": 0.0}]
-    nut = reference.y[S.NUT1_POSITION]
+    nut = reference.y[nut_index]
 
-    system = control.nlsys(lambda t, x, u, params: f(t, x), None, inputs=1, states=model.initial_state.size,
-                           outputs=model.initial_state.size, name="bench_plant")
+    system = control.nlsys(lambda t, y, u, params: f(t, y), None, inputs=1, states=y0.size, outputs=y0.size,
+                           name="bench_plant")
     start = time.perf_counter()
-    response = control.input_output_response(system, times, np.zeros(times.size), X0=model.initial_state,
+    response = control.input_output_response(system, times, np.zeros(times.size), X0=y0,
                                              solve_ivp_kwargs={"rtol": 1e-6})
     results.append({"method": "control.input_output_response (RK45, rtol 1e-6)",
                     "wall_time": time.perf_counter() - start,
-                    "error": float(np.max(np.abs(response.states[S.NUT1_POSITION] - nut)))})
+                    "error": float(np.max(np.abs(response.states[nut_index] - nut)))})
 
     every = int(round(output_dt / dt))
     n_steps = int(round(DURATION / dt))
     for method in ("rk4", "semi_implicit_euler"):
         out = np.zeros(n_steps // every + 1)
-        _integrate(INTEGRATORS[method], model.initial_state.copy(), c, inputs, force_table, poly, dt, 1, every, out)
+        arguments = (c, inputs, force_table, poly, active, model.pairs, dt)
+        _integrate(INTEGRATORS[method], model.initial_state.copy(), *arguments, 1, every, out)
         start = time.perf_counter()
-        _integrate(INTEGRATORS[method], model.initial_state.copy(), c, inputs, force_table, poly, dt, n_steps,
-                   every, out)
+        _integrate(INTEGRATORS[method], model.initial_state.copy(), *arguments, n_steps, every, out)
         results.append({"method": f"compiled {method} (dt {dt:g} s)", "wall_time": time.perf_counter() - start,
                         "error": float(np.max(np.abs(out - nut)))})
     return results

@@ -21,7 +21,11 @@ import twin
 from twin.engine.layout import N_INPUTS, U
 from twin.engine.linearize import highest_frequency, jacobian
 from twin.engine.model import build_model
+from twin.fidelity import IDEAL_INSTRUMENTS, resolve_fidelity
 from twin.scenes import scene_from_dict
+
+# The full plant (every stiff mode present) with an ideal force source and ideal instruments.
+STUDY_FIDELITY = {"default": "full", **IDEAL_INSTRUMENTS, "pneumatics": "ideal"}
 
 THEORY = {"rk4": 2.8, "semi_implicit_euler": 2.0}
 PRELOADS = (0.0, 1000.0, 3000.0)
@@ -43,8 +47,8 @@ def loaded_scene(preload: float, force: float, duration: float = 0.25) -> twin.S
 
 def loaded_state(scene, params):
     """Model, state and held inputs at the end of a fine RK4 run of ``scene``."""
-    ds = twin.simulate(scene, params, integrator="rk4", dt=FINE_STEP, sensors="ideal", pneumatics="ideal")
-    model = build_model(scene, params, converters=False, pneumatics="ideal")
+    ds = twin.simulate(scene, params, integrator="rk4", dt=FINE_STEP, fidelity=STUDY_FIDELITY)
+    model = build_model(scene, params, resolve_fidelity(scene, params, STUDY_FIDELITY))
     inputs = np.zeros(N_INPUTS)
     inputs[U.CURRENT_DEMAND] = float(ds.current_demand[-1])
     return model, ds.final_state.values.copy(), inputs
@@ -54,7 +58,7 @@ def runs_ok(scene, params, method: str, n: int) -> bool:
     """Whether the closed-loop run at ``dt = 1 ms / n`` (speed loop sampled every step) ends ``ok``."""
     dt = POSITION_PERIOD / n
     probe = params.with_values({"drive.speed_loop_sample_time": dt})
-    ds = twin.simulate(scene, probe, integrator=method, dt=dt, sensors="ideal", pneumatics="ideal", throw=False)
+    ds = twin.simulate(scene, probe, integrator=method, dt=dt, fidelity=STUDY_FIDELITY, throw=False)
     return ds.attrs["status"] == "ok"
 
 

@@ -23,8 +23,8 @@ import numpy as np
 import xarray as xr
 
 import twin
-from twin.engine.instrumentation import INSTRUMENTS
 from twin.engine.integrators import INTEGRATORS
+from twin.fidelity import IDEAL_INSTRUMENTS
 
 SPEED_PERIOD = 1.25e-4
 STEP_LADDER = tuple(SPEED_PERIOD / 2.0**k for k in range(11))  # 1.25e-4 ... 1.2e-7 s
@@ -32,9 +32,10 @@ TOLERANCE_LADDER = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 BASELINES = ("scipy_lsoda", "scipy_radau")
 REFERENCE = "scipy_radau"
 REFERENCE_RTOL = 1e-10
-QUANTIZED = {name: ("quantized" if name in ("linear_encoder", "torque_meter_encoder", "resolver") else "ideal")
-             for name in INSTRUMENTS}
-PANELS = {"quantizers_off": "ideal", "quantizers_on": QUANTIZED}
+# Full plant; the instruments ideal, or only the digital position sensors and converters quantised.
+PANELS = {"quantizers_off": {"default": "full", **IDEAL_INSTRUMENTS},
+          "quantizers_on": {"default": "full", **IDEAL_INSTRUMENTS, "encoders": "quantized",
+                            "output_converters": "quantized"}}
 LONG_RUN = 2.0  # s: runs slower than this are timed once (the median of repeats would cost minutes)
 METRICS = {
     "feature_error": ("m", "|backlash_feature - reference| (Eq. 9.12)"),
@@ -123,15 +124,15 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
     records = []
     attrs = {"scene": scene.name, "duration": duration, "reference": f"{REFERENCE} rtol={REFERENCE_RTOL:g}",
              **environment()}
-    for panel, sensors in PANELS.items():
-        reference, reference_time = timed(scene, 1, integrator=REFERENCE, rtol=REFERENCE_RTOL, sensors=sensors)
+    for panel, fidelity in PANELS.items():
+        reference, reference_time = timed(scene, 1, integrator=REFERENCE, rtol=REFERENCE_RTOL, fidelity=fidelity)
         attrs[f"{panel}_reference_wall_time"] = reference_time
         attrs[f"{panel}_reference_stats"] = ", ".join(f"{k[7:]}={v}" for k, v in reference.attrs.items()
                                                      if k.startswith("solver_"))
         progress(f"[{panel}] reference {REFERENCE}: {reference_time:.2f} s, status {reference.attrs['status']}")
         runs = [(m, dt, np.nan) for m in methods for dt in steps] + [(b, np.nan, r) for b in baselines for r in tolerances]
         for method, dt, rtol in runs:
-            options = {"integrator": method, "sensors": sensors}
+            options = {"integrator": method, "fidelity": fidelity}
             options.update({"dt": dt} if np.isfinite(dt) else {"rtol": rtol})
             ds, wall = timed(scene, repeats, **options)
             metrics = errors(ds, reference)

@@ -1,0 +1,14 @@
+"""Fidelity: model no more than a scene needs.
+
+Each subsystem of the bench has named levels (:mod:`twin.fidelity.levels`);
+``fidelity="auto"`` picks, per subsystem, the cheapest level the scene's
+demands, duration and requested outputs allow, by the rules of
+``rules.toml`` (:mod:`twin.fidelity.rules`), and explains every choice.
+``twin fidelity audit`` checks the choice against the full model
+(:mod:`campaigns.fidelity_audit`).
+"""
+
+from twin.fidelity.levels import IDEAL_INSTRUMENTS, SUBSYSTEMS, Level, Subsystem
+from twin.fidelity.rules import Fidelity, load_rules, resolve_fidelity
+
+__all__ = ["IDEAL_INSTRUMENTS", "SUBSYSTEMS", "Fidelity", "Level", "Subsystem", "load_rules", "resolve_fidelity"]

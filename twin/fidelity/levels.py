@@ -1,0 +1,105 @@
+"""Fidelity levels of the bench's subsystems: what each level models and what it removes.
+
+Every subsystem lists its levels from the most detailed (the "full" model) to
+the cheapest. A level that removes states takes them out of the integrated
+state vector (:data:`Level.removes_states`); a level that makes a signal
+meaningless takes it out of the simulation's output (:data:`Level.removes_signals`),
+so a reduced model never returns a number it did not compute.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from twin.engine.layout import S
+
+PNEUMATIC_STATES = (S.SPOOL_POSITION, S.SPOOL_SPEED, S.CHAMBER1_PRESSURE, S.CHAMBER2_PRESSURE, S.PISTON_POSITION,
+                    S.PISTON_SPEED)
+PNEUMATIC_SIGNALS = ("chamber1_pressure", "chamber2_pressure", "valve_command", "piston_position")
+
+
+@dataclass(frozen=True)
+class Level:
+    """One fidelity level of a subsystem."""
+
+    name: str
+    description: str
+    removes_states: tuple[S, ...] = ()
+    removes_signals: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Subsystem:
+    """A subsystem and its levels, most detailed first."""
+
+    name: str
+    description: str
+    levels: tuple[Level, ...]
+
+    @property
+    def full(self) -> str:
+        return self.levels[0].name
+
+    @property
+    def level_names(self) -> tuple[str, ...]:
+        return tuple(level.name for level in self.levels)
+
+    def level(self, name: str) -> Level:
+        return next(level for level in self.levels if level.name == name)
+
+
+SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
+    Subsystem("pneumatics", "external-force system on the master nut (Eqs. 9.9-9.11)", (
+        Level("full", "proportional valve, cylinder chambers, piston with seal friction and the load cell, "
+                      "under the cRIO's digital force loop"),
+        Level("ideal", "ideal force source: the external force is the scene's force demand",
+              PNEUMATIC_STATES, PNEUMATIC_SIGNALS),
+        Level("absent", "no external force", PNEUMATIC_STATES, PNEUMATIC_SIGNALS),
+    )),
+    Subsystem("current_loop", "drive current loop and motor winding (Eq. 9.1)", (
+        Level("full", "RL winding with back-EMF, Hall current sensor and analog PI with the DC-bus limit"),
+        Level("ideal", "ideal torque source: the current follows the speed loop's demand through a first-order "
+                       "lag at the designed loop bandwidth (controller.current_loop_bandwidth)",
+              (S.HALL_CURRENT, S.CURRENT_PI)),
+    )),
+    Subsystem("motor_thermal", "winding temperature (Eq. 9.2)", (
+        Level("dynamic", "winding temperature integrated from Joule losses, convection and radiation"),
+        Level("frozen", "winding held at the start (room) temperature; the resistance stays at its start value",
+              (S.WINDING_TEMP,), ("winding_temperature",)),
+    )),
+    Subsystem("contact", "ball-groove contact of the two nuts (Eqs. 9.4-9.6, 7.28, 7.29)", (
+        Level("variable_angle", "Hertzian contact with the load-dependent contact angle of Eq. 9.4"),
+        Level("constant_angle", "Hertzian contact at the design angle alpha_0"),
+        Level("linear", "linear normal stiffness at the design angle, secant to the Hertz curve at the scene's "
+                        "peak contact load (the elasto-backlash contact of Ch. 5)"),
+    )),
+    Subsystem("nut_rotation", "nut roll on the linear guides (Sec. 9.3)", (
+        Level("on", "each nut's roll angle integrated against the guides' roll stiffness"),
+        Level("off", "rigid guides: the nuts do not roll",
+              (S.NUT1_ANGLE, S.NUT1_ANGULAR_SPEED, S.NUT2_ANGLE, S.NUT2_ANGULAR_SPEED)),
+    )),
+    Subsystem("encoders", "linear encoder, torque-meter encoder and resolver (twin.engine.instrumentation)", (
+        Level("full", "edge-accurate quadrature counts with phase, asymmetry and precision errors"),
+        Level("quantized", "resolution only, no errors"),
+        Level("ideal", "true positions and angles"),
+    )),
+    Subsystem("analog_sensors", "torque meter, load cells and current monitor (twin.engine.instrumentation)", (
+        Level("full", "sensitivity, offset and temperature errors, electrical noise (Table 9.5), converters and filters"),
+        Level("quantized", "converters and filters only, no errors and no noise"),
+        Level("ideal", "true forces, torque and current"),
+    )),
+    Subsystem("torque_meter_refresh", "torque meter's rotor-to-stator streaming (Table B.5)", (
+        Level("modelled", "sample-and-hold at the 1 kHz refresh"),
+        Level("ideal", "continuous output"),
+    )),
+    Subsystem("output_converters", "controller output converters (drive speed input, valve-command D/A)", (
+        Level("quantized", "word lengths of Table B.3 and controller.valve_command_dac_bits"),
+        Level("ideal", "no quantisation"),
+    )),
+)}
+
+
+#: Instruments and output converters ideal: with ``"default": "full"`` this is the bench's full
+#: plant seen through perfect sensors, the setting of the solver studies (twin.studies).
+IDEAL_INSTRUMENTS = {"encoders": "ideal", "analog_sensors": "ideal", "torque_meter_refresh": "ideal",
+                     "output_converters": "ideal"}

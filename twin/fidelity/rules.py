@@ -1,0 +1,289 @@
+"""Automatic fidelity selection: the rules of ``rules.toml`` applied to a scene, each decision explained.
+
+A scene is a test procedure: its demands, duration and conditions, and the
+outputs it must produce. :func:`resolve_fidelity` turns a requested fidelity
+(``"auto"``, ``"full"`` or a per-subsystem mapping) into a :class:`Fidelity`:
+one level per subsystem of :data:`twin.fidelity.levels.SUBSYSTEMS` and the
+reason for it. The rules themselves are data (``rules.toml``); this module
+only evaluates their conditions, and every condition reports its numbers.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+
+from twin.engine.layout import N_STATES, OUTPUT_NAMES, CONTACT_LEVELS, K, N_CONSTANTS
+from twin.errors import OptionError
+from twin.fidelity.levels import SUBSYSTEMS
+from twin.parameters import ParameterSet
+from twin.scenes import Scene
+from twin.scenes.profiles import profile_value
+
+RULES_FILE = Path(__file__).with_name("rules.toml")
+PROFILE_GRID = 1.0e-3  # s: demand profiles are sampled at the acquisition period to find their peak speed
+RULE_KEYS = {"subsystem", "level", "because"}
+
+
+@dataclass(frozen=True)
+class Fidelity:
+    """A resolved fidelity configuration: a level and a reason for every subsystem.
+
+    Attributes
+    ----------
+    levels : dict
+        Subsystem -> level name.
+    reasons : dict
+        Subsystem -> why this level ("requested", or the rule and its numbers).
+    peak_contact_load : float
+        The scene's peak contact load on a nut [N], used by the ``linear`` contact level.
+    """
+
+    levels: Mapping[str, str]
+    reasons: Mapping[str, str]
+    peak_contact_load: float
+
+    def level(self, subsystem: str) -> str:
+        return self.levels[subsystem]
+
+    @property
+    def removed_states(self) -> tuple:
+        return tuple(sorted({s for name, level in self.levels.items()
+                             for s in SUBSYSTEMS[name].level(level).removes_states}))
+
+    @property
+    def active_states(self) -> np.ndarray:
+        """Indices (layout :class:`twin.engine.layout.S`) of the integrated states."""
+        removed = set(self.removed_states)
+        return np.array([j for j in range(N_STATES) if j not in removed], dtype=np.int64)
+
+    @property
+    def removed_signals(self) -> tuple[str, ...]:
+        return tuple(s for name, level in self.levels.items() for s in SUBSYSTEMS[name].level(level).removes_signals)
+
+    def summary(self) -> str:
+        """One line, ``subsystem=level, ...`` (stored in result attributes)."""
+        return ", ".join(f"{name}={level}" for name, level in self.levels.items())
+
+    def explain(self) -> str:
+        """One line per subsystem: the level, what it models and why it was chosen."""
+        width = max(map(len, self.levels))
+        lines = [f"{name:<{width}}  {level:<15} {self.reasons[name]}" for name, level in self.levels.items()]
+        lines.append(f"integrated states: {self.active_states.size} of {N_STATES}")
+        return "\n".join(lines)
+
+
+def load_rules(path: Path = RULES_FILE) -> tuple[dict, list[dict]]:
+    """Parse and check a rules file: ``(settings, rules)``.
+
+    Raises
+    ------
+    OptionError
+        Unknown subsystem, level or condition in a rule (all listed).
+    """
+    data = tomllib.loads(path.read_text())
+    rules = data.get("rules", [])
+    problems = []
+    for k, rule in enumerate(rules):
+        where = f"{path.name}: rules[{k}]"
+        subsystem = SUBSYSTEMS.get(rule.get("subsystem"))
+        if subsystem is None:
+            problems.append(f"{where}.subsystem: {rule.get('subsystem')!r} is not one of {', '.join(SUBSYSTEMS)}")
+        elif rule.get("level") not in subsystem.level_names:
+            problems.append(f"{where}.level: {rule.get('level')!r} is not one of {', '.join(subsystem.level_names)}")
+        unknown = set(rule) - RULE_KEYS - set(CONDITIONS)
+        if unknown:
+            problems.append(f"{where}: unknown condition(s) {', '.join(sorted(unknown))}; allowed: {', '.join(CONDITIONS)}")
+    if problems:
+        raise OptionError(problems)
+    return data.get("settings", {}), rules
+
+
+class SceneNeeds:
+    """What a scene asks of the model: its demands, duration, conditions and requested outputs."""
+
+    def __init__(self, scene: Scene, params: ParameterSet, outputs: frozenset[str], curvature: str,
+                 settings: Mapping[str, float]):
+        self.scene = scene
+        self.params = params
+        self.outputs = outputs
+        self.curvature = curvature
+        self.settings = settings
+
+    @cached_property
+    def peak_force_demand(self) -> float:
+        return float(np.max(np.abs(self._sampled(self.scene.force_table()))))
+
+    @cached_property
+    def peak_contact_load(self) -> float:
+        """Preload + largest |force demand| + the rules' allowance [N]."""
+        return self.scene.condition("preload") + self.peak_force_demand + self.settings["contact_load_allowance"]
+
+    @cached_property
+    def peak_motor_speed(self) -> float:
+        """Largest motor speed the position demand asks for [rad/s]."""
+        position = self._sampled(self.scene.position_table())
+        speed = np.max(np.abs(np.diff(position))) / PROFILE_GRID if position.size > 1 else 0.0
+        return speed / self.params.value("ball_screw.lead") * 2.0 * math.pi * self.params.value("reducer.ratio")
+
+    def _sampled(self, table: np.ndarray) -> np.ndarray:
+        times = np.arange(0.0, self.scene.duration + PROFILE_GRID, PROFILE_GRID)
+        return np.array([profile_value(table, t) for t in times])
+
+    @cached_property
+    def contact(self) -> tuple[np.ndarray, np.ndarray]:
+        """Contact constants and stiffness fit of the full model (for the deflection conditions)."""
+        from twin.engine.model import contact_constants
+
+        c = np.zeros(N_CONSTANTS)
+        poly = contact_constants(c, self.params.values(), self.curvature)
+        c[K.BACKLASH] = 0.0
+        return c, poly
+
+
+def _force_demand(needs: SceneNeeds, wanted: bool, decided) -> tuple[bool, str]:
+    has = needs.scene.has_force_demand
+    return has == wanted, f"force demand {'present' if has else 'none'}"
+
+
+def _outputs_exclude(needs: SceneNeeds, names: list[str], decided) -> tuple[bool, str]:
+    clash = sorted(needs.outputs & set(names))
+    return not clash, f"requested: {', '.join(clash)}" if clash else "none of its outputs requested"
+
+
+def _decided(needs: SceneNeeds, wanted: Mapping[str, str], decided) -> tuple[bool, str]:
+    ok = all(decided.get(k) == v for k, v in wanted.items())
+    return ok, ", ".join(f"{k}={decided.get(k)}" for k in wanted)
+
+
+def _not_decided(needs: SceneNeeds, unwanted: Mapping[str, str], decided) -> tuple[bool, str]:
+    ok = all(decided.get(k) != v for k, v in unwanted.items())
+    return ok, ", ".join(f"{k}={decided.get(k)}" for k in unwanted)
+
+
+def _voltage_fraction(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    p = needs.params
+    hot = p.value("motor.winding_resistance_20C") * (1.0 + p.value("motor.resistance_temperature_coefficient") * 130.0)
+    voltage = p.value("motor.speed_constant") * needs.peak_motor_speed + hot * p.value("motor.max_current")
+    fraction = voltage / p.value("drive.dc_bus_voltage")
+    return fraction <= limit, f"peak voltage demand {fraction:.2f} of the DC bus (limit {limit:g})"
+
+
+def _duration_over_tau(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    ratio = needs.scene.duration / needs.params.value("motor.thermal_time_constant")
+    return ratio <= limit, f"duration / tau_w = {ratio:.3f} (limit {limit:g})"
+
+
+def _nut_roll_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    arm = needs.params.value("ball_screw.lead") / (2.0 * math.pi)
+    deflection = arm**2 * needs.peak_contact_load / needs.params.value("sled.guide_roll_stiffness")
+    return deflection <= limit, (f"roll share of the nut deflection {deflection * 1e9:.2f} nm at "
+                                 f"{needs.peak_contact_load:.0f} N (limit {limit * 1e9:g} nm)")
+
+
+def _angle_deflection_error(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    from twin.engine.model import contact_position_for_force
+
+    c, poly = needs.contact
+    deflections = []
+    for model in ("variable_angle", "constant_angle"):
+        c[K.CONTACT_MODEL] = CONTACT_LEVELS[model]
+        deflections.append(contact_position_for_force(c, poly, needs.peak_contact_load))
+    error = abs(deflections[0] - deflections[1])
+    return error <= limit, (f"variable vs constant angle: {error * 1e9:.2f} nm of {deflections[0] * 1e6:.2f} um "
+                            f"deflection at {needs.peak_contact_load:.0f} N (limit {limit * 1e9:g} nm)")
+
+
+CONDITIONS = {
+    "force_demand": _force_demand,
+    "outputs_exclude": _outputs_exclude,
+    "decided": _decided,
+    "not_decided": _not_decided,
+    "max_voltage_fraction": _voltage_fraction,
+    "max_duration_over_thermal_tau": _duration_over_tau,
+    "max_nut_roll_deflection": _nut_roll_deflection,
+    "max_angle_deflection_error": _angle_deflection_error,
+}
+
+
+def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping[str, str] = "auto",
+                     outputs=None, curvature: str = "thesis", rules_file: Path = RULES_FILE) -> Fidelity:
+    """Resolve the requested fidelity for a scene.
+
+    Parameters
+    ----------
+    scene, params
+        The test and the parameter set.
+    fidelity : "auto", "full" or mapping
+        One choice for every subsystem, or ``{subsystem: level}`` where a level
+        may also be ``"auto"``; subsystems not in the mapping take the mapping's
+        ``"default"`` entry (``"auto"`` or ``"full"``; ``"auto"`` if absent).
+    outputs : iterable of str, optional
+        Signals and features the caller needs; ``None`` takes the scene's
+        ``outputs`` (every output if the scene names none).
+    curvature : str
+        Groove curvature formulas (:data:`twin.engine.model.CURVATURE_FORMULAS`).
+
+    Raises
+    ------
+    OptionError
+        Unknown subsystem, level or output; a level the scene cannot run with
+        (``"absent"`` pneumatics with a force demand) or that cannot produce a
+        requested output. All problems are listed at once.
+    """
+    problems = []
+    choices = {"default": fidelity} if isinstance(fidelity, str) else dict(fidelity)
+    default = choices.pop("default", "auto")
+    if default not in ("auto", "full"):
+        raise OptionError([f"fidelity: {default!r} is not 'auto', 'full' or a mapping {{subsystem: level}}"])
+    requested = {name: ("auto" if default == "auto" else s.full) for name, s in SUBSYSTEMS.items()}
+    for name, level in choices.items():
+        if name not in SUBSYSTEMS:
+            problems.append(f"fidelity.{name}: unknown subsystem; allowed: default, {', '.join(SUBSYSTEMS)}")
+        elif level != "auto" and level not in SUBSYSTEMS[name].level_names:
+            problems.append(f"fidelity.{name}: level {level!r} is not one of auto, "
+                            f"{', '.join(SUBSYSTEMS[name].level_names)}")
+        else:
+            requested[name] = level
+    wanted = frozenset(OUTPUT_NAMES if outputs is None and not scene.outputs else
+                       (scene.outputs if outputs is None else outputs))
+    problems += [f"outputs: {name!r} is not a signal or feature of the bench" for name in sorted(wanted - set(OUTPUT_NAMES))]
+    if problems:
+        raise OptionError(problems)
+
+    settings, rules = load_rules(rules_file)
+    needs = SceneNeeds(scene, params, wanted, curvature, settings)
+    levels, reasons = {}, {}
+    for name, subsystem in SUBSYSTEMS.items():
+        if requested[name] != "auto":
+            levels[name], reasons[name] = requested[name], "requested"
+            continue
+        levels[name], reasons[name] = subsystem.full, "no rule allows a cheaper level"
+        refusals = []
+        for rule in (r for r in rules if r["subsystem"] == name):
+            checks = [CONDITIONS[key](needs, value, levels) for key, value in rule.items() if key in CONDITIONS]
+            if all(ok for ok, _ in checks):
+                levels[name] = rule["level"]
+                reasons[name] = f"{rule['because']} ({'; '.join(text for _, text in checks)})"
+                break
+            refusals.append(f"not {rule['level']}: {'; '.join(text for ok, text in checks if not ok)}")
+        if refusals and levels[name] == subsystem.full:
+            reasons[name] = "; ".join(refusals)
+
+    if levels["pneumatics"] == "absent" and scene.has_force_demand:
+        problems.append(f"fidelity.pneumatics: 'absent' cannot apply the force demand of scene '{scene.name}'; "
+                        "use 'full' or 'ideal'")
+    explicit = outputs is not None or bool(scene.outputs)
+    for name, level in levels.items():
+        lost = sorted(wanted & set(SUBSYSTEMS[name].level(level).removes_signals))
+        if lost and explicit:
+            problems.append(f"fidelity.{name}: level {level!r} does not produce the requested output(s) {', '.join(lost)}")
+    if problems:
+        raise OptionError(problems)
+    return Fidelity(levels, reasons, needs.peak_contact_load)
