@@ -186,10 +186,15 @@ class Execution(_Strict):
 
 
 class Traces(_Strict):
-    """Decimated time series kept for the first ``runs_per_dataset`` runs of each data set."""
+    """Decimated time series kept for the first ``runs_per_dataset`` runs of each data set.
+
+    The default variables are the signals of Eq. 9.12, true and measured: what the backlash
+    feature is made of. Every traced variable is an output the automatic fidelity must keep
+    (adding ``motor_current`` keeps the full current loop in every run of the campaign).
+    """
 
     runs_per_dataset: int = Field(default=0, ge=0)
-    variables: list[str] = ["position_demand", "nut1_position", "screw_equivalent_position", "motor_current"]
+    variables: list[str] = ["position_demand", "nut1_position", "screw_equivalent_position", "linear_encoder_position"]
     decimation: int = Field(default=10, ge=1)
 
 

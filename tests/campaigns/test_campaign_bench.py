@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -45,3 +46,32 @@ def test_two_real_bench_runs(tmp_path):
     analysis = campaigns.analyze(results)
     with xr.open_dataset(analysis) as a:
         assert list(a["sweep_point"].values) == ["ds4", "ds2"]
+
+
+def test_campaign_records_fidelity_and_its_audit(tmp_path):
+    """auto by default: each data set's configuration and the paired audit against full fidelity land in results.nc."""
+    path = tmp_path / "audited.toml"
+    path.write_text(
+        f'extends = "{SPECS / "thesis_backlash.toml"}"\n'
+        'name = "audited"\nruns_per_dataset = 2\n[observability]\nsweep = []\n'
+        '[fidelity_audit]\nruns = 2\n'
+        '[[datasets]]\nname = "ds4"\nscene = "ds4"\nconditions = { backlash = 0.0, preload = 0.0 }\n'
+    )
+    results = campaigns.run_campaign(campaigns.load_spec(path), tmp_path / "out", workers=1, progress=False)
+    with xr.open_dataset(results) as ds:
+        assert ds.attrs["fidelity_requested"] == '"auto"'
+        assert "current_loop=ideal" in ds.attrs["fidelity_ds4"] and "encoders=full" in ds.attrs["fidelity_ds4"]
+        assert ds.attrs["fidelity_audit_runs"] == "2"
+        assert ds.attrs["fidelity_audit_ds4"].startswith("speedup x")
+        assert "backlash_feature: mean shift" in ds.attrs["fidelity_audit_ds4"]
+    with xr.open_dataset(tmp_path / "out" / "fidelity_audit" / "fidelity_audit.nc") as audit:
+        assert audit.attrs["runs"] == 2
+        assert float(np.abs(audit.mean_shift).max()) < 0.1e-6
+
+
+def test_spec_fidelity_is_validated(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(f'extends = "{SPECS / "demo.toml"}"\n[solver]\nfidelity = {{ gearbox = "full", contact = "rigid" }}\n')
+    with pytest.raises(campaigns.SpecError) as info:
+        campaigns.load_spec(path)
+    assert "unknown subsystem 'gearbox'" in str(info.value) and "contact: level 'rigid'" in str(info.value)

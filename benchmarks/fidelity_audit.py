@@ -1,0 +1,54 @@
+"""Acceptance of the automatic fidelity: auto against full on the seven thesis data sets.
+
+For each data set, ``--runs`` sampled runs (Table 9.5 uncertainties, thesis seed) at
+``fidelity="auto"`` and the same runs at full fidelity; prints the paired mean shift, the
+largest paired difference, the Monte Carlo error of the mean, the KS p-value and the
+speedup (campaign wall time per run, and the simulation alone on one run).
+
+    python benchmarks/fidelity_audit.py --runs 200 --out out/fidelity_acceptance
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import twin
+from campaigns.fidelity_audit import audit_scene
+
+DATASETS = ("ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7")
+
+
+def simulation_speedup(scene: str, repeats: int = 3) -> float:
+    """Median simulation wall time, full over auto (``attrs["wall_time"]``: the compiled loop only)."""
+    def median(fidelity):
+        twin.simulate(scene, fidelity=fidelity, duration=0.01)  # compile
+        times = sorted(twin.simulate(scene, fidelity=fidelity).attrs["wall_time"] for _ in range(repeats))
+        return times[len(times) // 2]
+    return median("full") / median("auto")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=200)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=Path("out/fidelity_acceptance"))
+    parser.add_argument("--datasets", nargs="*", default=DATASETS)
+    args = parser.parse_args()
+    print(f"{'set':4s} {'feature':22s} {'mean shift':>11s} {'max paired':>11s} {'MC error':>9s} {'KS p':>5s} "
+          f"{'verdict':7s} {'speedup campaign':>16s} {'speedup simulation':>18s}")
+    for name in args.datasets:
+        start = time.perf_counter()
+        audit = audit_scene(name, args.out / name, runs=args.runs, workers=args.workers)
+        sim = simulation_speedup(name)
+        for feature in audit.feature.values:
+            row = audit.sel(dataset=name, feature=feature)
+            print(f"{name:4s} {feature:22s} {float(row.mean_shift) * 1e6:+9.4f}um {float(row.max_paired_difference) * 1e6:9.4f}um "
+                  f"{float(row.sampling_error) * 1e6:7.4f}um {float(row.ks_pvalue):5.2f} "
+                  f"{'pass' if bool(row.passed) else 'FLAGGED':7s} x{float(row.speedup):15.2f} x{sim:17.2f}")
+        print(f"     auto: {audit.attrs['fidelity_auto']}  ({time.perf_counter() - start:.0f} s)", flush=True)
+
+
+if __name__ == "__main__":
+    main()
