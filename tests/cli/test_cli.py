@@ -38,3 +38,26 @@ def test_unknown_scene():
 def test_scenes_lists_data_sets():
     result = run("scenes")
     assert result.returncode == 0 and "ds7" in result.stdout and "nominal" in result.stdout
+
+
+def test_explain_fidelity_prints_each_choice_and_why():
+    result = run("simulate", "ds2", "--duration", "0.2", "--explain-fidelity")
+    assert result.returncode == 0, result.stderr
+    assert "current_loop          ideal" in result.stdout
+    assert "peak voltage demand" in result.stdout and "integrated states: 17 of 24" in result.stdout
+
+
+def test_fidelity_option_and_levels_listing():
+    result = run("simulate", "ds2", "--duration", "0.2", "--fidelity", "default=full,encoders=ideal")
+    assert result.returncode == 0, result.stderr
+    assert "encoders=ideal" in result.stdout and "(24 integrated states)" in result.stdout
+    listing = run("fidelity", "levels")
+    assert listing.returncode == 0 and "nut_rotation" in listing.stdout and "removes 4 states" in listing.stdout
+
+
+def test_bad_fidelity_is_a_clear_error():
+    result = run("simulate", "nominal", "--fidelity", "pneumatics=absent,gearbox=full")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert "fidelity.gearbox" in result.stderr
+    audit = run("fidelity", "audit", "no_such_scene", "--runs", "1")
+    assert audit.returncode == 2 and "runs: 1 must be an integer >= 2" in audit.stderr and "no_such_scene" in audit.stderr

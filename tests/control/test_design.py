@@ -50,3 +50,8 @@ def test_pi_anti_windup_stops_integrating_in_saturation():
     assert out == -2.0 and integral == 0.5
     out, integral = pi_step(-1.0, 4.0, 1.0, 1.0, 0.1, 2.0)  # saturated high by a wound-up integral: unwinds
     assert out == 2.0 and integral == pytest.approx(3.9)
+
+
+def test_ideal_current_loop_bandwidth_is_the_design(bench, designs):
+    """The ideal current-loop fidelity lags at the designed loop's closed-loop -3 dB bandwidth."""
+    assert bench.value("controller.current_loop_bandwidth") == pytest.approx(designs["current"].bandwidth_hz, rel=1e-3)

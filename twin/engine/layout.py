@@ -300,8 +300,6 @@ SIGNAL_META = {
     Signal.EXTERNAL_FORCE_MEASURED: ("N", "external-force load-cell reading"),
 }
 
-# Signals that exist only with the full pneumatic system.
-PNEUMATIC_SIGNALS = (Signal.CHAMBER1_PRESSURE, Signal.CHAMBER2_PRESSURE, Signal.VALVE_COMMAND, Signal.PISTON_POSITION)
 
 class M(IntEnum):
     """Memory of the digital loops and the acquisition between samples."""
