@@ -56,7 +56,7 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str]) ->
     return audit
 
 
-def summary_attrs(audit: xr.Dataset, auto: xr.Dataset) -> dict[str, str]:
+def summary_attrs(audit: xr.Dataset) -> dict[str, str]:
     """``fidelity_audit*`` attributes for ``results.nc`` (what the report's Fidelity section shows)."""
     attrs = {"fidelity_audit_runs": str(audit.attrs["runs"])}
     flagged = []
@@ -98,7 +98,7 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
         full = handle.load()
     audit = compare_fidelity(auto, full, list(spec.features))
     audit.to_netcdf(out_dir / "fidelity_audit.nc", engine="netcdf4")
-    _write_attrs(results_path, auto, summary_attrs(audit, auto))
+    _write_attrs(results_path, auto, summary_attrs(audit))
     return audit
 
 

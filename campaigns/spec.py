@@ -143,22 +143,11 @@ class Solver(_Strict):
     @field_validator("fidelity")
     @classmethod
     def _known_fidelity(cls, fidelity):
-        from twin.fidelity.levels import SUBSYSTEMS
+        from twin.fidelity.levels import requested_levels
 
-        if isinstance(fidelity, str):
-            if fidelity not in ("auto", "full"):
-                raise ValueError(f"{fidelity!r} is not auto, full or a table {{subsystem = level}}")
-            return fidelity
-        problems = []
-        for name, level in fidelity.items():
-            allowed = ("auto", "full") if name == "default" else (
-                ("auto", *SUBSYSTEMS[name].level_names) if name in SUBSYSTEMS else None)
-            if allowed is None:
-                problems.append(f"unknown subsystem {name!r}; known: default, {', '.join(SUBSYSTEMS)}")
-            elif level not in allowed:
-                problems.append(f"{name}: level {level!r} is not one of {', '.join(allowed)}")
+        problems = requested_levels(fidelity)[1]
         if problems:
-            raise ValueError("; ".join(problems))
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
         return fidelity
 
 

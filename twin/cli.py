@@ -223,7 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = fidelity_sub.add_parser("audit", help="auto against full fidelity on the same sampled runs of a scene")
     p.add_argument("scene", help="built-in scene name or a scene TOML file")
     p.add_argument("--runs", type=int, default=50, help="sampled runs (default 50)")
-    p.add_argument("--spec", type=Path, default=Path(__file__).resolve().parent.parent / "campaigns" / "specs" / "thesis_backlash.toml",
+    p.add_argument("--spec", type=Path,
                    help="campaign spec whose uncertainty table is sampled (default: the thesis study)")
     p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
     p.add_argument("--out", type=Path, help="output directory (default: out/fidelity_audit_<scene>)")

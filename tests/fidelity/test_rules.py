@@ -105,18 +105,21 @@ def test_scene_outputs_are_validated():
 
 def test_rules_file_is_checked(tmp_path):
     bad = tmp_path / "rules.toml"
-    bad.write_text('[settings]\ncontact_load_allowance = 200.0\n[[rules]]\nsubsystem = "contact"\nlevel = "rigid"\n'
+    bad.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\nsubsystem = "contact"\nlevel = "rigid"\n'
                    'because = "x"\nmax_softness = 1.0\n')
     with pytest.raises(twin.OptionError) as info:
         load_rules(bad)
     assert "rules[0].level: 'rigid'" in str(info.value) and "unknown condition(s) max_softness" in str(info.value)
+    bad.write_text('[settings]\ncontact_load_allowance = 200.0\n')
+    with pytest.raises(twin.OptionError, match="settings.hot_winding_temperature_rise: missing or not a number"):
+        load_rules(bad)
 
 
 def test_force_demand_condition_as_data(tmp_path, bench):
     """A rules file is data: a project may drop the cylinder on force-free tests (the shipped rules do not,
     see rules.toml) and the decision cites the condition."""
     rules = tmp_path / "rules.toml"
-    rules.write_text('[settings]\ncontact_load_allowance = 200.0\n[[rules]]\nsubsystem = "pneumatics"\n'
+    rules.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\nsubsystem = "pneumatics"\n'
                      'level = "absent"\nbecause = "cylinder disconnected for force-free tests"\nforce_demand = false\n')
     free = resolve_fidelity(twin.load_scene("ds2"), bench, rules_file=rules)
     loaded = resolve_fidelity(twin.load_scene("ds3"), bench, rules_file=rules)

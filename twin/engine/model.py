@@ -63,7 +63,6 @@ class Model:
     stiffness_poly: np.ndarray
     active: np.ndarray   # indices (layout S) of the integrated states; the others hold their initial value
     pairs: np.ndarray    # (m, 2) integrated (position, velocity) index pairs, for the semi-implicit Euler step
-    fidelity: Fidelity
 
     def full_state(self, integrated: np.ndarray) -> np.ndarray:
         """The full-layout state with the integrated states set to ``integrated``."""
@@ -186,7 +185,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curva
         x0[S.SPOOL_POSITION:] = pneumatic_constants(c, p, scene)
     active = fidelity.active_states
     pairs = np.array([pair for pair in POSITION_VELOCITY_PAIRS if pair[0] in active], dtype=np.int64).reshape(-1, 2)
-    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly, active, pairs, fidelity)
+    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly, active, pairs)
 
 
 def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.ndarray:

@@ -8,7 +8,7 @@ demands, duration and requested outputs allow, by the rules of
 (:mod:`campaigns.fidelity_audit`).
 """
 
-from twin.fidelity.levels import IDEAL_INSTRUMENTS, SUBSYSTEMS, Level, Subsystem
+from twin.fidelity.levels import SUBSYSTEMS, Level, Subsystem, full_plant, requested_levels
 from twin.fidelity.rules import Fidelity, load_rules, resolve_fidelity
 
-__all__ = ["IDEAL_INSTRUMENTS", "SUBSYSTEMS", "Fidelity", "Level", "Subsystem", "load_rules", "resolve_fidelity"]
+__all__ = ["SUBSYSTEMS", "full_plant", "requested_levels", "Fidelity", "Level", "Subsystem", "load_rules", "resolve_fidelity"]

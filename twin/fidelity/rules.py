@@ -21,14 +21,15 @@ import numpy as np
 
 from twin.engine.layout import N_STATES, OUTPUT_NAMES, CONTACT_LEVELS, K, N_CONSTANTS
 from twin.errors import OptionError
-from twin.fidelity.levels import SUBSYSTEMS
+from twin.fidelity.levels import SUBSYSTEMS, requested_levels
 from twin.parameters import ParameterSet
 from twin.scenes import Scene
-from twin.scenes.profiles import profile_value
+from twin.scenes.profiles import profile_values
 
 RULES_FILE = Path(__file__).with_name("rules.toml")
 PROFILE_GRID = 1.0e-3  # s: demand profiles are sampled at the acquisition period to find their peak speed
 RULE_KEYS = {"subsystem", "level", "because"}
+SETTINGS = ("contact_load_allowance", "hot_winding_temperature_rise")  # the [settings] the conditions read
 
 
 @dataclass(frozen=True)
@@ -85,11 +86,13 @@ def load_rules(path: Path = RULES_FILE) -> tuple[dict, list[dict]]:
     Raises
     ------
     OptionError
-        Unknown subsystem, level or condition in a rule (all listed).
+        A missing setting, or an unknown subsystem, level or condition in a rule (all listed).
     """
     data = tomllib.loads(path.read_text())
     rules = data.get("rules", [])
-    problems = []
+    settings = data.get("settings", {})
+    problems = [f"{path.name}: settings.{key}: missing or not a number" for key in SETTINGS
+                if isinstance(settings.get(key), bool) or not isinstance(settings.get(key), (int, float))]
     for k, rule in enumerate(rules):
         where = f"{path.name}: rules[{k}]"
         subsystem = SUBSYSTEMS.get(rule.get("subsystem"))
@@ -102,7 +105,7 @@ def load_rules(path: Path = RULES_FILE) -> tuple[dict, list[dict]]:
             problems.append(f"{where}: unknown condition(s) {', '.join(sorted(unknown))}; allowed: {', '.join(CONDITIONS)}")
     if problems:
         raise OptionError(problems)
-    return data.get("settings", {}), rules
+    return settings, rules
 
 
 class SceneNeeds:
@@ -134,7 +137,7 @@ class SceneNeeds:
 
     def _sampled(self, table: np.ndarray) -> np.ndarray:
         times = np.arange(0.0, self.scene.duration + PROFILE_GRID, PROFILE_GRID)
-        return np.array([profile_value(table, t) for t in times])
+        return profile_values(table, times)
 
     @cached_property
     def contact(self) -> tuple[np.ndarray, np.ndarray]:
@@ -142,9 +145,7 @@ class SceneNeeds:
         from twin.engine.model import contact_constants
 
         c = np.zeros(N_CONSTANTS)
-        poly = contact_constants(c, self.params.values(), self.curvature)
-        c[K.BACKLASH] = 0.0
-        return c, poly
+        return c, contact_constants(c, self.params.values(), self.curvature)
 
 
 def _force_demand(needs: SceneNeeds, wanted: bool, decided) -> tuple[bool, str]:
@@ -169,7 +170,8 @@ def _not_decided(needs: SceneNeeds, unwanted: Mapping[str, str], decided) -> tup
 
 def _voltage_fraction(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
     p = needs.params
-    hot = p.value("motor.winding_resistance_20C") * (1.0 + p.value("motor.resistance_temperature_coefficient") * 130.0)
+    rise = needs.settings["hot_winding_temperature_rise"]
+    hot = p.value("motor.winding_resistance_20C") * (1.0 + p.value("motor.resistance_temperature_coefficient") * rise)
     voltage = p.value("motor.speed_constant") * needs.peak_motor_speed + hot * p.value("motor.max_current")
     fraction = voltage / p.value("drive.dc_bus_voltage")
     return fraction <= limit, f"peak voltage demand {fraction:.2f} of the DC bus (limit {limit:g})"
@@ -221,9 +223,7 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
     scene, params
         The test and the parameter set.
     fidelity : "auto", "full" or mapping
-        One choice for every subsystem, or ``{subsystem: level}`` where a level
-        may also be ``"auto"``; subsystems not in the mapping take the mapping's
-        ``"default"`` entry (``"auto"`` or ``"full"``; ``"auto"`` if absent).
+        The request (:func:`twin.fidelity.levels.requested_levels`).
     outputs : iterable of str, optional
         Signals and features the caller needs; ``None`` takes the scene's
         ``outputs`` (every output if the scene names none).
@@ -237,20 +237,7 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
         (``"absent"`` pneumatics with a force demand) or that cannot produce a
         requested output. All problems are listed at once.
     """
-    problems = []
-    choices = {"default": fidelity} if isinstance(fidelity, str) else dict(fidelity)
-    default = choices.pop("default", "auto")
-    if default not in ("auto", "full"):
-        raise OptionError([f"fidelity: {default!r} is not 'auto', 'full' or a mapping {{subsystem: level}}"])
-    requested = {name: ("auto" if default == "auto" else s.full) for name, s in SUBSYSTEMS.items()}
-    for name, level in choices.items():
-        if name not in SUBSYSTEMS:
-            problems.append(f"fidelity.{name}: unknown subsystem; allowed: default, {', '.join(SUBSYSTEMS)}")
-        elif level != "auto" and level not in SUBSYSTEMS[name].level_names:
-            problems.append(f"fidelity.{name}: level {level!r} is not one of auto, "
-                            f"{', '.join(SUBSYSTEMS[name].level_names)}")
-        else:
-            requested[name] = level
+    requested, problems = requested_levels(fidelity)
     wanted = frozenset(OUTPUT_NAMES if outputs is None and not scene.outputs else
                        (scene.outputs if outputs is None else outputs))
     problems += [f"outputs: {name!r} is not a signal or feature of the bench" for name in sorted(wanted - set(OUTPUT_NAMES))]

@@ -131,3 +131,12 @@ def profile_value(table, t):
             phase = table[k, COL_PHASE]
             return v0 + amp * (math.sin(2.0 * math.pi * table[k, COL_FREQ] * (t - t0) + phase) - math.sin(phase))
     return table[n - 1, COL_V1]
+
+
+@numba.njit(cache=True)
+def profile_values(table, times):
+    """:func:`profile_value` at every instant of ``times`` (one compiled loop, not one call per instant)."""
+    out = np.empty(times.shape[0])
+    for k in range(times.shape[0]):
+        out[k] = profile_value(table, times[k])
+    return out

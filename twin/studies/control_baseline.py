@@ -23,10 +23,10 @@ from twin.engine.layout import N_INPUTS, S, U
 from twin.engine.model import build_model
 from twin.engine.plant import rhs
 from twin.engine.reference import absolute_tolerance
-from twin.fidelity import IDEAL_INSTRUMENTS, resolve_fidelity
+from twin.fidelity import full_plant, resolve_fidelity
 
 # The plant alone: full detail, no load system, no sensors in the way.
-OPEN_LOOP_FIDELITY = {"default": "full", **IDEAL_INSTRUMENTS, "pneumatics": "absent"}
+OPEN_LOOP_FIDELITY = full_plant("absent")
 
 CURRENT_STEP = 0.5  # A of current demand: ~1.9 N m of motor torque, accelerating the unloaded screw
 DURATION = 0.05     # s

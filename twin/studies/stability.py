@@ -21,11 +21,11 @@ import twin
 from twin.engine.layout import N_INPUTS, U
 from twin.engine.linearize import highest_frequency, jacobian
 from twin.engine.model import build_model
-from twin.fidelity import IDEAL_INSTRUMENTS, resolve_fidelity
+from twin.fidelity import full_plant, resolve_fidelity
 from twin.scenes import scene_from_dict
 
 # The full plant (every stiff mode present) with an ideal force source and ideal instruments.
-STUDY_FIDELITY = {"default": "full", **IDEAL_INSTRUMENTS, "pneumatics": "ideal"}
+STUDY_FIDELITY = full_plant("ideal")
 
 THEORY = {"rk4": 2.8, "semi_implicit_euler": 2.0}
 PRELOADS = (0.0, 1000.0, 3000.0)

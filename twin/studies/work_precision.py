@@ -24,7 +24,7 @@ import xarray as xr
 
 import twin
 from twin.engine.integrators import INTEGRATORS
-from twin.fidelity import IDEAL_INSTRUMENTS
+from twin.fidelity import full_plant
 
 SPEED_PERIOD = 1.25e-4
 STEP_LADDER = tuple(SPEED_PERIOD / 2.0**k for k in range(11))  # 1.25e-4 ... 1.2e-7 s
@@ -33,9 +33,8 @@ BASELINES = ("scipy_lsoda", "scipy_radau")
 REFERENCE = "scipy_radau"
 REFERENCE_RTOL = 1e-10
 # Full plant; the instruments ideal, or only the digital position sensors and converters quantised.
-PANELS = {"quantizers_off": {"default": "full", **IDEAL_INSTRUMENTS},
-          "quantizers_on": {"default": "full", **IDEAL_INSTRUMENTS, "encoders": "quantized",
-                            "output_converters": "quantized"}}
+PANELS = {"quantizers_off": full_plant(),
+          "quantizers_on": full_plant(encoders="quantized", output_converters="quantized")}
 LONG_RUN = 2.0  # s: runs slower than this are timed once (the median of repeats would cost minutes)
 METRICS = {
     "feature_error": ("m", "|backlash_feature - reference| (Eq. 9.12)"),
