@@ -4,6 +4,7 @@ Usage::
 
     python benchmarks/campaign_throughput.py --synthetic --runs 200 --delay 0.005
     python benchmarks/campaign_throughput.py --runs 10          # the real bench (demo spec)
+    python benchmarks/campaign_throughput.py --quick            # synthetic model, 10 runs per data set
 
 For each worker count a local cluster is started first and warmed up (worker
 and sandbox start-up are not campaign throughput); the campaign then runs on it
@@ -32,6 +33,7 @@ from distributed import LocalCluster
 
 import campaigns
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from machine import header
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 
@@ -113,7 +115,11 @@ def main() -> None:
     parser.add_argument("--synthetic", action="store_true", help="use the synthetic model instead of the bench twin")
     parser.add_argument("--delay", type=float, default=0.005, help="synthetic compute time per run [s] (default 0.005)")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts to compare (default 1 2)")
+    parser.add_argument("--quick", action="store_true", help="synthetic model, 10 runs per data set (seconds)")
     args = parser.parse_args()
+    header("campaign throughput", args.quick)
+    if args.quick:
+        args.synthetic, args.runs = True, 10
     model = f"synthetic (delay {args.delay:g} s)" if args.synthetic else "bench twin (demo spec)"
     print(f"model: {model}; runs per data set: {args.runs}")
     with tempfile.TemporaryDirectory() as tmp:

@@ -6,13 +6,17 @@ largest paired difference, the Monte Carlo error of the mean, the KS p-value and
 speedup (campaign wall time per run, and the simulation alone on one run).
 
     python benchmarks/fidelity_audit.py --runs 200 --out out/fidelity_acceptance
+    python benchmarks/fidelity_audit.py --quick     # 4 runs of ds2 and ds5: checks the pipeline, not the acceptance
 """
 
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
 from pathlib import Path
+
+from machine import header
 
 import twin
 from campaigns.fidelity_audit import audit_scene
@@ -20,7 +24,7 @@ from campaigns.fidelity_audit import audit_scene
 DATASETS = ("ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7")
 
 
-def simulation_speedup(scene: str, repeats: int = 3) -> float:
+def simulation_speedup(scene: str, repeats: int) -> float:
     """Median simulation wall time, full over auto (``attrs["wall_time"]``: the compiled loop only)."""
     def median(fidelity):
         twin.simulate(scene, fidelity=fidelity, duration=0.01)  # compile
@@ -35,13 +39,19 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=Path("out/fidelity_acceptance"))
     parser.add_argument("--datasets", nargs="*", default=DATASETS)
+    parser.add_argument("--quick", action="store_true",
+                        help="4 runs of ds2 and ds5 into a temporary directory (too few for the acceptance)")
     args = parser.parse_args()
+    header("fidelity audit: auto against full fidelity on the thesis data sets", args.quick)
+    if args.quick:
+        args.runs, args.datasets = 4, ["ds2", "ds5"]
+        args.out = Path(tempfile.mkdtemp(prefix="fidelity_audit_quick_"))
     print(f"{'set':4s} {'feature':22s} {'mean shift':>11s} {'max paired':>11s} {'MC error':>9s} {'KS p':>5s} "
           f"{'verdict':7s} {'speedup campaign':>16s} {'speedup simulation':>18s}")
     for name in args.datasets:
         start = time.perf_counter()
         audit = audit_scene(name, args.out / name, runs=args.runs, workers=args.workers)
-        sim = simulation_speedup(name)
+        sim = simulation_speedup(name, 1 if args.quick else 3)
         for feature in audit.feature.values:
             row = audit.sel(dataset=name, feature=feature)
             print(f"{name:4s} {feature:22s} {float(row.mean_shift) * 1e6:+9.4f}um {float(row.max_paired_difference) * 1e6:9.4f}um "

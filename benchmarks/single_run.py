@@ -1,14 +1,14 @@
 """Wall time of one default-scene run after compilation (issue: bench twin core).
 
 Prints the median of repeated 10 s nominal-scene runs per integrator and step, runs/s on one core,
-and the real-time factor. Usage: python benchmarks/single_run.py [--repeats N]
+and the real-time factor. Usage: python benchmarks/single_run.py [--repeats N] [--quick]
 """
 
 import argparse
-import os
-import platform
 import statistics
 import time
+
+from machine import header
 
 import twin
 
@@ -17,10 +17,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--scene", default="nominal")
+    parser.add_argument("--quick", action="store_true", help="one 1 s run per configuration (seconds)")
     args = parser.parse_args()
     scene = twin.load_scene(args.scene)
+    if args.quick:
+        scene, args.repeats = scene.with_duration(1.0), 1
     params = twin.load_parameters()
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
+    header("single run: wall time of one scene after compilation", args.quick)
     print(f"# scene '{scene.name}', duration {scene.duration} s; median of {args.repeats} runs after compilation")
     print(f"{'integrator':22s} {'dt [s]':>10s} {'wall [s]':>9s} {'runs/s':>8s} {'x real time':>12s} {'f_b [um]':>10s}")
     for integrator, dt in (("rk4", 6.25e-5), ("rk4", 3.125e-5), ("semi_implicit_euler", 3.125e-5),

@@ -4,7 +4,7 @@ Prints, for the nominal and data-set-2 scenes (10 s): the default configuration'
 core (median after compilation), the scipy reference path's wall time and the feature difference
 between them (timed side by side in this run), the python-control baseline on the open-loop plant,
 and the estimated wall time of the thesis study (7 x 1000 runs) on this machine's cores.
-Usage: python benchmarks/speed_accuracy.py [--reference-duration 2.0]
+Usage: python benchmarks/speed_accuracy.py [--reference-duration 2.0] [--quick]
 """
 
 import argparse
@@ -12,8 +12,11 @@ import os
 import statistics
 import time
 
+from machine import header
+
 import twin
 import twin.engine.simulate
+from twin.fidelity import full_plant
 from twin.studies.control_baseline import compare
 
 
@@ -31,24 +34,31 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--reference-duration", type=float, default=2.0,
                         help="simulated seconds of the side-by-side comparison with the scipy path")
+    parser.add_argument("--quick", action="store_true", help="1 s scenes, 0.2 s reference comparison, one repeat")
     args = parser.parse_args()
+    repeats = 1 if args.quick else 5
+    if args.quick:
+        args.reference_duration = 0.2
+    header("speed against accuracy at the default configuration", args.quick)
     print(f"# {os.cpu_count()} cores; default: {twin.engine.simulate.DEFAULT_INTEGRATOR} "
           f"dt={twin.engine.simulate.DEFAULT_DT:g} s")
     walls = []
     for name in ("nominal", "ds2"):
-        scene = twin.load_scene(name)
-        wall, ds = median_wall(scene)
-        walls.append(wall)
+        full_duration = twin.load_scene(name).duration
+        scene = twin.load_scene(name).with_duration(1.0 if args.quick else full_duration)
+        wall, ds = median_wall(scene, repeats)
+        walls.append(wall * full_duration / scene.duration)  # per full-length run, for the study estimate
         print(f"{name:8s} {scene.duration:4.1f} s scene: {wall:.3f} s per run ({scene.duration / wall:.0f}x real time), "
               f"f_b {float(ds.backlash_feature) * 1e6:.4f} um")
     for name in ("ds2", "nominal"):
         scene = twin.load_scene(name).with_duration(args.reference_duration)
-        fast, ds_fast = median_wall(scene, repeats=3, sensors="ideal")
+        ideal = full_plant()  # the solvers are compared on the plant, seen through ideal instruments
+        fast, ds_fast = median_wall(scene, repeats=min(3, repeats), fidelity=ideal)
         start = time.perf_counter()
-        ds_ref = twin.simulate(scene, integrator="scipy_lsoda", rtol=1e-8, sensors="ideal")
+        ds_ref = twin.simulate(scene, integrator="scipy_lsoda", rtol=1e-8, fidelity=ideal)
         slow = time.perf_counter() - start
         start = time.perf_counter()
-        ds_radau = twin.simulate(scene, integrator="scipy_radau", rtol=1e-8, sensors="ideal")
+        ds_radau = twin.simulate(scene, integrator="scipy_radau", rtol=1e-8, fidelity=ideal)
         radau = time.perf_counter() - start
         print(f"{name:8s} {args.reference_duration:.1f} s, ideal instruments: default {fast:.3f} s; "
               f"scipy LSODA rtol 1e-8 {slow:.2f} s ({slow / fast:.0f}x), Radau rtol 1e-8 {radau:.2f} s "
