@@ -15,7 +15,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
@@ -27,9 +27,10 @@ LIBRARY = Path(__file__).parent / "library"
 
 
 
-@dataclass(frozen=True)
-class Condition:
+class Condition(NamedTuple):
     """One condition of a test procedure: a number in an SI unit, or one of a few named choices.
+
+    A named tuple whose first field is the unit, so ``CONDITIONS[name][0]`` is the unit.
 
     Attributes
     ----------
