@@ -24,6 +24,8 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from campaigns import sensitivity
+
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
 REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm"
@@ -36,6 +38,8 @@ _VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not 
 _STATEMENT_ATTRS = {"long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, in one sentence"}
 #: Spawn-key tag of the observability bootstrap's random stream (the correlation bootstraps use (dataset, feature)).
 _OBSERVABILITY_STREAM = 1_000_003
+#: Spawn-key tag of the first-order index bootstrap's random stream.
+_SENSITIVITY_STREAM = 1_000_033
 #: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
 _EXPLAINED = 1e-18
 
@@ -440,18 +444,24 @@ def analysis_dataset(
     power: float = 0.95,
     seed: int = 0,
     min_ok_runs: int = MIN_OK_RUNS,
+    sensitivity_boot: int = 200,
 ) -> xr.Dataset:
     """Compute every statistic of :func:`analyze` on an opened results dataset.
 
     A data set with fewer than ``min_ok_runs`` used runs of a feature is flagged
     in ``data_sufficient`` and gets NaN statistics for that feature.
+    ``sensitivity_boot`` resamples give the interval of the first-order index
+    (:func:`campaigns.sensitivity.first_order`).
     """
+    if min_ok_runs < 3:
+        raise ValueError(f"min_ok_runs = {min_ok_runs}: must be at least 3 (a standard deviation and a correlation need 3 runs)")
     parameters = [v for v in results.data_vars if results[v].attrs.get("role") == "sampled"]
     features = [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]
     names = [str(n) for n in results["dataset"].values]
     shape = (len(names), len(features), len(parameters))
     out = {k: np.full(shape, math.nan) for k in ("pearson", "spearman", "prcc")}
-    ci = {k: np.full(shape + (2,), math.nan) for k in ("pearson", "spearman")}
+    ci = {k: np.full(shape + (2,), math.nan) for k in ("pearson", "spearman", "first_order_index", "effect_size")}
+    out["first_order_index"], effect_size = np.full(shape, math.nan), np.full(shape, math.nan)
     n_used = np.zeros((len(names), len(features)), dtype=np.int64)
     mean, std = np.full(n_used.shape, math.nan), np.full(n_used.shape, math.nan)
     overlap = np.full((len(features), len(names), len(names)), math.nan)
@@ -475,6 +485,12 @@ def analysis_dataset(
                 out[method][d, f] = estimate
                 ci[method][d, f, :, 0], ci[method][d, f, :, 1] = lower, upper
             out["prcc"][d, f] = prcc(X.T, y)
+            found = sensitivity.first_order(
+                X.T, y, n_boot=sensitivity_boot, confidence=confidence,
+                seed=np.random.SeedSequence(seed, spawn_key=(_SENSITIVITY_STREAM, d, f)),
+            )
+            out["first_order_index"][d, f], ci["first_order_index"][d, f] = found["index"], found["ci"]
+            effect_size[d, f], ci["effect_size"][d, f] = found["effect_size"], found["effect_size_ci"]
     for f in range(len(features)):
         for a, b in ((a, b) for a in range(len(names)) for b in range(len(names))):
             if (a, f) in used_values and (b, f) in used_values:
@@ -485,6 +501,8 @@ def analysis_dataset(
     n_runs = results.sizes["run"]
 
     corr_dims = ("dataset", "feature", "parameter")
+    units = {results[f].attrs.get("units", "") for f in features}
+    feature_units = units.pop() if len(units) == 1 else "units of each feature"
     data_vars = {
         "n_used": (("dataset", "feature"), n_used, {"long_name": "runs used (status ok, finite feature)"}),
         "n_excluded": (("dataset", "feature"), n_runs - n_used, {"long_name": "runs excluded from the statistics"}),
@@ -506,6 +524,30 @@ def analysis_dataset(
         "spearman": (corr_dims, out["spearman"], {"units": "1", "long_name": "Spearman rank correlation"}),
         "spearman_ci": (corr_dims + ("bound",), ci["spearman"], {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of spearman"}),
         "prcc": (corr_dims, out["prcc"], {"units": "1", "long_name": "partial rank correlation coefficient"}),
+        "first_order_index": (
+            corr_dims,
+            out["first_order_index"],
+            {"units": "1", "long_name": "first-order (Sobol') index: share of the feature's variance explained by the parameter alone, any shape of dependence", "method": sensitivity.METHOD},
+        ),
+        "first_order_index_ci": (
+            corr_dims + ("bound",),
+            ci["first_order_index"],
+            {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of first_order_index", "n_boot": sensitivity_boot, "method": sensitivity.METHOD},
+        ),
+        "effect_size": (
+            corr_dims,
+            effect_size,
+            {
+                "units": feature_units,
+                "long_name": "standard deviation of the conditional mean E[feature | parameter] over the parameter's distribution, sqrt(max(first_order_index, 0) var(feature)): what the parameter alone moves the feature by",
+                "method": sensitivity.METHOD,
+            },
+        ),
+        "effect_size_ci": (
+            corr_dims + ("bound",),
+            ci["effect_size"],
+            {"units": feature_units, "long_name": "effect_size at the bounds of first_order_index_ci (feature variance held fixed)"},
+        ),
         "overlap": (("feature", "dataset", "reference"), overlap, {"units": "1", "long_name": "overlap coefficient of the feature distributions"}),
         "detection_probability": (
             ("feature", "dataset", "reference"),

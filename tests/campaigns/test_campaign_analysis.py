@@ -159,6 +159,12 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         assert list(a["minimum_detectable_backlash_ci"].sel(feature="backlash_feature").values) == [0.0, 5e-6]
         assert a["requirement_verdict"].sel(feature="backlash_feature") == "undetermined"
         assert (a["data_sufficient"] == 1).all() and a.attrs["min_ok_runs"] == 20
+        # the given-data sensitivity: the gain dominates data set 2, its effect in metres of feature
+        effect = a["effect_size"].sel(dataset="ds2", feature="backlash_feature")
+        assert effect.to_pandas().idxmax() == "synthetic.gain" and a["effect_size"].attrs["units"] == "m"
+        assert "rbd_fast" in a["first_order_index"].attrs["method"]
+        index_ci = a["first_order_index_ci"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
+        assert index_ci.sel(bound="lower") <= a["first_order_index"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain") <= index_ci.sel(bound="upper")
         assert float(a["overlap"].sel(feature="backlash_feature", dataset="ds2", reference="ds4")) == 0.0
 
 
