@@ -76,15 +76,34 @@ def bootstrap_correlation(x, y, method: str = "spearman", *, n_boot: int = 1000,
     return float(estimate[0]), float(lower[0]), float(upper[0])
 
 
+def _resampled_ranks(v: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``scipy.stats.rankdata(v[idx], axis=-1)`` (average ranks) without sorting every resample.
+
+    A resample's rank of a value is the number of resampled values below it plus half of
+    (its own count + 1): cumulative bootstrap counts over the values sorted once.
+    """
+    n_boot = idx.shape[0]
+    values, group = np.unique(v, return_inverse=True)
+    resampled = group[idx]
+    counts = np.bincount((resampled + len(values) * np.arange(n_boot)[:, None]).ravel(), minlength=n_boot * len(values))
+    counts = counts.reshape(n_boot, len(values)).astype(float)
+    rank = np.cumsum(counts, axis=1) - 0.5 * (counts - 1.0)
+    return np.take_along_axis(rank, resampled, axis=1)
+
+
 def _correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, confidence: float):
     """Estimates and percentile CIs for each row of ``X`` (shape (p, n)) against ``y``, shared resamples ``idx``."""
-    transform = (lambda v: stats.rankdata(v, axis=-1)) if method == "spearman" else (lambda v: v)
-    estimate = _pearson(transform(X), transform(y)[None, :])
-    yb = transform(y[idx])  # ranked once, shared by every parameter
+    spearman = method == "spearman"
+    estimate = _pearson(stats.rankdata(X, axis=-1), stats.rankdata(y)[None, :]) if spearman else _pearson(X, y[None, :])
+
+    def resampled(v: np.ndarray) -> np.ndarray:
+        return _resampled_ranks(v, idx) if spearman else v[idx]
+
+    yb = resampled(y)  # once, shared by every parameter
     alpha = 0.5 * (1.0 - confidence)
     lower, upper = np.full(len(X), math.nan), np.full(len(X), math.nan)
     for j, x in enumerate(X):
-        boot = _pearson(transform(x[idx]), yb)
+        boot = _pearson(resampled(x), yb)
         boot = boot[np.isfinite(boot)]  # resamples without variance have no correlation
         if len(boot):
             lower[j], upper[j] = np.quantile(boot, [alpha, 1.0 - alpha])
@@ -275,6 +294,10 @@ def requirement_verdict(lower: float, upper: float, requirement: float = BACKLAS
     return "undetermined"
 
 
+def _runs(n: int) -> str:
+    return f"{n} ok run{'s' if n != 1 else ''}"
+
+
 def _micrometres(value: float) -> str:
     return f"{value * 1e6:.3g} µm"
 
@@ -308,7 +331,9 @@ def requirement_statement(
     against = f"against the {_micrometres(BACKLASH_REQUIREMENT)} requirement of Table 9.3"
     if not n_used:
         return f"insufficient data: the spec has no observability sweep, so no minimum detectable backlash is estimated {against}"
-    short = [f"{name} has {n} ok run{'s' if n != 1 else ''}" for name, n in n_used.items() if n < min_ok_runs]
+    short = [f"{name} has {_runs(n)}" for name, n in n_used.items() if n < min_ok_runs]
+    if len(short) == len(n_used) > 1 and len(set(n_used.values())) == 1:
+        short = [f"each of the {len(n_used)} sweep data sets has {_runs(next(iter(n_used.values())))}"]
     if short:
         return (
             f"insufficient data: {', '.join(short)} (at least {min_ok_runs} per sweep data set are needed), "
@@ -612,7 +637,9 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     for feature in (str(f) for f in analysis["feature"].values):
         statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
         n_used = analysis["n_used"].sel(feature=feature)
-        short = [f"{d} ({int(n)} ok run{'s' if n != 1 else ''})" for d, n in zip(analysis["dataset"].values, n_used.values) if n < min_ok_runs]
+        short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values) if n < min_ok_runs]
+        if len(short) == len(n_used) > 1 and len(set(n_used.values)) == 1:
+            short = [f"all {len(short)} data sets ({_runs(int(n_used[0]))} each)"]
         if short:
             warnings.append(
                 f"{feature}: insufficient data in {', '.join(short)}: fewer than {min_ok_runs} ok runs, their statistics are NaN"

@@ -201,3 +201,13 @@ def test_analysis_reports_exclusions_by_status():
     assert np.isnan(a["spearman"].sel(dataset="ds6")).all()
     assert (a["requirement_verdict"] == "insufficient data").all()
     assert "ds6 has 0 ok runs" in str(a["requirement_statement"].sel(feature="backlash_feature").item())
+
+
+def test_resampled_ranks_are_scipys_average_ranks():
+    """The bootstrap ranks each resample from cumulative counts; ties (repeated runs, discrete values) included."""
+    from campaigns.analysis import _resampled_ranks
+
+    rng = np.random.default_rng(5)
+    for v in (rng.normal(size=200), rng.integers(0, 4, 200).astype(float), np.full(200, 2.0)):
+        idx = rng.integers(0, 200, (30, 200))
+        np.testing.assert_array_equal(_resampled_ranks(v, idx), stats.rankdata(v[idx], axis=-1))

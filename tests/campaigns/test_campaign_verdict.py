@@ -116,7 +116,8 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     a = analysis_dataset(sweep_results(0.1e-6, ok_runs=1), n_boot=50)
     verdict, statement, ci, estimate = verdict_of(a)
     assert verdict == "insufficient data" and np.isnan(ci).all() and math.isnan(estimate)
-    assert statement.startswith("insufficient data: b0 has 1 ok run, ") and f"at least {MIN_OK_RUNS} per sweep data set" in statement
+    assert statement.startswith("insufficient data: each of the 7 sweep data sets has 1 ok run ")
+    assert f"at least {MIN_OK_RUNS} per sweep data set" in statement
     assert (a["data_sufficient"] == 0).all() and (a["n_used"] == 1).all() and a.attrs["min_ok_runs"] == MIN_OK_RUNS
     for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability", "sweep_detection_probability"):
         assert np.isnan(a[name]).all(), name
@@ -128,6 +129,17 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
     assert np.isnan(a["feature_mean"].sel(dataset="b2")).all() and np.isfinite(a["feature_mean"].sel(dataset="b1")).all()
     assert f"b2 has {MIN_OK_RUNS - 1} ok runs" in str(a["requirement_statement"].sel(feature="f").item())
+
+
+def test_every_feature_gets_its_own_verdict():
+    """A second feature (like backlash_hysteresis beside backlash_feature) with ten times the noise."""
+    results = sweep_results(0.1e-6)
+    results["g"] = results["condition_backlash"] + 10 * (results["f"] - results["condition_backlash"])
+    results["g"].attrs = {"role": "feature", "units": "m"}
+    a = analysis_dataset(results, n_boot=100)
+    assert list(a["requirement_verdict"].values) == ["met", "not met"]
+    assert a["requirement_statement"].sel(feature="g").item().startswith("not met: ")
+    assert a["first_order_index"].sizes == {"dataset": 7, "feature": 2, "parameter": 1}
 
 
 def test_a_spec_without_sweep_has_no_verdict():
@@ -147,4 +159,4 @@ def test_cli_prints_the_statement_and_the_insufficient_data_sets(tmp_path):
         statement = str(a["requirement_statement"].sel(feature="f").item())
         assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
     assert f"f: {statement}" in done.stdout.splitlines()
-    assert "warning: f: insufficient data in b0 (1 ok run), b1 (1 ok run)" in done.stderr
+    assert "warning: f: insufficient data in all 7 data sets (1 ok run each)" in done.stderr
