@@ -116,10 +116,15 @@ def prcc(X, y) -> np.ndarray:
     The PRCC of column ``j`` is the Pearson correlation of the residuals of
     ``rank(x_j)`` and ``rank(y)`` after linear regression (with intercept) on
     the ranks of the other columns (Marino et al. 2008, J. Theor. Biol. 254,
-    Sec. 2.4), computed here by that definition. Constant columns are left out
-    of the regressions and get NaN; so does a column whose residual is zero
-    (the other columns explain it, or ``y``, completely) and every column when
-    there are too few rows.
+    Sec. 2.4). All those regressions come from one QR factorisation of the
+    design ``A = [1, ranks]``: with ``H = (A^T A)^-1``, the residual of column
+    ``k`` on the others is ``A H e_k / H_kk``, and that of ``rank(y)`` on the
+    others is the full residual plus ``beta_k`` times it (one factorisation
+    instead of two least-squares fits per column, which a BLAS shared by busy
+    cores makes costly). Constant columns are left out of the regressions and
+    get NaN; so does a column whose residual is zero (the other columns explain
+    it, or ``y``, completely), and every column when there are too few rows or
+    the ranks of the columns are linearly dependent.
 
     Parameters
     ----------
@@ -133,13 +138,23 @@ def prcc(X, y) -> np.ndarray:
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
     out = np.full(X.shape[1], math.nan)
     varying = np.flatnonzero(np.ptp(X, axis=0) > 0)
-    if len(varying) == 0 or np.ptp(y) == 0 or len(y) < len(varying) + 3:
+    n = len(y)
+    if len(varying) == 0 or np.ptp(y) == 0 or n < len(varying) + 3:
         return out
-    R, ry = stats.rankdata(X[:, varying], axis=0), stats.rankdata(y)
+    ry = stats.rankdata(y)
+    Q, R = np.linalg.qr(np.column_stack([np.ones(n), stats.rankdata(X[:, varying], axis=0)]))
+    if np.abs(np.diag(R)).min() <= 1e-9 * np.abs(np.diag(R)).max():
+        return out
+    R_inv = np.linalg.solve(R, np.eye(R.shape[0]))
+    H_diag = (R_inv * R_inv).sum(axis=1)  # diagonal of H = R^-1 R^-T
+    residuals_x = (Q @ R_inv.T[:, 1:]) / H_diag[1:]  # A H e_k / H_kk, column k
+    coefficients = Q.T @ ry
+    beta = R_inv[1:] @ coefficients
+    residuals_y = (ry - Q @ coefficients)[:, None] + beta * residuals_x
+    explained = _EXPLAINED * n**3  # rank variance ~ n^3 / 12
     for k, j in enumerate(varying):
-        others = np.column_stack([np.ones(len(y)), np.delete(R, k, axis=1)])
-        rx, rr = (v - others @ np.linalg.lstsq(others, v, rcond=None)[0] for v in (R[:, k], ry))
-        if min(rx @ rx, rr @ rr) > _EXPLAINED * len(y) ** 3:  # rank variance ~ n^3 / 12
+        rx, rr = residuals_x[:, k], residuals_y[:, k]
+        if min(rx @ rx, rr @ rr) > explained:
             out[j] = _pearson(rx, rr)
     return out
 
