@@ -42,15 +42,19 @@ class Estimate:
         Wall time with ``workers`` busy workers; None when the run function gives no run time.
     disk_bytes : int
         Bytes the chunk files and results.nc will take.
+    workers : int
+        Workers the wall time assumes.
     """
 
     runs: int
     wall_seconds: float | None
     disk_bytes: int
+    workers: int = 1
 
     def describe(self) -> str:
-        """One line for the user, e.g. ``7000 runs, about 41 min on 2 workers, about 12 MB on disk``."""
-        wall = f"about {_duration(self.wall_seconds)}" if self.wall_seconds is not None else "wall time unknown"
+        """One line for the user, e.g. ``7000 run(s), about 70 min on 2 worker(s), about 13 MB on disk``."""
+        wall = (f"about {_duration(self.wall_seconds)} on {self.workers} worker(s)" if self.wall_seconds is not None
+                else "wall time unknown")
         return f"{self.runs} run(s), {wall}, about {_size(self.disk_bytes)} on disk"
 
 
@@ -64,7 +68,7 @@ def estimate(spec: CampaignSpec, run_function=None, *, workers: int = 2, runs: i
     trace_bytes = traced * len(spec.traces.variables) * samples * 8
     run_seconds = getattr(run_function, "typical_run_seconds", None)
     wall = run_seconds * runs / max(1, workers) if run_seconds is not None else None
-    return Estimate(runs, wall, COPIES * (per_run * total + trace_bytes))
+    return Estimate(runs, wall, COPIES * (per_run * total + trace_bytes), max(1, workers))
 
 
 def check_disk(out_dir: str | Path, cost: Estimate) -> None:

@@ -332,7 +332,7 @@ def load_chunk(path: Path, features=()) -> dict:
         Naming the file and what is wrong with it.
     """
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:  # our handle: closed even if np.load fails
             chunk = {k: z[k] for k in z.files}
     except (zipfile.BadZipFile, EOFError, ValueError, OSError, KeyError, zlib.error) as exc:
         raise CorruptChunk(f"corrupt chunk {path} ({type(exc).__name__}: {exc})") from exc
