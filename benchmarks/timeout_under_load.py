@@ -47,7 +47,11 @@ def main() -> None:
     tests = TESTS + ([RESUME_TEST] if args.with_resume else [])
     print(f"# {platform.machine()}, {os.cpu_count()} cores, load average before: {os.getloadavg()[0]:.2f}; "
           f"{args.load} CPU burner(s); {repeats} repeat(s) of {len(tests)} timeout tests")
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # clean up the burners when terminated
+    def stop(*_):
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not interrupt the clean-up
+        sys.exit(143)
+
+    signal.signal(signal.SIGTERM, stop)  # clean up the burners and the tests when terminated
     children = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(args.load)]
     passed = 0
     failures: dict[str, int] = {}

@@ -34,8 +34,9 @@ Optional attributes of a run function:
 :func:`execute` wraps a call to the run function and turns *every* outcome,
 including exceptions and invalid results, into a record; failures are data. A
 run that returns ``"ok"`` after its wall-clock budget is recorded as
-``"timeout"`` (its features discarded): with or without process isolation, a
-run over budget never enters the statistics.
+``"timeout"`` (its features discarded) when it overran its budget by more than
+:func:`kill_grace`, the point where a sandbox would have killed it: with or
+without process isolation, the same runs enter the statistics.
 """
 
 from __future__ import annotations
@@ -64,6 +65,18 @@ STATUS_MEANINGS = {
 }
 
 RunFunction = Callable[["RunRequest"], dict]
+
+#: Smallest time [s] a run may overrun its wall-clock budget before it counts as a timeout (and, in a
+#: sandbox, is killed).
+MIN_KILL_GRACE = 1.0
+#: The grace grows with the budget: on a loaded machine a run's wall time stretches in proportion,
+#: and a run that watches its own budget needs time to return its "timeout" record.
+KILL_GRACE_FRACTION = 0.1
+
+
+def kill_grace(budget: float) -> float:
+    """Seconds past ``budget`` after which a run is a timeout (killed, in a sandbox)."""
+    return max(MIN_KILL_GRACE, KILL_GRACE_FRACTION * budget)
 
 
 @dataclass(frozen=True)
@@ -182,9 +195,10 @@ def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
             status, reason = "failed", "; ".join(problems)
     if status not in STATUSES:
         status, reason = "error", f"run function returned unknown status {status!r}: {reason}"
-    if status == "ok" and wall_time > request.wall_time_limit:
-        reason = (f"ran {wall_time:.3g} s wall clock, over its {request.wall_time_limit:g} s budget (not interruptible "
-                  "in this process: it ran to the end; its features are discarded)")
+    limit = request.wall_time_limit + kill_grace(request.wall_time_limit)
+    if status == "ok" and wall_time > limit:
+        reason = (f"ran {wall_time:.3g} s wall clock, over its {request.wall_time_limit:g} s budget + {limit - request.wall_time_limit:.3g} s "
+                  "grace (not interruptible in this process: it ran to the end; its features are discarded)")
         return record(request, "timeout", reason, result.get("t_reached", math.nan), wall_time)
     return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"),
                   str(result.get("fidelity", "")))

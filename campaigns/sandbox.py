@@ -36,21 +36,12 @@ import threading
 import time
 from multiprocessing.connection import Connection
 
-from campaigns.runs import RunFunction, RunRequest, execute, record, warm_up
+from campaigns.runs import RunFunction, RunRequest, execute, kill_grace, record, warm_up
 
-#: Smallest time [s] a run may overrun its wall-clock budget before its process is killed.
-MIN_KILL_GRACE = 1.0
-#: The grace grows with the budget: on a loaded machine a run's wall time stretches in proportion,
-#: and a run that watches its own budget needs time to return its "timeout" record.
-KILL_GRACE_FRACTION = 0.1
 #: Seconds a fresh child may take to import and warm up what a request needs (not counted in the
 #: run's budget): a cold numba compilation of the bench loop on a loaded machine fits well within it.
 STARTUP_TIMEOUT = 600.0
 
-
-def kill_grace(budget: float) -> float:
-    """Seconds past ``budget`` after which a run's process is killed."""
-    return max(MIN_KILL_GRACE, KILL_GRACE_FRACTION * budget)
 
 _local = threading.local()
 

@@ -173,7 +173,7 @@ class Execution(_Strict):
 
     ``timeout`` is the wall-clock budget of one run in seconds; the run function
     receives it as ``wall_time_limit``; with ``isolation = "process"`` a run
-    still busy ``campaigns.sandbox.kill_grace(timeout)`` seconds later is killed
+    still busy ``campaigns.runs.kill_grace(timeout)`` seconds later is killed
     (see :mod:`campaigns.sandbox`); without isolation a run that returns over its
     budget is recorded as a timeout (see :mod:`campaigns.runs`). ``chunk_size`` fixes the number of runs per task;
     by default it adapts to the measured run time (see :mod:`campaigns.execution`).

@@ -9,9 +9,9 @@ import xarray as xr
 
 import campaigns
 from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
-from campaigns.runs import execute
+from campaigns.runs import execute, kill_grace
 from campaigns.sampling import sample
-from campaigns.sandbox import Sandbox, kill_grace
+from campaigns.sandbox import Sandbox
 from campaigns.testing import SyntheticModel
 from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 

@@ -23,9 +23,9 @@ import xarray as xr
 import campaigns
 from campaigns import budget, execution
 from campaigns.replay import replay_run
-from campaigns.runs import execute, run_function_name
+from campaigns.runs import execute, kill_grace, run_function_name
 from campaigns.sampling import sample
-from campaigns.sandbox import Sandbox, kill_grace
+from campaigns.sandbox import Sandbox
 from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError
 from campaigns.storage import CampaignError, OutputLock, atomic_write, load_chunk
 from campaigns.testing import SyntheticModel, synthetic_run
@@ -305,8 +305,8 @@ def test_start_up_is_not_charged_to_the_run(tmp_path):
 
 def test_a_run_over_budget_is_a_timeout_without_isolation_too(tmp_path):
     request = _request(tmp_path, 0.1)
-    record = execute(SyntheticModel(delay=0.3), request)  # sleeps at least 0.3 s: over its 0.1 s budget
-    assert record["status"] == "timeout" and "over its 0.1 s budget" in record["failure_reason"]
+    record = execute(SyntheticModel(delay=1.5), request)  # sleeps at least 1.5 s: over its 0.1 s budget + 1 s grace
+    assert record["status"] == "timeout" and "over its 0.1 s budget + 1 s grace" in record["failure_reason"]
     assert np.isnan(record["features"]["backlash_feature"])  # a timeout never enters the statistics
 
 
