@@ -43,12 +43,14 @@ from distributed.comm.core import CommClosedError
 from distributed.scheduler import KilledWorker
 from tqdm.auto import tqdm
 
+from campaigns.budget import check_disk, estimate
 from campaigns.catalog import SCENE_PREFIX, Catalog
-from campaigns.runs import RunFunction, RunRequest, execute, record
+from campaigns.provenance import provenance
+from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
 from campaigns.sampling import sample
 from campaigns.sandbox import run_isolated
 from campaigns.spec import CampaignSpec, load_spec
-from campaigns.storage import ChunkStore
+from campaigns.storage import ChunkStore, OutputLock
 
 #: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write. Measured
 #: 9 ms (1 worker) to 13 ms (2 workers sharing 2 cores with the driver) with one-run chunks of
@@ -92,20 +94,24 @@ def run_chunk(run_function: RunFunction, requests: list[RunRequest], isolation: 
     return [run(run_function, r) for r in requests]
 
 
-def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int) -> RunRequest:
+def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int, *,
+                  targets: list[str] | None = None) -> RunRequest:
     """The request of run ``run_index`` of data set ``dataset_index``.
 
     ``samples`` is the array of :func:`campaigns.sampling.sample`; sampled
     ``scene.*`` targets become scene conditions, the others parameter values.
+    ``targets`` names the sampled columns (default: the spec's resolved table;
+    :mod:`campaigns.replay` passes those stored in ``results.nc``).
     """
     dataset = spec.datasets[dataset_index]
     conditions = dict(dataset.conditions)
     parameter_values = {}
-    for dist, value in zip(spec.distributions(), samples[dataset_index, run_index]):
-        if dist.target.startswith(SCENE_PREFIX):
-            conditions[dist.target.removeprefix(SCENE_PREFIX)] = float(value)
+    targets = [d.target for d in spec.distributions()] if targets is None else targets
+    for target, value in zip(targets, samples[dataset_index, run_index]):
+        if target.startswith(SCENE_PREFIX):
+            conditions[target.removeprefix(SCENE_PREFIX)] = float(value)
         else:
-            parameter_values[dist.target] = float(value)
+            parameter_values[target] = float(value)
     traced = run_index < spec.traces.runs_per_dataset
     return RunRequest(
         dataset=dataset.name,
@@ -147,6 +153,7 @@ def run_campaign(
     progress: bool = True,
     run_function: RunFunction | None = None,
     catalog: Catalog | None = None,
+    allow_version_mix: bool = False,
 ) -> Path:
     """Run (or resume) a campaign and write ``results.nc``.
 
@@ -170,6 +177,9 @@ def run_campaign(
         default :func:`campaigns.bench.simulate_run`.
     catalog : Catalog, optional
         Used only when ``spec`` is a path (see :func:`campaigns.load_spec`).
+    allow_version_mix : bool, default False
+        On resume, accept finished chunks computed by other package versions or model code
+        (:mod:`campaigns.provenance`); ``results.nc`` then lists every provenance it mixes.
 
     Returns
     -------
@@ -182,30 +192,36 @@ def run_campaign(
     SpecError
         If ``spec`` is a path to an invalid spec.
     CampaignError
-        If ``out_dir`` holds results that may not be mixed with this campaign's.
+        If ``out_dir`` holds results that may not be mixed with this campaign's, is in use by
+        another driver, cannot be written, or lacks the disk space the campaign needs.
+        Everything is checked before the cluster starts.
     """
     if not isinstance(spec, CampaignSpec):
         spec = load_spec(spec, catalog=catalog)
     if run_function is None:
         from campaigns.bench import simulate_run as run_function
-    store = ChunkStore(out_dir, spec, resume=resume)
-    samples = sample(spec)
-    pending = deque(
-        (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
-    )
-    executed = len(pending)
-    start = time.perf_counter()
-    if pending:
-        with _client(workers, scheduler) as client, tqdm(
-            total=len(pending), disable=not progress, unit="run", desc=spec.name
-        ) as bar:
-            _execute(client, spec, samples, pending, run_function, store, bar)
-    results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                       "workers": scheduler or workers})
-    from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
+    check_disk(out_dir, estimate(spec, run_function, workers=workers))
+    with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
+        store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
+                           allow_version_mix=allow_version_mix)
+        samples = sample(spec)
+        pending = deque(
+            (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
+        )
+        executed = len(pending)
+        start = time.perf_counter()
+        if pending:
+            with _client(workers, scheduler) as client, tqdm(
+                total=len(pending), disable=not progress, unit="run", desc=spec.name
+            ) as bar:
+                _execute(client, spec, samples, pending, run_function, store, bar)
+        results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                                           "workers": scheduler or workers},
+                                 {"run_function": run_function_name(run_function)})
+        from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
 
-    audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
-                   run_function=run_function)
+        audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume,
+                       progress=progress, run_function=run_function, allow_version_mix=allow_version_mix)
     return results
 
 

@@ -97,7 +97,7 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
     with xr.open_dataset(full_path) as handle:
         full = handle.load()
     audit = compare_fidelity(auto, full, list(spec.features))
-    audit.to_netcdf(out_dir / "fidelity_audit.nc", engine="netcdf4")
+    atomic_write(out_dir / "fidelity_audit.nc", lambda tmp: audit.to_netcdf(tmp, engine="netcdf4"))
     _write_attrs(results_path, auto, summary_attrs(audit))
     return audit
 

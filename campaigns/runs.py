@@ -22,13 +22,28 @@ module-level class) so it can travel to dask workers. It should stop by itself
 once ``request.wall_time_limit`` seconds have passed (returning status
 ``"timeout"``); :mod:`campaigns.sandbox` kills it otherwise.
 
+Optional attributes of a run function:
+
+``warm_up(request)``
+    loads or compiles what the run needs (imports, numba's compiled loop); called
+    once per process and model configuration *before* the run's clock starts, so
+    start-up is never charged to a run's budget;
+``typical_run_seconds``, ``trace_samples``
+    used by :mod:`campaigns.budget` to estimate a campaign's cost.
+
 :func:`execute` wraps a call to the run function and turns *every* outcome,
-including exceptions and invalid results, into a record; failures are data.
+including exceptions and invalid results, into a record; failures are data. A
+run that returns ``"ok"`` after its wall-clock budget is recorded as
+``"timeout"`` (its features discarded) when it overran its budget by more than
+:func:`kill_grace`, the point where a sandbox would have killed it: with or
+without process isolation, the same runs enter the statistics.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import sys
 import time
 import traceback
 from dataclasses import dataclass
@@ -50,6 +65,18 @@ STATUS_MEANINGS = {
 }
 
 RunFunction = Callable[["RunRequest"], dict]
+
+#: Smallest time [s] a run may overrun its wall-clock budget before it counts as a timeout (and, in a
+#: sandbox, is killed).
+MIN_KILL_GRACE = 1.0
+#: The grace grows with the budget: on a loaded machine a run's wall time stretches in proportion,
+#: and a run that watches its own budget needs time to return its "timeout" record.
+KILL_GRACE_FRACTION = 0.1
+
+
+def kill_grace(budget: float) -> float:
+    """Seconds past ``budget`` after which a run is a timeout (killed, in a sandbox)."""
+    return max(MIN_KILL_GRACE, KILL_GRACE_FRACTION * budget)
 
 
 @dataclass(frozen=True)
@@ -119,8 +146,32 @@ def record(request: RunRequest, status: str, reason: str, t_reached: float, wall
     }
 
 
+_warmed: set[tuple] = set()
+
+
+def warm_up(run_function: RunFunction, request: RunRequest) -> None:
+    """Call ``run_function.warm_up(request)`` once per process and model configuration.
+
+    A failing warm-up is ignored here: the run itself then fails and is recorded with its reason.
+    """
+    hook = getattr(run_function, "warm_up", None)
+    key = (run_function_name(run_function), request.scene, request.parameters,
+           json.dumps(request.solver, sort_keys=True, default=str), request.outputs)
+    if hook is None or key in _warmed:
+        return
+    _warmed.add(key)
+    try:
+        hook(request)
+    except Exception:  # noqa: BLE001 - reported by the run that follows
+        pass
+
+
 def execute(run_function: RunFunction, request: RunRequest) -> dict:
-    """Call ``run_function`` on ``request`` and return its record; never raises."""
+    """Call ``run_function`` on ``request`` and return its record; never raises.
+
+    The run's warm-up (:func:`warm_up`) happens before its clock starts.
+    """
+    warm_up(run_function, request)
     start = time.perf_counter()
     try:
         result = run_function(request)
@@ -144,5 +195,28 @@ def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
             status, reason = "failed", "; ".join(problems)
     if status not in STATUSES:
         status, reason = "error", f"run function returned unknown status {status!r}: {reason}"
+    limit = request.wall_time_limit + kill_grace(request.wall_time_limit)
+    if status == "ok" and wall_time > limit:
+        reason = (f"ran {wall_time:.3g} s wall clock, over its {request.wall_time_limit:g} s budget + {limit - request.wall_time_limit:.3g} s "
+                  "grace (not interruptible in this process: it ran to the end; its features are discarded)")
+        return record(request, "timeout", reason, result.get("t_reached", math.nan), wall_time)
     return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"),
                   str(result.get("fidelity", "")))
+
+
+def run_function_name(run_function) -> str:
+    """``module:name`` of a run function defined at module level (found by identity or equality),
+    else its ``repr`` (what ``results.nc`` records and :mod:`campaigns.replay` resolves)."""
+    module_name = getattr(run_function, "__module__", None) or type(run_function).__module__
+    module = sys.modules.get(module_name)
+    for name, value in vars(module).items() if module else ():
+        if value is run_function or (type(value) is type(run_function) and _equal(value, run_function)):
+            return f"{module_name}:{name}"
+    return repr(run_function)
+
+
+def _equal(a, b) -> bool:
+    try:
+        return bool(a == b)
+    except Exception:  # noqa: BLE001 - objects without a usable equality are not the same run function
+        return False

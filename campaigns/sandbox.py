@@ -5,10 +5,17 @@ compiled (numba) loop does not return to the interpreter, so neither a signal
 handler nor a thread can interrupt it. The only reliable way to stop it is to
 kill the process running it. A :class:`Sandbox` is therefore a
 long-lived child Python process (one per worker thread) that executes requests
-one at a time; the parent waits at most ``wall_time_limit + KILL_GRACE``
+one at a time; the parent waits at most ``wall_time_limit + kill_grace(wall_time_limit)``
 seconds for each answer and otherwise kills the child, records a ``"timeout"``
 and starts a fresh child for the next run. A child that dies (segfault, out of
 memory) yields an ``"error"`` record instead of taking the dask worker down.
+
+What is charged to a run: only the run. A fresh child first unpickles the request
+(importing the run function's modules) and calls the run function's warm-up
+(:func:`campaigns.runs.warm_up`: e.g. loading numba's compiled loop) and only then
+reports ``"started"``; the budget counts from there. Start-up has its own, much
+larger limit (:data:`STARTUP_TIMEOUT`), so a killed run does not make the next run
+pay for a cold child.
 
 The child is a plain ``subprocess`` (dask worker processes are daemonic and may
 not use :mod:`multiprocessing` children). Requests and records travel over
@@ -29,12 +36,12 @@ import threading
 import time
 from multiprocessing.connection import Connection
 
-from campaigns.runs import RunFunction, RunRequest, execute, record
+from campaigns.runs import RunFunction, RunRequest, execute, kill_grace, record, warm_up
 
-#: Seconds a run may overrun its wall-clock budget before its process is killed.
-KILL_GRACE = 1.0
-#: Seconds a fresh child may take to import what a request needs (not counted in the run's budget).
-STARTUP_TIMEOUT = 300.0
+#: Seconds a fresh child may take to import and warm up what a request needs (not counted in the
+#: run's budget): a cold numba compilation of the bench loop on a loaded machine fits well within it.
+STARTUP_TIMEOUT = 600.0
+
 
 _local = threading.local()
 
@@ -85,8 +92,8 @@ class Sandbox:
             self.close()
             self._start()
         self._to_child.send((run_function, request))
-        # The clock starts once the child has unpickled the request (imports of a
-        # fresh child are not the run's time).
+        # The clock starts once the child has unpickled the request and warmed up
+        # (a fresh child's imports and compilation are not the run's time).
         if not self._from_child.poll(STARTUP_TIMEOUT):
             self._kill()
             return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"), float("nan"))
@@ -97,10 +104,11 @@ class Sandbox:
             return self._died(request, start)
         if message != "started":
             return record(request, "error", message, float("nan"), float("nan"))
-        if not self._from_child.poll(request.wall_time_limit + KILL_GRACE):
+        grace = kill_grace(request.wall_time_limit)
+        if not self._from_child.poll(request.wall_time_limit + grace):
             self._kill()
             elapsed = time.perf_counter() - start
-            reason = f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {KILL_GRACE:g} s grace)"
+            reason = f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {grace:.3g} s grace)"
             return record(request, "timeout", reason, float("nan"), elapsed)
         try:
             return self._from_child.recv()
@@ -142,5 +150,6 @@ def serve(read_fd: int, write_fd: int) -> None:
         except Exception as exc:  # e.g. the run function's module does not import here
             records.send(f"cannot load the request in the run process: {type(exc).__name__}: {exc}")
             continue
+        warm_up(run_function, request)
         records.send("started")
         records.send(execute(run_function, request))

@@ -3,56 +3,161 @@
 Layout of an output directory::
 
     OUT/
+      .lock                       held (flock) by the driver that owns OUT while it runs
       spec.json                   canonical spec + its hash (written first)
       chunks/<hash[:16]>/         one file per finished chunk
         d003-r000120-000159.npz   runs 120..159 of data set 3
+      corrupt/                    chunk files found damaged on resume (moved aside, their runs re-run)
       results.nc                  assembled when every run has a record
 
-Every file is written to a temporary name in the same directory and moved into
-place with :func:`os.replace`, so a killed driver leaves either a complete file
-or a stray ``*.tmp`` (removed on resume), never a truncated chunk. Only the
-driver writes (workers may not share a file system with it), and each chunk is
-its own file because concurrent writes to one netCDF/HDF5 file are unsafe.
+One driver owns a directory: :class:`OutputLock` takes an exclusive ``fcntl.flock`` on
+``OUT/.lock`` for the driver's lifetime (the OS releases it when the driver dies, even by
+SIGKILL), and a second driver is refused at once. Every file is written to a temporary name
+in the same directory and moved into place with :func:`os.replace`, so a killed driver
+leaves either a complete file or a stray ``.*.tmp``; a new owner removes those strays
+(they can only be a dead driver's, since a live one would hold the lock). Only the driver
+writes (workers may not share a file system with it), and each chunk is its own file
+because concurrent writes to one netCDF/HDF5 file are unsafe.
+
+Integrity: a chunk carries a SHA-256 of its arrays (``checksum``) on top of the zip
+CRC-32 of each array; both are verified whenever the chunk is read. On resume a chunk
+that fails (truncated, corrupt, incomplete) is named, moved to ``OUT/corrupt/`` and its
+runs run again. Each chunk records the provenance of the code that computed it
+(:mod:`campaigns.provenance`); a resume refuses to mix provenances unless told to.
 """
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import json
+import logging
 import math
 import os
-import platform
+import socket
 import tempfile
+import time
+import zipfile
+import zlib
 from datetime import datetime, timezone
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from campaigns import provenance as prov
 from campaigns.catalog import CONDITION_UNITS
+from campaigns.provenance import package_versions
 from campaigns.runs import STATUS_MEANINGS
 from campaigns.spec import HALF_RANGE_SIGMAS, CampaignSpec
 
 RESULTS_NAME = "results.nc"
-_VERSIONED = ("benchtwin", "numpy", "scipy", "xarray", "netCDF4", "dask", "distributed", "pydantic", "numba")
+LOCK_NAME = ".lock"
+CORRUPT_DIR = "corrupt"
+#: Arrays every chunk holds (besides ``feature/<name>`` per feature).
+CHUNK_KEYS = ("dataset_index", "run", "status", "failure_reason", "t_reached", "wall_time")
+
+_log = logging.getLogger("campaigns")
+
+__all__ = ["CampaignError", "ChunkStore", "OutputLock", "atomic_write", "build_results", "check_output",
+           "package_versions"]
 
 
 class CampaignError(RuntimeError):
     """The campaign cannot proceed (e.g. an output directory holding another spec's results)."""
 
 
+class CorruptChunk(CampaignError):
+    """A chunk file cannot be read back intact."""
+
+
 def atomic_write(path: Path, write) -> None:
-    """Call ``write(tmp_path)`` then move the file onto ``path`` atomically."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    """Call ``write(tmp_path)`` then move the file onto ``path`` atomically.
+
+    Raises
+    ------
+    CampaignError
+        If the file system refuses (read-only, full, missing directory), naming ``path``.
+    """
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:
+        raise CampaignError(f"cannot write {path}: {exc.strerror or exc}") from exc
     os.close(fd)
     try:
         write(Path(tmp))
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise CampaignError(f"cannot write {path}: {exc.strerror or exc}") from exc
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def check_output(out: str | Path, inputs=(), *, force: bool = False) -> Path:
+    """Refuse to write ``out`` over one of ``inputs``, or over an existing file unless ``force``.
+
+    Raises
+    ------
+    CampaignError
+        Naming the file and what to do.
+    """
+    out = Path(out)
+    for given in inputs:
+        if given is not None and Path(given).exists() and out.exists() and os.path.samefile(out, given):
+            raise CampaignError(f"{out}: refusing to write the output over its own input; choose another --out")
+    if out.exists() and not force:
+        raise CampaignError(f"{out} already exists; pass --force to replace it or choose another --out")
+    return out
+
+
+class OutputLock:
+    """Exclusive ownership of an output directory for as long as the lock is held.
+
+    ``fcntl.flock`` on ``OUT/.lock``; the file holds the owner's pid, host and start time
+    for the refusal message. The OS drops the lock when the owner exits or dies. (flock is
+    reliable on local file systems; on NFS use one driver per directory by hand.)
+    """
+
+    def __init__(self, out_dir: str | Path):
+        self.root = Path(out_dir)
+        self.path = self.root / LOCK_NAME
+        self._fd: int | None = None
+
+    def acquire(self) -> "OutputLock":
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise CampaignError(f"cannot use output directory {self.root}: {exc.strerror or exc}") from exc
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 4096, 0).decode(errors="replace").strip() or "unknown process"
+            os.close(fd)
+            raise CampaignError(f"{self.root} is in use by another campaign driver ({holder}); "
+                                "wait for it to finish, or choose another output directory") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()} on {socket.gethostname()}, since "
+                      f"{datetime.now(timezone.utc).isoformat(timespec='seconds')}\n".encode(), 0)
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        if self._fd is not None:
+            fcntl.flock(self._fd, fcntl.LOCK_UN)
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> "OutputLock":
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
 
 
 class ChunkStore:
@@ -74,17 +179,17 @@ class ChunkStore:
         ``(dataset_index, run_index)`` of every run already recorded.
     """
 
-    def __init__(self, out_dir: str | Path, spec: CampaignSpec, *, resume: bool = False):
+    def __init__(self, out_dir: str | Path, spec: CampaignSpec, *, resume: bool = False,
+                 provenance: dict[str, str] | None = None, allow_version_mix: bool = False):
         self.root = Path(out_dir)
         self.spec = spec
         self.hash = spec.spec_hash()
+        self.provenance = provenance or {}
+        self.quarantined: list[Path] = []
         manifest = self.root / "spec.json"
-        if manifest.exists():
-            if not resume:
-                raise CampaignError(
-                    f"{self.root} already holds campaign results; pass resume=True (--resume) to continue them or choose another output directory"
-                )
-            stored = json.loads(manifest.read_text())
+        self._refuse_foreign_results(manifest, resume)
+        if manifest.exists() and self._holds_results():
+            stored = _read_manifest(manifest)
             if stored["hash"] != self.hash:
                 differ = _differences(stored["canonical"], spec.canonical())
                 raise CampaignError(
@@ -92,13 +197,66 @@ class ChunkStore:
                     f"differences in: {', '.join(differ)}); refusing to mix them. Use another output directory."
                 )
         self.chunk_dir = self.root / "chunks" / self.hash[:16]
-        self.chunk_dir.mkdir(parents=True, exist_ok=True)
-        if not manifest.exists():
+        try:
+            self.chunk_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise CampaignError(f"cannot create {self.chunk_dir}: {exc.strerror or exc}") from exc
+        if not manifest.exists() or not self._holds_results():
             text = json.dumps({"hash": self.hash, "canonical": spec.canonical()}, indent=1, sort_keys=True)
             atomic_write(manifest, lambda p: p.write_text(text))
-        for stray in self.chunk_dir.glob(".*.tmp"):
-            stray.unlink()
-        self.done = {(int(z["dataset_index"]), int(r)) for z in map(_load, self.chunk_files()) for r in z["run"]}
+        for directory in (self.root, self.chunk_dir):  # a dead owner's temporaries (see the module docstring)
+            for stray in directory.glob(".*.tmp"):
+                stray.unlink()
+        chunks = self._intact_chunks()
+        self._check_provenance(chunks, allow_version_mix)
+        self.done = {(int(z["dataset_index"]), int(r)) for z in chunks for r in z["run"]}
+
+    def _holds_results(self) -> bool:
+        """Whether the directory holds any campaign output (results.nc or a chunk file)."""
+        return (self.root / RESULTS_NAME).exists() or any((self.root / "chunks").glob("*/*.npz"))
+
+    def _refuse_foreign_results(self, manifest: Path, resume: bool) -> None:
+        if not self._holds_results():
+            return  # empty, or a spec.json left by a driver killed before its first chunk: nothing to lose
+        if not manifest.exists():
+            raise CampaignError(
+                f"{self.root} holds campaign results ({RESULTS_NAME} or chunks/) but no spec.json, so nothing tells "
+                "which spec made them; refusing to touch them. Choose another output directory."
+            )
+        if not resume:
+            raise CampaignError(
+                f"{self.root} already holds campaign results; pass resume=True (--resume) to continue them or choose another output directory"
+            )
+
+    def _intact_chunks(self) -> list[dict]:
+        """Load every chunk; move the damaged ones to ``OUT/corrupt/`` (their runs will run again)."""
+        chunks = []
+        for path in self.chunk_files():
+            try:
+                chunks.append(load_chunk(path, self.spec.features))
+            except CorruptChunk as exc:
+                target = self.root / CORRUPT_DIR / self.hash[:16] / f"{path.name}.{time.strftime('%Y%m%dT%H%M%S')}"
+                target.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(path, target)
+                self.quarantined.append(target)
+                _log.warning("%s; moved to %s, its runs will run again", exc, target)
+        return chunks
+
+    def _check_provenance(self, chunks: list[dict], allow_version_mix: bool) -> None:
+        stored = {str(c.get("provenance", "")) for c in chunks}
+        mine = prov.as_text(self.provenance)
+        foreign = sorted(stored - {mine})
+        if not foreign or allow_version_mix:
+            return
+        why = []
+        for text in foreign:
+            old = json.loads(text) if text else {}
+            why += prov.differences(old, self.provenance) if old else ["chunks written without a recorded provenance"]
+        raise CampaignError(
+            f"{self.root}: the finished chunks were computed by another version ({'; '.join(sorted(set(why)))}); "
+            "resuming would mix numbers of two versions in one results.nc. Re-run into a new directory, or pass "
+            "allow_version_mix=True (--allow-version-mix) to accept the mix (results.nc then lists every version)."
+        )
 
     def chunk_files(self) -> list[Path]:
         """Finished chunk files, sorted by name."""
@@ -116,6 +274,7 @@ class ChunkStore:
             "t_reached": np.array([r["t_reached"] for r in records]),
             "wall_time": np.array([r["wall_time"] for r in records]),
             "fidelity": np.array([r.get("fidelity", "") for r in records], dtype=str),
+            "provenance": np.array(prov.as_text(self.provenance)),
         }
         for f in self.spec.features:
             arrays[f"feature/{f}"] = np.array([r["features"][f] for r in records])
@@ -127,6 +286,7 @@ class ChunkStore:
             for v in self.spec.traces.variables:
                 arrays[f"trace/{v}"] = np.stack([_padded(r["trace"], v, len(time)) for r in traced])
                 arrays[f"trace_units/{v}"] = np.array(_units(traced[0]["trace"], v))
+        arrays["checksum"] = np.array(_checksum(arrays))
         path = self.chunk_dir / f"d{d:03d}-r{runs.min():06d}-{runs.max():06d}.npz"
 
         def write(tmp: Path) -> None:
@@ -137,23 +297,65 @@ class ChunkStore:
         self.done.update((d, int(r)) for r in runs)
         return path
 
-    def assemble(self, samples: np.ndarray, execution: dict | None = None) -> Path:
+    def assemble(self, samples: np.ndarray, execution: dict | None = None, attrs: dict | None = None) -> Path:
         """Write ``results.nc`` from the chunk files and the samples; return its path.
 
         ``execution`` (runs executed by this invocation, its wall time [s], the workers or scheduler)
         is recorded in the attributes as ``execution_*``: a resumed campaign reports its last leg.
+        ``attrs`` are further global attributes (e.g. the run function).
         """
-        ds = build_results(self.spec, samples, [_load(p) for p in self.chunk_files()])
+        ds = build_results(self.spec, samples, [load_chunk(p, self.spec.features) for p in self.chunk_files()])
         for key, value in (execution or {}).items():
             ds.attrs[key if key.startswith("execution") else f"execution_{key}"] = value
+        ds.attrs.update(attrs or {})
         path = self.root / RESULTS_NAME
         atomic_write(path, lambda p: ds.to_netcdf(p, engine="netcdf4"))
         return path
 
 
-def _load(path: Path) -> dict:
-    with np.load(path) as z:
-        return {k: z[k] for k in z.files}
+def _checksum(arrays: dict) -> str:
+    """SHA-256 over every array of a chunk (name, dtype, shape, bytes), ``checksum`` itself excluded."""
+    digest = hashlib.sha256()
+    for key in sorted(k for k in arrays if k != "checksum"):
+        value = np.ascontiguousarray(arrays[key])
+        digest.update(f"{key}\0{value.dtype.str}\0{value.shape}\0".encode())
+        digest.update(value.tobytes())
+    return digest.hexdigest()
+
+
+def load_chunk(path: Path, features=()) -> dict:
+    """Read a chunk file and verify it (zip CRC-32, checksum, required arrays, consistent lengths).
+
+    Raises
+    ------
+    CorruptChunk
+        Naming the file and what is wrong with it.
+    """
+    try:
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:  # our handle: closed even if np.load fails
+            chunk = {k: z[k] for k in z.files}
+    except (zipfile.BadZipFile, EOFError, ValueError, OSError, KeyError, zlib.error) as exc:
+        raise CorruptChunk(f"corrupt chunk {path} ({type(exc).__name__}: {exc})") from exc
+    missing = [k for k in (*CHUNK_KEYS, *(f"feature/{f}" for f in features)) if k not in chunk]
+    if missing:
+        raise CorruptChunk(f"corrupt chunk {path} (missing {', '.join(missing)})")
+    n = len(chunk["run"])
+    uneven = [k for k in chunk if k in CHUNK_KEYS[2:] or k.startswith("feature/") if len(chunk[k]) != n]
+    if uneven:
+        raise CorruptChunk(f"corrupt chunk {path} ({', '.join(uneven)} not of {n} runs)")
+    if "checksum" in chunk and str(chunk["checksum"]) != _checksum(chunk):
+        raise CorruptChunk(f"corrupt chunk {path} (checksum mismatch)")
+    return chunk
+
+
+def _read_manifest(path: Path) -> dict:
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        stored["hash"], stored["canonical"]  # noqa: B018 - both must exist
+        return stored
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CampaignError(f"{path} is unreadable ({type(exc).__name__}: {exc}); cannot tell which spec made the "
+                            "results beside it. Choose another output directory.") from exc
 
 
 def _padded(trace: xr.Dataset, variable: str, length: int) -> np.ndarray:
@@ -174,15 +376,21 @@ def _differences(a: dict, b: dict) -> list[str]:
     return keys or ["resolved distributions (nominal values of the parameter set)"]
 
 
-def package_versions() -> dict[str, str]:
-    """Versions of the packages that determine the results."""
-    versions = {"python": platform.python_version()}
-    for name in _VERSIONED:
-        try:
-            versions[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            versions[name] = "not installed"
-    return versions
+def _provenance_attrs(chunks: list[dict]) -> dict[str, str]:
+    """``benchtwin_version``, ``model_code_hash``, ``provenance`` (every distinct one) and ``version_mix``."""
+    texts = sorted({str(c.get("provenance", "")) for c in chunks})
+    records = [json.loads(t) if t else {} for t in texts]
+    first = records[0] if records else {}
+    mixed = len(records) > 1
+    return {
+        "benchtwin_version": first.get("benchtwin", "unknown") if not mixed else "mixed: " + ", ".join(
+            sorted({r.get("benchtwin", "unknown") for r in records})),
+        "model_code_hash": first.get("model_code", "unknown") if not mixed else "mixed",
+        "model_code_packages": first.get("model_packages", ""),
+        "provenance": json.dumps(records, sort_keys=True),
+        "version_mix": ("MIXED (allowed by --allow-version-mix): " + " | ".join(
+            "; ".join(prov.differences(records[0], r)) for r in records[1:])) if mixed else "none",
+    }
 
 
 def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -> xr.Dataset:
@@ -265,6 +473,7 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "seeding": "run i of data set d: SeedSequence(root_seed, spawn_key=(d, i)).spawn(2) -> [parameters, sensor noise]",
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
+        **_provenance_attrs(chunks),
         "date_created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "fidelity_requested": json.dumps(spec.solver.fidelity),
         **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity) if used},

@@ -123,9 +123,13 @@ def cmd_accuracy(args) -> int:
 def cmd_campaign_run(args) -> int:
     import campaigns
 
-    spec = campaigns.load_spec(args.spec, runs=args.runs)
+    from campaigns.budget import estimate
+
+    spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
     out = args.out or Path("out") / spec.name
-    results = campaigns.run_campaign(spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume)
+    print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
+    results = campaigns.run_campaign(spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume,
+                                     allow_version_mix=args.allow_version_mix)
     print(f"wrote {results}")
     if args.analyze:
         print(f"wrote {campaigns.analyze(results)}")
@@ -137,13 +141,21 @@ def cmd_campaign_run(args) -> int:
     return 0
 
 
+def _bench_run():
+    from campaigns.bench import simulate_run
+
+    return simulate_run
+
+
 def cmd_campaign_analyze(args) -> int:
     import xarray as xr
 
     import campaigns
     from campaigns.analysis import summary
+    from campaigns.storage import check_output
 
-    path = campaigns.analyze(args.results, args.out)
+    out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force)
+    path = campaigns.analyze(args.results, out)
     print(f"wrote {path}")
     with xr.open_dataset(path, engine="netcdf4") as analysis:
         statements, warnings = summary(analysis)
@@ -152,6 +164,23 @@ def cmd_campaign_analyze(args) -> int:
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
     return 0
+
+
+def cmd_campaign_replay(args) -> int:
+    from campaigns.replay import replay_run
+
+    run = replay_run(args.results, args.dataset, args.run, out=args.out, force=args.force)
+    print(f"replayed run {args.run} of data set {args.dataset}: status {run.attrs['status']} "
+          f"(stored: {run.attrs['stored_status']}), {run.sizes.get('time', 0)} time samples")
+    identical = True
+    for feature in [v for v in run.data_vars if f"identical_{v}" in run.attrs]:
+        same = run.attrs[f"identical_{feature}"] == "yes"
+        identical &= same
+        print(f"  {feature}: replayed {float(run[feature]):.17g}, stored {run.attrs[f'stored_{feature}']:.17g} "
+              f"[{run[feature].attrs.get('units', '')}] -> {'bit-identical' if same else 'DIFFERENT'}")
+    if args.out:
+        print(f"wrote {args.out}")
+    return 0 if identical else 1
 
 
 def cmd_fidelity_levels(args) -> int:
@@ -178,7 +207,10 @@ def cmd_fidelity_audit(args) -> int:
 
 def cmd_report(args) -> int:
     from reports import build_report
+    from campaigns.storage import check_output
 
+    for name in ("report.html", "report.pdf"):
+        check_output(args.out / name, [args.results, args.analysis, args.accuracy], force=args.force)
     for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy).items():
         print(f"wrote {kind} report: {path}")
     return 0
@@ -230,13 +262,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
     p.add_argument("--scheduler", help="address of an existing dask scheduler (instead of a local cluster)")
     p.add_argument("--resume", action="store_true", help="skip finished chunks of an interrupted run")
+    p.add_argument("--timeout", type=float, help="wall-clock budget of one run [s] (overrides execution.timeout)")
+    p.add_argument("--allow-version-mix", action="store_true",
+                   help="on --resume, accept chunks computed by another BenchTwin/numpy/numba/scipy version or model code")
     p.add_argument("--analyze", action="store_true", help="also write analysis.nc")
     p.add_argument("--report", action="store_true", help="also write report.html and report.pdf")
     p.set_defaults(func=cmd_campaign_run)
     p = campaign_sub.add_parser("analyze", help="correlations, separation and observability of a results.nc")
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
+    p.add_argument("--force", action="store_true", help="replace an existing analysis file")
     p.set_defaults(func=cmd_campaign_analyze)
+    p = campaign_sub.add_parser("replay", help="re-run one run of a campaign alone, with its full time series")
+    p.add_argument("results", type=Path, help="results.nc of a campaign")
+    p.add_argument("--dataset", required=True, help="data-set name, e.g. ds6")
+    p.add_argument("--run", type=int, required=True, help="run index within the data set (zero-based)")
+    p.add_argument("--out", type=Path, help="write the replayed run (netCDF)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.set_defaults(func=cmd_campaign_replay)
 
     fidelity = sub.add_parser("fidelity", help="fidelity levels and the audit of the automatic choice")
     fidelity_sub = fidelity.add_subparsers(dest="fidelity_command", required=True)
@@ -256,6 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, else computed in memory)")
     p.add_argument("--accuracy", type=Path, help="work_precision.nc of `twin accuracy` (speed-and-accuracy section)")
     p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
+    p.add_argument("--force", action="store_true", help="replace an existing report in --out")
     p.set_defaults(func=cmd_report)
     return parser
 

@@ -46,6 +46,16 @@ def test_two_real_bench_runs(tmp_path):
     analysis = campaigns.analyze(results)
     with xr.open_dataset(analysis) as a:
         assert list(a["sweep_point"].values) == ["ds4", "ds2"]
+    # the sandboxed campaign run, replayed alone in this process, gives the same bits and its full series
+    from campaigns.replay import replay_run
+
+    replayed = replay_run(results, "ds2", 0)
+    with xr.open_dataset(results) as ds:
+        for feature in ("backlash_feature", "backlash_feature_true"):
+            assert replayed[feature].values.tobytes() == ds[feature].sel(dataset="ds2", run=0).values.tobytes()
+        assert replayed.sizes["time"] == 10_001  # 10 s at 1 ms, undecimated (the campaign kept every 10th)
+        np.testing.assert_array_equal(replayed["nut1_position"].values[::10],
+                                      ds["trace_nut1_position"].sel(dataset="ds2", trace_run=0).values)
 
 
 def test_campaign_records_fidelity_and_its_audit(tmp_path):
