@@ -32,11 +32,14 @@ after that is recorded with status ``"lost"``.
 from __future__ import annotations
 
 import contextlib
+import json
+import logging
 import math
 import statistics
 import time
 from collections import deque
 from pathlib import Path
+from typing import Callable
 
 from distributed import Client, LocalCluster, as_completed
 from distributed.comm.core import CommClosedError
@@ -131,8 +134,9 @@ def _client(workers: int, scheduler: str | None):
         with Client(scheduler) as client:
             yield client
         return
+    # silence_logs: the nanny's shutdown warnings (a worker killed after its grace period) are not the user's business
     with LocalCluster(
-        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
     ) as cluster, Client(cluster) as client:
         yield client
 
@@ -147,6 +151,7 @@ def run_campaign(
     progress: bool = True,
     run_function: RunFunction | None = None,
     catalog: Catalog | None = None,
+    announce: Callable[[str, str], None] | None = None,
 ) -> Path:
     """Run (or resume) a campaign and write ``results.nc``.
 
@@ -170,6 +175,9 @@ def run_campaign(
         default :func:`campaigns.bench.simulate_run`.
     catalog : Catalog, optional
         Used only when ``spec`` is a path (see :func:`campaigns.load_spec`).
+    announce : callable, optional
+        ``announce(stage, message)`` is called as each stage starts (compile, cluster start,
+        runs, fidelity audit), with its expected duration in the message; default silent.
 
     Returns
     -------
@@ -186,8 +194,10 @@ def run_campaign(
     """
     if not isinstance(spec, CampaignSpec):
         spec = load_spec(spec, catalog=catalog)
-    if run_function is None:
-        from campaigns.bench import simulate_run as run_function
+    announce = announce or (lambda stage, message: None)
+    bench = run_function is None
+    if bench:
+        from campaigns.bench import dataset_conditions, simulate_run as run_function, warm_up
     store = ChunkStore(out_dir, spec, resume=resume)
     samples = sample(spec)
     pending = deque(
@@ -195,17 +205,32 @@ def run_campaign(
     )
     executed = len(pending)
     start = time.perf_counter()
+    per_run = None
+    if pending and bench:  # once here, before the workers start, so they load the compiled code instead of compiling it
+        announce("compile", f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
+        per_run = warm_up(spec)
     if pending:
+        slots = 1 if scheduler else workers
+        announce("cluster start", f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} (about 10-20 s)")
         with _client(workers, scheduler) as client, tqdm(
             total=len(pending), disable=not progress, unit="run", desc=spec.name
         ) as bar:
+            expected = f"about {len(pending) * per_run / slots / 60:.1f} min" if per_run else "the bar shows the estimate"
+            announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
             _execute(client, spec, samples, pending, run_function, store, bar)
-    results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                       "workers": scheduler or workers})
+    extra = {"execution_workers": scheduler or workers}
+    if bench:
+        conditions, base = dataset_conditions(spec)
+        extra.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
+    results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start}, extra)
     from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
 
+    if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
+        runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
+        announce("fidelity audit", f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
+                 + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)" if per_run else ""))
     audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
-                   run_function=run_function)
+                   run_function=None if bench else run_function, announce=announce)
     return results
 
 

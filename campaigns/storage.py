@@ -137,15 +137,17 @@ class ChunkStore:
         self.done.update((d, int(r)) for r in runs)
         return path
 
-    def assemble(self, samples: np.ndarray, execution: dict | None = None) -> Path:
+    def assemble(self, samples: np.ndarray, execution: dict | None = None, attrs: dict | None = None) -> Path:
         """Write ``results.nc`` from the chunk files and the samples; return its path.
 
         ``execution`` (runs executed by this invocation, its wall time [s], the workers or scheduler)
         is recorded in the attributes as ``execution_*``: a resumed campaign reports its last leg.
+        ``attrs`` are further attributes as they are (e.g. the driver's ``dataset_conditions``).
         """
         ds = build_results(self.spec, samples, [_load(p) for p in self.chunk_files()])
         for key, value in (execution or {}).items():
             ds.attrs[key if key.startswith("execution") else f"execution_{key}"] = value
+        ds.attrs.update(attrs or {})
         path = self.root / RESULTS_NAME
         atomic_write(path, lambda p: ds.to_netcdf(p, engine="netcdf4"))
         return path
