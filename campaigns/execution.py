@@ -212,12 +212,11 @@ def run_campaign(
     if pending:
         slots = 1 if scheduler else workers
         announce("cluster start", f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} (about 10-20 s)")
-        with _client(workers, scheduler) as client, tqdm(
-            total=len(pending), disable=not progress, unit="run", desc=spec.name
-        ) as bar:
-            expected = f"about {len(pending) * per_run / slots / 60:.1f} min" if per_run else "the bar shows the estimate"
+        with _client(workers, scheduler) as client:
+            expected = f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run else "see the bar"
             announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
-            _execute(client, spec, samples, pending, run_function, store, bar)
+            with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
+                _execute(client, spec, samples, pending, run_function, store, bar)
     extra = {"execution_workers": scheduler or workers}
     if bench:
         conditions, base = dataset_conditions(spec)

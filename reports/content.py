@@ -295,15 +295,16 @@ def _executive(b: _Builder):
     for name in b.datasets:
         s = results["status"].sel(dataset=name).values
         reasons = [r for r in (b.insufficient(name, f) for f in b.measured) if r]
-        rows.append((name, b.conditions.label(name) or "–", f"{int((s == 'ok').sum())} of {s.size}", reasons[0] if reasons else "–"))
+        used = min(b.n_used(name, f) for f in b.measured)
+        rows.append((name, b.conditions.label(name) or "–", f"{used} of {s.size}", reasons[0] if reasons else "–"))
         muted.append(bool(reasons))
     common = b.conditions.common_text()
     yield b.table(
         "Data sets: the conditions that differ between them or from the base scene "
         f"'{spec['base']['scene']}'" + (f" (all share {common})" if common else "")
         + ("" if b.conditions.from_scene else "; read from the spec's overrides (results.nc stores no effective scene conditions)")
-        + f", and the ok runs the statistics use (at least {b.min_ok_runs} needed, {b.min_ok_source}).",
-        ("Data set", "Conditions", "Ok runs", "Data"), rows, muted,
+        + f", and the runs the statistics use (status ok, finite feature; at least {b.min_ok_runs} needed, {b.min_ok_source}).",
+        ("Data set", "Conditions", "Runs used", "Data"), rows, muted,
     )
     for feature in b.measured:
         yield Callout(_influences(b, feature), "info", "correlations")
@@ -478,7 +479,7 @@ def _correlations(b: _Builder):
             yield b.figure(
                 f"tornado-{feature}-{name}",
                 f"Correlation of {feature} with the sampled parameters, data set {b.describe(name)}, {n} runs; the "
-                f"{shown} strongest by |ρ| of the {np.isfinite(rho).sum()} with a correlation ({b.parameter_counts()})."
+                f"{shown} strongest by |ρ| of the {np.isfinite(rho).sum()} with a correlation ({b.parameter_counts(names=False)})."
                 + (f" Greyed: {reason} (minimum from {b.min_ok_source}); with so few runs a correlation of ±1 arises by chance, so none of these bars is "
                    "a finding." if reason else
                    " The top bars are the tolerances that drive the spread of the feature; look for bars clear of the grey band.")
@@ -819,7 +820,8 @@ _AUDIT_LINE = re.compile(r"(?P<feature>\w+): mean shift (?P<shift>[-+0-9.e]+) um
 
 
 def _microns(text: str) -> str:
-    return quantity(float(text) * 1e-6, "m", 2) if text not in ("nan", "") else "–"
+    """An audit figure as stored (µm, four decimals), in one unit down the column."""
+    return f"{text} µm" if text not in ("nan", "") else "–"
 
 
 def _fidelity(b: _Builder):

@@ -185,7 +185,8 @@ def distributions(panels: list[Panel]) -> bytes:
             ax.set_ylim(bottom=0.0)
             if stacked:
                 ax.set_yticks([])
-                ax.set_ylabel(groups[0].label, rotation=0, ha="right", va="center")
+                used = int(np.isfinite(groups[0].values).sum())
+                ax.set_ylabel(f"{groups[0].label}\nn = {used}", rotation=0, ha="right", va="center")
                 if row < rows - 1:
                     ax.tick_params(labelbottom=False)
             else:
@@ -195,7 +196,8 @@ def distributions(panels: list[Panel]) -> bytes:
             _tidy_x(ax)
         grid[0, column].set_title(panel.title)
         grid[-1, column].set_xlabel(panel.xlabel)
-    _legend_outside(fig, fig.axes, ncols=4 if not stacked else 7)
+    if not stacked:  # the rows of small multiples name their data set and n themselves
+        _legend_outside(fig, fig.axes, ncols=3)
     return _png(fig)
 
 
@@ -223,7 +225,7 @@ def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band:
     n = len(labels)
     wrapped = [wrap(label) for label in labels]
     lines = sum(label.count("\n") + 1 for label in wrapped)
-    fig = _new(1, 1, 1.2 + 0.16 * max(lines, 4) + 0.08 * n)
+    fig = _new(1, 1, 0.95 + 0.13 * max(lines, 4) + 0.06 * n)
     ax = fig.axes[0]
     y = np.arange(n)[::-1]
     estimate, lower, upper = (np.asarray(v, dtype=float) for v in (estimate, lower, upper))
@@ -292,7 +294,7 @@ def scatter(panels: list[Panel]) -> bytes:
             x, xlabel = _scaled(np.asarray(item.x, dtype=float), panel.xlabel)
             ax.plot(x, item.y, "o", ms=3.0, alpha=0.6, color=item.color, mec="none", label=item.label)
         ax.set_xlabel(wrap(xlabel, 44))
-        ax.set_ylabel(panel.ylabel)
+        ax.set_ylabel(wrap(panel.ylabel, 24))
         _tidy_x(ax)
     for ax in fig.axes[len(panels):]:
         ax.set_visible(False)
@@ -309,7 +311,7 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
     ``sharey`` gives every panel the same value axis (small multiples of one quantity).
     """
     compact = sharey and len(panels) > 3
-    fig = _new(len(panels), 1, (0.6 + 1.05 * len(panels)) if compact else (0.5 + 1.75 * len(panels)))
+    fig = _new(len(panels), 1, (0.6 + 1.05 * len(panels)) if compact else (0.45 + 1.25 * len(panels)))
     for ax in fig.axes[1:]:
         ax.sharex(fig.axes[0])
         if sharey:
@@ -318,10 +320,13 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
         for line in panel.items:
             ax.plot(line.x, line.y, line.style, color=line.color, lw=1.0, label=line.label)
         ax.set_title(panel.title, fontsize=8.5 if compact else None)
-        ax.set_ylabel(wrap(panel.ylabel, 22))
+        if not sharey:
+            ax.set_ylabel(wrap(panel.ylabel, 22))
         ax.yaxis.set_major_locator(MaxNLocator(4 if compact else 5))
         if len(panel.items) > 1:
             ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=7.5)
+    if sharey:  # one label for the shared value axis, along the whole column
+        fig.supylabel(panels[0].ylabel, fontsize=9.0)
     for ax in fig.axes[:-1]:
         ax.tick_params(labelbottom=False)
     fig.axes[-1].set_xlabel(panels[-1].xlabel)
