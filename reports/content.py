@@ -619,7 +619,10 @@ def _traces(b: _Builder):
             unit = b.results[f"trace_{variables[0]}"].attrs.get("units", "")
             factor, shown = display_scale(unit, np.concatenate([b.results[f"trace_{v}"].values.ravel() for v in variables]))
             lines = tuple(_trace_line(b, v, name, run, ("-", "--", ":", "-.")[k % 4], f"C{k}", factor) for k, v in enumerate(variables))
-            panels.append(Panel(title, "time [s]", axis_label(quantity_name, shown), lines))
+            complete = len(variables) == len(next((v for t, _, v in TRACE_PANELS if t == title), variables))
+            # a panel's title names only what it draws: a partial group is titled by its signals
+            panels.append(Panel(title if complete else ", ".join(line.label for line in lines).capitalize(), "time [s]",
+                                axis_label(quantity_name, shown), lines))
             if derived and title.startswith("Position"):
                 panels.append(_nut_minus_screw_panel(b, [(name, run)]))
         status = b.results["status"].sel(dataset=name, run=run).item()

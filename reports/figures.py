@@ -306,8 +306,8 @@ def scatter(panels: list[Panel]) -> bytes:
 def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
     """Stacked time-series panels sharing the time axis; ``items`` are :class:`Line` s.
 
-    A panel with more than one line has its legend to the right of the axes, never over
-    the data; callers keep at most :data:`MAX_TRACES` lines per panel (small multiples otherwise).
+    Each panel has its legend to the right of the axes, never over the data (small
+    multiples name their line in the title instead); callers keep at most :data:`MAX_TRACES` lines per panel (small multiples otherwise).
     ``sharey`` gives every panel the same value axis (small multiples of one quantity).
     """
     compact = sharey and len(panels) > 3
@@ -323,7 +323,7 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
         if not sharey:
             ax.set_ylabel(wrap(panel.ylabel, 22))
         ax.yaxis.set_major_locator(MaxNLocator(4 if compact else 5))
-        if len(panel.items) > 1:
+        if not compact:  # every signal named in the figure, beside its axes
             ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=7.5)
     if sharey:  # one label for the shared value axis, along the whole column
         fig.supylabel(panels[0].ylabel, fontsize=9.0)
