@@ -471,7 +471,10 @@ def _correlations(b: _Builder):
             n = int(sel["n_used"])
             constant = [parameters[j] for j in np.flatnonzero(~np.isfinite(rho))]
             if len(order) == 0:
-                yield Callout(f"{feature}, data set {name}: no correlation could be computed ({n} runs used).")
+                reason = b.insufficient(name, feature)
+                yield Callout(f"{feature}, data set {b.describe(name)}: " + (f"{reason} (minimum from {b.min_ok_source}); the "
+                              "analysis computed no statistics." if reason else f"no correlation could be computed ({n} runs used)."),
+                              "muted" if reason else "info")
                 continue
             ci = sel["spearman_ci"]
             shown = len(order)

@@ -157,8 +157,13 @@ def test_seven_data_sets_become_small_multiples(demo_like):
 def test_three_run_statistics_are_greyed_with_the_reason(three_runs):
     report, drawn, _ = three_runs
     correlations = next(s for s in report.sections if s.key == "correlations")
+    # per data set either a greyed chart (an analysis that still computed the statistics) or a greyed note
+    # (one that leaves them NaN); either way the reason is given, never a bare ρ = ±1
     tornadoes = [b for b in correlations.blocks if type(b).__name__ == "Figure" and b.key.startswith("tornado-")]
-    assert tornadoes and all("insufficient data: 3 ok run(s)" in b.caption for b in tornadoes)
+    notes = [b for b in correlations.blocks if type(b).__name__ == "Callout" and b.tone == "muted"]
+    assert len(tornadoes) + len(notes) == 3
+    assert all("insufficient data: 3 ok run(s)" in b.caption for b in tornadoes)
+    assert all("insufficient data: 3 ok run(s)" in b.text for b in notes)
     (table,) = [b for b in correlations.blocks if type(b).__name__ == "Table"]
     assert table.muted and all(table.muted)
     assert all("insufficient data" in row[-1] for row in table.rows)
