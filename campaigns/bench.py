@@ -12,13 +12,12 @@ from functools import lru_cache
 
 from campaigns.catalog import CONDITION_UNITS, lookup_nominal
 from campaigns.runs import RunRequest
+from twin.engine.features import FEATURES
 from twin.errors import InputError
 
-#: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name.
-BENCH_FEATURES: dict[str, tuple[str, str]] = {
-    "backlash_feature": ("m", "backlash feature f_b of Eq. 9.12 from the measured signals"),
-    "backlash_feature_true": ("m", "backlash feature f_b of Eq. 9.12 from the true states"),
-}
+#: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
+#: declarations of :mod:`twin.engine.features` (a light module: no numba compilation on import).
+BENCH_FEATURES: dict[str, tuple[str, str]] = {name: (f.unit, f.long_name) for name, f in FEATURES.items()}
 
 
 def scene_conditions(scene) -> dict[str, float]:

@@ -11,13 +11,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping, Protocol, Sequence
 
-#: Scene conditions a data set may override (``scene.with_conditions`` keys) and their SI units.
+from twin.scenes import CONDITIONS
+
+#: Scene conditions a data set may override with a number (``scene.with_conditions`` keys) and their SI
+#: units: the numeric conditions of the bench's scene table (twin.scenes.CONDITIONS), plus ``external_force``,
+#: a condition of the synthetic test model only (campaigns.testing): the bench's scenes apply an external
+#: force as a force demand profile, and BenchCatalog.condition_names leaves it out, so a bench spec naming
+#: it is rejected with the list of the conditions the scenes accept.
 CONDITION_UNITS: dict[str, str] = {
-    "backlash": "m",
-    "preload": "N",
+    **{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric},
     "external_force": "N",
-    "room_temperature": "K",
-    "supply_pressure": "Pa",
 }
 
 #: Prefix of uncertainty targets that are scene conditions rather than parameters.

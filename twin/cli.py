@@ -12,13 +12,17 @@ from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
 
 
-def _parse_assignment(text: str) -> tuple[str, float]:
+def _parse_assignment(text: str) -> tuple[str, float | str]:
+    """``name=number``; a scene condition may also be a word (``scene.zero_procedure=preloaded``),
+    which the scene then checks against its allowed values."""
     name, sep, value = text.partition("=")
     if not sep or not name:
         raise argparse.ArgumentTypeError(f"--set expects name=value, got {text!r}")
     try:
         return name.strip(), float(value)
     except ValueError:
+        if name.strip().startswith("scene.") and value.strip():
+            return name.strip(), value.strip()
         raise argparse.ArgumentTypeError(f"--set {name}: value {value!r} is not a number") from None
 
 
@@ -76,15 +80,22 @@ def cmd_simulate(args) -> int:
         options["dt"] = args.dt
     if args.explain_fidelity:
         from twin.fidelity import resolve_fidelity
+        from twin.scenes import CYLINDER_STATES, ZERO_PROCEDURES
 
+        print(f"test procedure of scene {scene.name}:")
+        print(f"  zero_procedure = {scene.condition('zero_procedure')}: {ZERO_PROCEDURES[scene.condition('zero_procedure')]}")
+        print(f"  cylinder = {scene.condition('cylinder')}: {CYLINDER_STATES[scene.condition('cylinder')]}")
         print(f"fidelity of scene {scene.name}:")
         print(resolve_fidelity(scene, params, args.fidelity, args.outputs).explain())
     ds = twin.simulate(scene, params, **options)
     print(f"scene {scene.name}: status {ds.attrs['status']}"
           + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok" else "")
           + f", wall time {ds.attrs['wall_time']:.3f} s")
-    print(f"backlash feature (Eq. 9.12): measured {float(ds['backlash_feature']) * 1e6:.4f} um, "
-          f"true signals {float(ds['backlash_feature_true']) * 1e6:.4f} um")
+    print(f"test procedure: zero_procedure = {ds.attrs['zero_procedure']}, cylinder = {ds.attrs['cylinder']}")
+    for name, label in (("backlash_feature", "backlash feature (Eq. 9.12)"),
+                        ("backlash_hysteresis", "backlash hysteresis (zero-independent)")):
+        if name in ds:
+            print(f"{label}: measured {float(ds[name]) * 1e6:.4f} um, true signals {float(ds[name + '_true']) * 1e6:.4f} um")
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
     if args.out:
         ds.to_netcdf(args.out, engine="netcdf4")
@@ -143,9 +154,19 @@ def cmd_campaign_run(args) -> int:
 
 
 def cmd_campaign_analyze(args) -> int:
-    import campaigns
+    import xarray as xr
 
-    print(f"wrote {campaigns.analyze(args.results, args.out)}")
+    import campaigns
+    from campaigns.analysis import summary
+
+    path = campaigns.analyze(args.results, args.out)
+    print(f"wrote {path}")
+    with xr.open_dataset(path, engine="netcdf4") as analysis:
+        statements, warnings = summary(analysis)
+    for line in statements:
+        print(line)
+    for line in warnings:
+        print(f"warning: {line}", file=sys.stderr)
     return 0
 
 
@@ -190,7 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="built-in scene name (see `twin scenes`) or a scene TOML file")
     p.add_argument("--params", default="bench", help="parameter set name or directory/file (default: bench)")
     p.add_argument("--set", action="append", type=_parse_assignment, metavar="NAME=VALUE",
-                   help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5)")
+                   help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5, "
+                        "scene.zero_procedure=preloaded, scene.cylinder=detached)")
     p.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS))
     p.add_argument("--dt", type=float, help="integration step [s]")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")

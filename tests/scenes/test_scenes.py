@@ -14,7 +14,7 @@ TABLE_9_4 = {  # data set: (backlash [m], preload [N], external force [N])
 
 
 def test_shipped_scenes():
-    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4}
+    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4, "ds1_preloaded", "ds5_preloaded"}
 
 
 @pytest.mark.parametrize("name", sorted(TABLE_9_4))

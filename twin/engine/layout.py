@@ -6,6 +6,9 @@ compiled right-hand side reads ``x[S.NUT1_POSITION]`` at no cost.
 
 from enum import IntEnum
 
+from twin.engine.features import FEATURES as FEATURE_TABLE
+from twin.engine.features import N_ACCUMULATORS
+
 
 class S(IntEnum):
     """Continuous state vector (SI units)."""
@@ -260,8 +263,8 @@ class Signal(IntEnum):
 
 N_SIGNALS = len(Signal)
 
-# Scalar features of a run (Eq. 9.12), computed by the loop alongside the signals.
-FEATURES = ("backlash_feature", "backlash_feature_true")
+# Scalar features of a run (twin.engine.features), computed by the loop alongside the signals.
+FEATURES = tuple(FEATURE_TABLE)
 # Everything a scene or a campaign may ask a run to produce.
 OUTPUT_NAMES = tuple(signal.name.lower() for signal in Signal) + FEATURES
 
@@ -310,23 +313,24 @@ class M(IntEnum):
     SPEED_COMMAND = 3       # after the drive's analog input [rad/s]
     PREVIOUS_ANGLE = 4      # resolver reading at the previous speed sample [rad]
     DEMAND = 5              # position demand at the last acquisition [m]
-    FEATURE_TRUE = 6        # running sums of Eq. 9.12
-    FEATURE_MEASURED = 7
-    SAMPLES = 8             # acquisition samples taken
+    SAMPLES = 6             # acquisition samples taken
     # last acquired readings, in the order of Signal.LINEAR_ENCODER_POSITION ...
-    SLED = 9
-    SCREW_ANGLE = 10
-    SLED_SPEED = 11
-    MOTOR_SPEED = 12
-    CURRENT = 13
-    TORQUE = 14
-    PRELOAD = 15
-    EXTERNAL = 16
-    LOCAL_ERROR = 17        # largest step-doubling local-error estimate so far, in tolerance units
-    LOCAL_ERROR_STREAK = 18  # consecutive acquisition instants with the estimate above tolerance
+    SLED = 7
+    SCREW_ANGLE = 8
+    SLED_SPEED = 9
+    MOTOR_SPEED = 10
+    CURRENT = 11
+    TORQUE = 12
+    PRELOAD = 13
+    EXTERNAL = 14
+    LOCAL_ERROR = 15        # largest step-doubling local-error estimate so far, in tolerance units
+    LOCAL_ERROR_STREAK = 16  # consecutive acquisition instants with the estimate above tolerance
+    # feature accumulators (layout twin.engine.features.A), from true and from measured signals
+    FEATURES_TRUE = 17
+    FEATURES_MEASURED = 17 + N_ACCUMULATORS
 
 
-N_MEMORY = len(M)
+N_MEMORY = M.FEATURES_MEASURED + N_ACCUMULATORS
 N_MEASURED = M.EXTERNAL - M.SLED + 1
 
 # Run status codes returned by the compiled loop.

@@ -13,6 +13,7 @@ import numpy as np
 from sensors.acquisition import convert
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
+from twin.engine.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.engine.integrators import WORK_VECTORS, step
 from twin.engine.layout import (
     N_INPUTS,
@@ -133,7 +134,7 @@ def controller_init(memory, u, instrument_state, rows, levels, x, c, force_table
 def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise, position_table, force_table,
                        stiffness_poly, sample_time):
     """Acquisition instant of the cRIO: read every channel, run the position and force loops,
-    and accumulate the Eq. 9.12 feature on true and on measured signals."""
+    and accumulate the backlash features (:mod:`twin.engine.features`) on true and on measured signals."""
     torque, _, _, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
     n = int(memory[M.SAMPLES])
     sled = ins.linear_encoder_position(instrument_state, rows, levels, x, c)
@@ -159,8 +160,11 @@ def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
         force_loop(t, c, u, memory, sample_time, force_table)
     arm = c[K.LEAD_ARM]
-    memory[M.FEATURE_TRUE] += abs(x[S.NUT1_POSITION] - c[K.NUT1_ZERO] - arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]))
-    memory[M.FEATURE_MEASURED] += abs(sled - arm * screw_angle)
+    threshold = MOTION_SPEED_THRESHOLD * sample_time
+    accumulate(memory[M.FEATURES_TRUE:M.FEATURES_TRUE + N_ACCUMULATORS], x[S.NUT1_POSITION] - c[K.NUT1_ZERO],
+               arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]), n == 0, threshold)
+    accumulate(memory[M.FEATURES_MEASURED:M.FEATURES_MEASURED + N_ACCUMULATORS], sled, arm * screw_angle, n == 0,
+               threshold)
     memory[M.SAMPLES] = n + 1
 
 
@@ -235,7 +239,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     rows, levels, lookback, noise : arrays
         Instruments of the run (:class:`twin.engine.instrumentation.Instruments`).
     memory : 1-D array
-        Loop memory (layout :class:`twin.engine.layout.M`), holds the feature sums at the end.
+        Loop memory (layout :class:`twin.engine.layout.M`), holds the feature accumulators at the end.
     output : 2-D array
         ``(n_steps // output_every + 1, N_SIGNALS)`` buffer, filled row by row.
     tolerance : 1-D array

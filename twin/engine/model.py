@@ -177,7 +177,8 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curva
     if converters:
         c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
 
-    x0 = preload_equilibrium(c, stiffness_poly, preload)
+    x0 = initial_state(c, stiffness_poly, preload, scene.condition("zero_procedure"))
+    # The encoders are zeroed on the initial state, whatever the procedure (docs/model.md).
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
     c[K.ENCODER_SCALE_ORIGIN] = p["sensors.linear_encoder_scale_origin"]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
@@ -319,6 +320,25 @@ def contact_position_for_force(c: np.ndarray, stiffness_poly: np.ndarray, force:
         upper = half_gap + 2.0 * (upper - half_gap)
     return side * brentq(lambda d: abs(contact_force(c, stiffness_poly, side * d)) - abs(force), half_gap, upper,
                          xtol=1e-15, rtol=1e-13)
+
+
+def initial_state(c: np.ndarray, stiffness_poly: np.ndarray, preload: float, zero_procedure: str) -> np.ndarray:
+    """State at t = 0 under the scene's zero procedure (:data:`twin.scenes.ZERO_PROCEDURES`); sets
+    ``K.PRELOAD_COMPRESSION``.
+
+    ``"thesis"`` (Sec. 9.3.2, "the initial conditions of the simulation consider all the elements
+    unloaded"): every body at rest at its assembled position, the nuts centred in their backlash
+    (the symmetric dead zone of Eqs. 5.9-5.10, ``dx_i = 0``), the disc-spring set compressed so that
+    it pushes with the scene's preload at that position; the nuts are loaded during the run and the
+    preload "decreases a little as the elastic deformations arise" (Fig. 9.7b), by
+    ``k_pr (b + deflections)``. ``"preloaded"``: :func:`preload_equilibrium`.
+    """
+    if zero_procedure == "preloaded":
+        return preload_equilibrium(c, stiffness_poly, preload)
+    x = np.zeros(N_STATES)
+    x[S.WINDING_TEMP] = c[K.AMBIENT]
+    c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] if preload > 0.0 else 0.0
+    return x
 
 
 def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: float) -> np.ndarray:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from typing import Mapping, Sequence
@@ -9,6 +10,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from twin.engine.features import FEATURES, N_ACCUMULATORS, finish
 from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.layout import (
@@ -29,7 +31,7 @@ from twin.engine.reference import local_error_tolerance, run_reference
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.fidelity import resolve_fidelity
 from twin.parameters import ParameterSet, load_parameters
-from twin.scenes import Scene, load_scene
+from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
 DEFAULT_INTEGRATOR = "rk4"
 DEFAULT_DT = 6.25e-5         # s; chosen by the speed-versus-accuracy study (docs/accuracy.md)
@@ -98,8 +100,10 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     -------
     xarray.Dataset
         True and measured signals on ``time`` [s] with ``units`` attributes, the
-        scalars ``backlash_feature`` (Eq. 9.12 on the measured encoder signals) and
-        ``backlash_feature_true`` (on true signals), and run metadata in ``attrs``.
+        scalar features of :data:`twin.engine.features.FEATURES` (``backlash_feature``,
+        Eq. 9.12, and ``backlash_hysteresis`` on the measured encoder signals; ``*_true``
+        on true signals), and run metadata in ``attrs``, among them the scene's
+        ``zero_procedure`` and ``cylinder`` and every condition in ``scene_conditions`` (JSON).
 
     Raises
     ------
@@ -177,12 +181,12 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         if signal.name.lower() not in removed
     }
     ok = status == STATUS_OK and memory[M.SAMPLES] > 0
-    for name, total, source in (("backlash_feature_true", memory[M.FEATURE_TRUE], "true signals"),
-                                ("backlash_feature", memory[M.FEATURE_MEASURED],
-                                 "the linear encoder and the torque-meter encoder")):
-        data_vars[name] = ((), total / memory[M.SAMPLES] if ok else np.nan, {
-            "units": "m", "long_name": f"backlash feature f_b (Eq. 9.12) from {source}",
-            "description": "mean over the acquisition samples of |x_n1 - p*theta_s/(2*pi)|, both zeroed at t = 0"})
+    for suffix, block in (("", M.FEATURES_MEASURED), ("_true", M.FEATURES_TRUE)):
+        values = finish(memory[block:block + N_ACCUMULATORS], memory[M.SAMPLES])
+        for base, value in values.items():
+            feature = FEATURES[base + suffix]
+            data_vars[base + suffix] = ((), value if ok else np.nan, {
+                "units": feature.unit, "long_name": feature.long_name, "description": feature.description})
     data_vars["final_state"] = ("state", x[model.active], {
         "long_name": "integrated states at t_reached (SI units, layout twin.engine.layout.S)"})
     return xr.Dataset(
@@ -194,6 +198,10 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "failure_reason": reason,
             "t_reached": t_reached,
             "scene": scene.name,
+            "zero_procedure": scene.condition("zero_procedure"),
+            "zero_procedure_description": ZERO_PROCEDURES[scene.condition("zero_procedure")],
+            "cylinder": scene.condition("cylinder"),
+            "scene_conditions": json.dumps(dict(scene.conditions)),
             "parameter_set": params.name,
             "screw_lead": params.value("ball_screw.lead"),
             "integrator": integrator,

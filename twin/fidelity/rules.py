@@ -214,6 +214,22 @@ CONDITIONS = {
 }
 
 
+def scene_levels(scene: Scene, requested: Mapping[str, str], fidelity, problems: list[str]) -> dict[str, tuple[str, str]]:
+    """Levels the scene's conditions fix, whatever the request: ``{subsystem: (level, reason)}``.
+
+    An attached cylinder (``conditions.cylinder``) is part of the bench and fixes nothing: the request
+    and the rules decide how it is modelled. A detached cylinder takes the load system out of the bench,
+    so the pneumatics are ``"absent"`` even under ``"full"``; asking for another level explicitly is a problem.
+    """
+    if scene.condition("cylinder") != "detached":
+        return {}
+    explicit = not isinstance(fidelity, str) and fidelity.get("pneumatics", "auto") not in ("auto", "absent")
+    if explicit:
+        problems.append(f"fidelity.pneumatics: {requested['pneumatics']!r} needs the cylinder the scene "
+                        f"'{scene.name}' detaches (conditions.cylinder = 'detached'); use 'absent' or 'auto'")
+    return {"pneumatics": ("absent", "the scene's cylinder is detached (conditions.cylinder): no force on the master nut")}
+
+
 def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping[str, str] = "auto",
                      outputs=None, curvature: str = "thesis", rules_file: Path = RULES_FILE) -> Fidelity:
     """Resolve the requested fidelity for a scene.
@@ -246,10 +262,17 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
 
     settings, rules = load_rules(rules_file)
     needs = SceneNeeds(scene, params, wanted, curvature, settings)
+    fixed = scene_levels(scene, requested, fidelity, problems)
     levels, reasons = {}, {}
     for name, subsystem in SUBSYSTEMS.items():
+        if name in fixed:
+            levels[name], reasons[name] = fixed[name]
+            continue
         if requested[name] != "auto":
             levels[name], reasons[name] = requested[name], "requested"
+            if name == "pneumatics" and requested[name] != subsystem.full:
+                reasons[name] += (" (the scene's cylinder is attached: this level drops the force loop "
+                                  "and the seal friction on the master nut)")
             continue
         levels[name], reasons[name] = subsystem.full, "no rule allows a cheaper level"
         refusals = []
@@ -262,6 +285,9 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
             refusals.append(f"not {rule['level']}: {'; '.join(text for ok, text in checks if not ok)}")
         if refusals and levels[name] == subsystem.full:
             reasons[name] = "; ".join(refusals)
+        if name == "pneumatics" and levels[name] == subsystem.full:
+            reasons[name] += (" (the scene's cylinder is attached, conditions.cylinder: the force loop holds "
+                              "the force demand through the piston's seal friction)")
 
     if levels["pneumatics"] == "absent" and scene.has_force_demand:
         problems.append(f"fidelity.pneumatics: 'absent' cannot apply the force demand of scene '{scene.name}'; "

@@ -2,10 +2,11 @@
 
 A scene is what an engineer would write on a test sheet: how long the test
 lasts, the sled position demand, the external force demand, and the conditions
-(preload and its configuration, ball-screw axial backlash, room temperature,
-supply pressure). The thesis's data sets of Table 9.4 are the scenes
-``ds1`` ... ``ds5``; ``ds6``/``ds7`` repeat ``ds2`` with 5 um / 40 um backlash;
-``nominal`` is the Fig. 9.6/9.7 case.
+(:data:`CONDITIONS`: preload and its configuration, ball-screw axial backlash,
+room temperature, supply pressure, how the bench is initialised and where the
+encoders are zeroed, whether the pneumatic cylinder is attached). The thesis's
+data sets of Table 9.4 are the scenes ``ds1`` ... ``ds5``; ``ds6``/``ds7``
+repeat ``ds2`` with 5 um / 40 um backlash; ``nominal`` is the Fig. 9.6/9.7 case.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
@@ -24,14 +25,81 @@ from twin.scenes.profiles import compile_profile
 
 LIBRARY = Path(__file__).parent / "library"
 
-# Condition name -> (unit, check, allowed-range text).
-CONDITIONS: dict[str, tuple[str, Any, str]] = {
-    "preload": ("N", lambda v: v >= 0, ">= 0"),
-    "backlash": ("m", lambda v: 0 <= v <= 1e-3, "0 ... 1e-3 m"),
-    "room_temperature": ("K", lambda v: 200 < v < 400, "200 ... 400 K"),
-    "supply_pressure": ("Pa", lambda v: v > 0, "> 0 (absolute)"),
+
+
+class Condition(NamedTuple):
+    """One condition of a test procedure: a number in an SI unit, or one of a few named choices.
+
+    A named tuple whose first field is the unit, so ``CONDITIONS[name][0]`` is the unit.
+
+    Attributes
+    ----------
+    unit : str
+        SI unit of a numeric condition; ``""`` for a choice.
+    description : str
+        What it states about the test (with its source).
+    allowed : str
+        The allowed values, as an error message prints them.
+    check : callable, optional
+        Range check of a numeric condition.
+    choices : tuple of str
+        The values of a choice condition (empty for a number).
+    default : optional
+        Value of a condition a scene does not state; ``None``: the scene must state it.
+    """
+
+    unit: str
+    description: str
+    allowed: str
+    check: Callable[[float], bool] | None = None
+    choices: tuple[str, ...] = ()
+    default: Any = None
+
+    @property
+    def numeric(self) -> bool:
+        return not self.choices
+
+    def problem(self, name: str, value) -> str | None:
+        """What is wrong with ``value`` (naming the field and what is allowed), or None."""
+        if self.choices:
+            return None if value in self.choices else f"conditions.{name}: {value!r} is not one of {', '.join(self.choices)}"
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            return f"conditions.{name}: must be a finite number [{self.unit}], got {value!r}"
+        return None if self.check(value) else f"conditions.{name}: {value:g} {self.unit} is out of range; allowed: {self.allowed}"
+
+
+#: Zero procedures: how the bench is initialised at t = 0 and where the encoders are zeroed (docs/model.md).
+#: "preloaded" is the default of a scene that does not state it: a real bench is zeroed after assembly.
+ZERO_PROCEDURES = {
+    "thesis": "Sec. 9.3.2: every element unloaded at t = 0 (nuts centred in their backlash, disc springs "
+              "compressed by the preload but not yet pushing the nuts), encoders zeroed there; the springs "
+              "load the nuts during the run, so the preload condition is the spring force at assembly",
+    "preloaded": "start at rest in the static equilibrium of the preloaded nuts, encoders zeroed there (what a "
+                 "real bench does after assembly); the preload condition is the preload at that equilibrium",
 }
-PRELOAD_CONFIGURATIONS = ("O", "X")
+#: States of the pneumatic cylinder (Sec. 9.2): what holds the master nut besides the screw.
+CYLINDER_STATES = {
+    "attached": "rod pinned to the master nut by its jags (Sec. 9.2), the force loop holding the force demand "
+                "(0 N in a force-free test) through the piston's seal friction",
+    "detached": "rod end unpinned: no force of any kind from the load system on the master nut (a force "
+                "demand is then impossible)",
+}
+
+#: Every condition a scene states: the one table of names, units and allowed values
+#: (campaigns.catalog derives the campaigns' condition units from it).
+CONDITIONS: dict[str, Condition] = {
+    "preload": Condition("N", "preload between the nuts (its meaning depends on zero_procedure)", ">= 0",
+                         lambda v: v >= 0),
+    "preload_configuration": Condition("", "O separates the nuts, X draws them together (Eq. 9.8)", "O, X",
+                                       choices=("O", "X")),
+    "backlash": Condition("m", "total axial play of each nut", "0 ... 1e-3 m", lambda v: 0 <= v <= 1e-3),
+    "room_temperature": Condition("K", "room and air temperature", "200 ... 400 K", lambda v: 200 < v < 400),
+    "supply_pressure": Condition("Pa", "pneumatic supply pressure (absolute)", "> 0 (absolute)", lambda v: v > 0),
+    "zero_procedure": Condition("", "how the bench is initialised and where the encoders are zeroed",
+                                ", ".join(ZERO_PROCEDURES), choices=tuple(ZERO_PROCEDURES), default="preloaded"),
+    "cylinder": Condition("", "state of the pneumatic cylinder", ", ".join(CYLINDER_STATES),
+                          choices=tuple(CYLINDER_STATES), default="attached"),
+}
 _TOP_FIELDS = {"base", "name", "description", "duration", "conditions", "position_demand", "force_demand", "outputs"}
 
 
@@ -48,9 +116,12 @@ class Scene:
         Profile segments (see :mod:`twin.scenes.profiles`): sled position [m]
         and external force on the master nut [N, positive along +x].
     conditions : dict
-        ``preload`` [N], ``preload_configuration`` ("O" separates the nuts,
-        "X" draws them together), ``backlash`` [m] (total axial play of each
-        nut), ``room_temperature`` [K], ``supply_pressure`` [Pa, absolute].
+        Every condition of :data:`CONDITIONS` (those with a default may be left
+        out of the file): ``preload`` [N], ``preload_configuration`` ("O" separates
+        the nuts, "X" draws them together), ``backlash`` [m] (total axial play of
+        each nut), ``room_temperature`` [K], ``supply_pressure`` [Pa, absolute],
+        ``zero_procedure`` (:data:`ZERO_PROCEDURES`, default "preloaded") and
+        ``cylinder`` (:data:`CYLINDER_STATES`, default "attached").
     outputs : tuple of str
         Signals and features the test must produce (:data:`twin.engine.layout.OUTPUT_NAMES`);
         empty means all of them. The automatic fidelity (:mod:`twin.fidelity`) models
@@ -66,6 +137,8 @@ class Scene:
     outputs: tuple[str, ...] = ()
 
     def __post_init__(self):
+        defaults = {name: c.default for name, c in CONDITIONS.items() if c.default is not None and name not in self.conditions}
+        object.__setattr__(self, "conditions", {**self.conditions, **defaults})
         problems = validate_scene(self)
         if problems:
             raise SceneError(problems)
@@ -109,20 +182,11 @@ def validate_scene(scene: Scene) -> list[str]:
     if not (isinstance(scene.duration, (int, float)) and math.isfinite(scene.duration) and scene.duration > 0):
         problems.append(f"duration: must be a positive number of seconds, got {scene.duration!r}")
     for name, value in scene.conditions.items():
-        if name == "preload_configuration":
-            if value not in PRELOAD_CONFIGURATIONS:
-                problems.append(f"conditions.preload_configuration: {value!r} is not one of {PRELOAD_CONFIGURATIONS}")
-            continue
         if name not in CONDITIONS:
-            problems.append(f"conditions.{name}: unknown condition; allowed: {', '.join([*CONDITIONS, 'preload_configuration'])}")
-            continue
-        unit, ok, allowed = CONDITIONS[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            problems.append(f"conditions.{name}: must be a finite number [{unit}], got {value!r}")
-        elif not ok(value):
-            problems.append(f"conditions.{name}: {value:g} {unit} is out of range; allowed: {allowed}")
-    missing = [c for c in [*CONDITIONS, "preload_configuration"] if c not in scene.conditions]
-    problems += [f"conditions.{c}: missing" for c in missing]
+            problems.append(f"conditions.{name}: unknown condition; allowed: {', '.join(CONDITIONS)}")
+        elif (problem := CONDITIONS[name].problem(name, value)) is not None:
+            problems.append(problem)
+    problems += [f"conditions.{c}: missing" for c in CONDITIONS if c not in scene.conditions]
     if not isinstance(scene.outputs, tuple) or not all(isinstance(o, str) for o in scene.outputs):
         problems.append(f"outputs: must be a list of output names, got {scene.outputs!r}")
     else:
@@ -134,6 +198,10 @@ def validate_scene(scene: Scene) -> list[str]:
             problems.append(f"{name}: must be a list of segments")
             continue
         problems += compile_profile(segments, name)[1]
+    if scene.conditions.get("cylinder") == "detached" and isinstance(scene.force_demand, list) and scene.force_demand \
+            and not problems and scene.has_force_demand:
+        problems.append("conditions.cylinder: 'detached' cannot apply the scene's force demand; "
+                        "use 'attached' or remove force_demand")
     return problems
 
 

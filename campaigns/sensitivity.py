@@ -1,0 +1,107 @@
+"""Given-data sensitivity: first-order indices and effect sizes from the plain Monte Carlo sample.
+
+Correlations (Pearson, Spearman, PRCC) only see monotone dependence: a feature
+that rises on both sides of a tolerance's nominal (``f = |x|``) has a rank
+correlation of zero. The first-order (Sobol') index
+
+    S1_i = Var(E[Y | X_i]) / Var(Y)
+
+sees any shape of dependence. It is estimated here from the campaign's own
+sample, without a dedicated design, by the RBD-FAST / EASI estimator of
+SALib (``SALib.analyze.rbd_fast``; Plischke 2010, Reliab. Eng. Syst. Saf. 95,
+354-360): the outputs are reordered along the sorted input so that E[Y | X_i]
+becomes a periodic signal, whose power in the first ``HARMONICS`` harmonics,
+relative to the total, estimates S1_i; the Tissot & Prieur (2012, Reliab. Eng.
+Syst. Saf. 107, 205-213) correction removes the bias of the noise in those
+harmonics, so an inert parameter scatters around 0 (and may go slightly below).
+
+The confidence interval is a seeded percentile bootstrap over runs (pairs
+resampled, the estimator re-applied). SALib's own interval (normal
+approximation from half-size resamples, one loop per parameter) costs about
+1.5 s per data set and feature for 38 parameters; the same estimator is applied
+here to all resamples at once: a resample is sorted along ``X_i`` by repeating
+the sorted original runs by their bootstrap counts, no sort per resample.
+
+The effect size is in the feature's units: the standard deviation of the
+conditional mean E[Y | X_i] over the parameter's distribution,
+``sqrt(max(S1_i, 0) Var(Y))`` — what the parameter alone moves the feature by
+(one standard deviation of that movement; for a linear effect ``b X_i`` it is
+``|b| std(X_i)``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from SALib.analyze import rbd_fast
+
+#: Harmonics of the reordered signal counted as first-order power (SALib's default M).
+HARMONICS = 10
+METHOD = (
+    f"RBD-FAST/EASI given-data estimator (SALib.analyze.rbd_fast, M = {HARMONICS} harmonics, "
+    "Tissot-Prieur bias correction) on the Monte Carlo sample; percentile bootstrap over runs"
+)
+
+
+def _easi_order(n: int) -> np.ndarray:
+    """EASI reordering of ``n`` sorted positions: odd ones up, even ones back down (a periodic signal)."""
+    return np.concatenate([np.arange(0, n, 2), np.arange(1, n, 2)[::-1]])
+
+
+def _first_order_of_signals(signals: np.ndarray) -> np.ndarray:
+    """Bias-corrected first-order index of each reordered signal (rows), as ``rbd_fast`` computes it.
+
+    ``rbd_fast`` takes the ratio of sums of ``scipy.signal.periodogram`` (mean removed, one-sided):
+    that is ``|rfft|^2`` with every bin but the Nyquist one counted twice; the scale cancels in the
+    ratio. ``periodogram`` itself costs three times the FFT (its short-time-FFT machinery).
+    """
+    n = signals.shape[-1]
+    power = np.abs(np.fft.rfft(signals - signals.mean(axis=-1, keepdims=True), axis=-1)[:, 1:]) ** 2
+    one_sided = np.full(power.shape[-1], 2.0)
+    if n % 2 == 0:
+        one_sided[-1] = 1.0  # the Nyquist bin has no mirror image
+    index = 2.0 * power[:, :HARMONICS].sum(axis=-1) / (power * one_sided).sum(axis=-1)
+    return rbd_fast.unskew_S1(index, HARMONICS, n)
+
+
+def first_order(X, y, *, n_boot: int = 200, confidence: float = 0.95, seed=None) -> dict[str, np.ndarray]:
+    """First-order index, its bootstrap interval and the effect size of each column of ``X`` on ``y``.
+
+    Parameters
+    ----------
+    X : array_like, shape (n, p)
+        Sampled values (any distribution: given data).
+    y : array_like, shape (n,)
+        The feature.
+    n_boot : int, default 200
+        Bootstrap resamples (runs resampled with replacement, shared by every column).
+    confidence : float, default 0.95
+    seed : int, SeedSequence, Generator or None
+
+    Returns
+    -------
+    dict
+        ``index`` (p,), ``ci`` (p, 2) percentile bounds, ``effect_size`` (p,) in the units of
+        ``y`` and ``effect_size_ci`` (p, 2) (the index's bounds through the same transform). NaN for a constant column, and for every column when ``y`` is constant or
+        ``n <= 2 HARMONICS`` (too few runs to separate the harmonics from the rest).
+    """
+    X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
+    n, p = X.shape
+    index, ci = np.full(p, math.nan), np.full((p, 2), math.nan)
+    varying = np.flatnonzero(np.ptp(X, axis=0) > 0) if n else np.array([], dtype=int)
+    if n <= 2 * HARMONICS or np.ptp(y) == 0:
+        return {"index": index, "ci": ci, "effect_size": np.full(p, math.nan), "effect_size_ci": ci.copy()}
+    counts = np.random.default_rng(seed).multinomial(n, np.full(n, 1.0 / n), size=n_boot)  # (n_boot, n)
+    reorder, alpha = _easi_order(n), 0.5 * (1.0 - confidence)
+    for j in varying:
+        order = np.argsort(X[:, j])
+        index[j] = _first_order_of_signals(y[order][reorder][None, :])[0]  # = rbd_fast.analyze's S1 (tested)
+        # each resample, sorted along X_j: the sorted runs, each repeated by its bootstrap count
+        runs = np.repeat(np.tile(order, n_boot), counts[:, order].ravel()).reshape(n_boot, n)
+        replicates = _first_order_of_signals(y[runs[:, reorder]])
+        ci[j] = np.quantile(replicates[np.isfinite(replicates)], [alpha, 1.0 - alpha])
+    def effect(share: np.ndarray) -> np.ndarray:
+        return np.sqrt(np.clip(share, 0.0, None) * y.var(ddof=1))
+
+    return {"index": index, "ci": ci, "effect_size": effect(index), "effect_size_ci": effect(ci)}
