@@ -9,19 +9,31 @@ synthetic model's.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cache
 from typing import Mapping, Protocol, Sequence
 
-from twin.scenes import CONDITIONS
 
-#: Scene conditions a data set may override with a number (``scene.with_conditions`` keys) and their SI
-#: units: the numeric conditions of the bench's scene table (twin.scenes.CONDITIONS), plus ``external_force``,
-#: a condition of the synthetic test model only (campaigns.testing): the bench's scenes apply an external
-#: force as a force demand profile, and BenchCatalog.condition_names leaves it out, so a bench spec naming
-#: it is rejected with the list of the conditions the scenes accept.
-CONDITION_UNITS: dict[str, str] = {
-    **{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric},
-    "external_force": "N",
-}
+@cache
+def condition_units() -> dict[str, str]:
+    """Scene conditions a data set may override with a number (``scene.with_conditions`` keys) and their SI units.
+
+    The numeric conditions of the bench's scene table (``twin.scenes.CONDITIONS``, the one source), plus
+    ``external_force``, a condition of the synthetic test model only (campaigns.testing): the bench's
+    scenes apply an external force as a force demand profile, and ``BenchCatalog.condition_names`` leaves
+    it out, so a bench spec naming it is rejected with the list of the conditions the scenes accept.
+    The twin is imported on first use, not with this module: the synthetic model's run processes never load it.
+    """
+    from twin.scenes import CONDITIONS
+
+    return {**{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric}, "external_force": "N"}
+
+
+def __getattr__(name: str):
+    """``CONDITION_UNITS``: :func:`condition_units`, computed on first access (PEP 562)."""
+    if name == "CONDITION_UNITS":
+        return condition_units()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 #: Prefix of uncertainty targets that are scene conditions rather than parameters.
 SCENE_PREFIX = "scene."
@@ -60,7 +72,7 @@ class StaticCatalog:
     parameters : mapping of str to (value, unit)
         Parameter nominal values and units.
     conditions : mapping of str to float
-        Nominal scene conditions (SI units of :data:`CONDITION_UNITS`); their
+        Nominal scene conditions (SI units of :func:`condition_units`); their
         names are the accepted conditions.
     scene_names : sequence of str
     feature_units : mapping of str to (unit, long_name), or None
@@ -91,7 +103,7 @@ def lookup_nominal(
         key = target.removeprefix(SCENE_PREFIX)
         if key not in conditions:
             raise KeyError(f"unknown scene condition {target!r}; known: {', '.join(SCENE_PREFIX + c for c in conditions)}")
-        return float(conditions[key]), CONDITION_UNITS[key]
+        return float(conditions[key]), condition_units()[key]
     if target not in parameters:
         group = target.split(".")[0]
         siblings = [n for n in parameters if n.startswith(group + ".")]

@@ -26,7 +26,6 @@ from twin.scenes.profiles import compile_profile
 LIBRARY = Path(__file__).parent / "library"
 
 
-
 class Condition(NamedTuple):
     """One condition of a test procedure: a number in an SI unit, or one of a few named choices.
 
