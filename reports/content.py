@@ -31,8 +31,8 @@ FALLBACK_MIN_OK_RUNS = 10
 SUMMARY_INFLUENCES = 3
 #: Tone of each requirement verdict (CONTRACT.md: the analysis writes exactly one of these).
 VERDICT_TONES = {"met": "good", "not met": "bad", "undetermined": "info", "insufficient data": "muted"}
-#: Parameter rows of a correlation heat map.
-HEATMAP_PARAMETERS = 25
+#: Parameter rows of a correlation heat map (with wrapped names, a page holds about this many).
+HEATMAP_PARAMETERS = 20
 #: Parameters in the scatter plots of a feature.
 SCATTER_PARAMETERS = 4
 #: Run indices listed per row of the failed-runs table before "and N more".

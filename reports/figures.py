@@ -27,6 +27,8 @@ from scipy import stats
 DPI = 150
 #: Figure width [in]: the text width of an A4 page, so PDF figures are shown at their drawn size.
 WIDTH = 7.0
+#: Tallest figure [in]: an A4 page's text height less room for a caption.
+MAX_HEIGHT = 8.4
 #: Most traces (curves or distributions) drawn over each other on one axes; more become small multiples.
 MAX_TRACES = 4
 #: Characters per line of a wrapped tick or axis label (a long parameter name breaks after "." or "_").
@@ -71,8 +73,9 @@ class Panel(NamedTuple):
 
 
 def _new(nrows: int, ncols: int, height: float, **subplots) -> Figure:
-    # drawn at the PNG's resolution, so text extents measured on the canvas are those of the stored image
-    fig = Figure(figsize=(WIDTH, height), dpi=DPI, layout="constrained")
+    # drawn at the PNG's resolution, so text extents measured on the canvas are those of the stored image;
+    # never taller than a page leaves for a figure and its caption
+    fig = Figure(figsize=(WIDTH, min(height, MAX_HEIGHT)), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     fig.subplots(nrows, ncols, squeeze=False, **subplots)
     return fig
@@ -259,7 +262,7 @@ def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str,
     rows, cols = matrix.shape
     row_labels = [wrap(label) for label in row_labels]
     lines = max((label.count("\n") + 1 for label in row_labels), default=1)
-    fig = _new(1, 1, 1.4 + (0.12 + 0.13 * lines) * max(rows, 4))
+    fig = _new(1, 1, 1.4 + (0.1 + 0.11 * lines) * max(rows, 4))
     ax = fig.axes[0]
     norm = TwoSlopeNorm(center, vmin, vmax) if center is not None else None
     image = ax.imshow(np.ma.masked_invalid(matrix), cmap=cmap, aspect="auto", norm=norm,

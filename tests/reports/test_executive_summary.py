@@ -78,8 +78,17 @@ def test_page_one_links_each_finding_to_its_section(with_verdicts):
     assert "§6 Observability" in _page_one(paths["pdf"])
 
 
-def test_an_older_analysis_gives_no_verdict(report):
-    """The session's report fixture uses an analysis.nc written before requirement_verdict existed."""
-    page = _page_one(report["pdf"])
+def test_an_older_analysis_gives_no_verdict(campaign, generated_at, tmp_path):
+    """An analysis.nc written before requirement_verdict existed: page 1 says "not available", composes nothing."""
+    shutil.copyfile(campaign, tmp_path / "results.nc")
+    new = ["requirement_verdict", "requirement_statement", "data_sufficient", "first_order_index", "first_order_index_ci",
+           "effect_size", "effect_size_ci", "minimum_detectable_backlash_ci"]
+    with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
+        old = stored.load().drop_vars(new, errors="ignore")
+    old.attrs.pop("min_ok_runs", None)
+    old.to_netcdf(tmp_path / "analysis.nc")
+    paths = reports.build_report(tmp_path / "results.nc", out_dir=tmp_path / "report", generated_at=generated_at)
+    page = _page_one(paths["pdf"])
     assert "Requirement verdict: not available" in page
     assert not re.search(r"\b(meets|not met|met)\b", page.replace("not available", ""))
+    assert "a rank correlation, not an effect size" in page  # the influences fall back to |Spearman ρ|, labelled
