@@ -112,8 +112,9 @@ def test_bench_traces_get_the_thesis_panels(extended):
 
 
 def test_every_figure_and_table_is_numbered_in_order(report):
-    figures = [b for s in report.sections for b in s.blocks if isinstance(b, Figure)]
-    tables = [b for s in report.sections for b in s.blocks if isinstance(b, Table)]
+    blocks = [*report.executive] + [b for s in report.sections for b in s.blocks]  # page 1 first
+    figures = [b for b in blocks if isinstance(b, Figure)]
+    tables = [b for b in blocks if isinstance(b, Table)]
     assert [f.number for f in figures] == list(range(1, len(figures) + 1))
     assert [t.number for t in tables] == list(range(1, len(tables) + 1))
     assert all(f.png.startswith(b"\x89PNG") and len(f.caption) > 40 for f in figures)
