@@ -25,6 +25,52 @@ def scene_conditions(scene) -> dict[str, float]:
     return {k: float(v) for k, v in scene.conditions.items() if k in CONDITION_UNITS}
 
 
+def dataset_conditions(spec) -> tuple[dict, dict]:
+    """Every condition of each data set's effective scene, for ``results.attrs["dataset_conditions"]``.
+
+    Takes all conditions the scene holds (numbers in SI with the unit of
+    ``twin.scenes.CONDITIONS``, strings as they are), after the data set's overrides, plus
+    ``external_force_peak`` [N], the largest |force demand| of the scene. Returns
+    ``({dataset: {condition: {"value", "unit"}}}, the base scene's conditions in the same form)``.
+    """
+    import numpy as np
+
+    from twin.scenes import CONDITIONS
+    from twin.scenes.profiles import profile_values
+
+    def described(scene) -> dict:
+        entries = {k: {"value": float(v) if isinstance(v, (int, float)) else str(v),
+                       "unit": CONDITIONS[k][0] if k in CONDITIONS and isinstance(v, (int, float)) else ""}
+                   for k, v in scene.conditions.items()}
+        times = np.linspace(0.0, scene.duration, 2001)
+        entries["external_force_peak"] = {"value": float(np.max(np.abs(profile_values(scene.force_table(), times)))), "unit": "N"}
+        return entries
+
+    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_conditions(dict(d.conditions))) for d in spec.datasets}
+    return datasets, described(_scene(spec.base.scene))
+
+
+def warm_up(spec) -> float:
+    """Compile the twin in this process (numba writes its on-disk cache, so workers load rather than compile).
+
+    Runs a short stretch of the first data set's scene, then the whole scene once; returns
+    the wall time of that compiled run [s], from which the driver estimates the campaign's duration.
+    """
+    import time
+
+    import twin
+
+    dataset = spec.datasets[0]
+    scene = _scene(dataset.scene or spec.base.scene).with_conditions(dict(dataset.conditions))
+    params = _parameters(spec.base.parameters)
+    options = {k: v for k, v in spec.solver.model_dump().items() if v is not None}
+    options["outputs"] = list(spec.features) + (list(spec.traces.variables) if spec.traces.runs_per_dataset else [])
+    twin.simulate(scene.with_duration(min(scene.duration, 0.1)), params, throw=False, **options)  # compiles (or loads the cache)
+    start = time.perf_counter()
+    twin.simulate(scene, params, throw=False, **options)
+    return time.perf_counter() - start
+
+
 class BenchCatalog:
     """Catalog of the bench twin for one parameter set and base scene.
 

@@ -32,11 +32,14 @@ after that is recorded with status ``"lost"``.
 from __future__ import annotations
 
 import contextlib
+import json
+import logging
 import math
 import statistics
 import time
 from collections import deque
 from pathlib import Path
+from typing import Callable
 
 from distributed import Client, LocalCluster, as_completed
 from distributed.comm.core import CommClosedError
@@ -137,8 +140,9 @@ def _client(workers: int, scheduler: str | None):
         with Client(scheduler) as client:
             yield client
         return
+    # silence_logs: the nanny's shutdown warnings (a worker killed after its grace period) are not the user's business
     with LocalCluster(
-        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
     ) as cluster, Client(cluster) as client:
         yield client
 
@@ -154,6 +158,7 @@ def run_campaign(
     run_function: RunFunction | None = None,
     catalog: Catalog | None = None,
     allow_version_mix: bool = False,
+    announce: Callable[[str, str], None] | None = None,
 ) -> Path:
     """Run (or resume) a campaign and write ``results.nc``.
 
@@ -180,6 +185,9 @@ def run_campaign(
     allow_version_mix : bool, default False
         On resume, accept finished chunks computed by other package versions or model code
         (:mod:`campaigns.provenance`); ``results.nc`` then lists every provenance it mixes.
+    announce : callable, optional
+        ``announce(stage, message)`` is called as each stage starts (compile, cluster start,
+        runs, fidelity audit), with its expected duration in the message; default silent.
 
     Returns
     -------
@@ -198,7 +206,10 @@ def run_campaign(
     """
     if not isinstance(spec, CampaignSpec):
         spec = load_spec(spec, catalog=catalog)
-    if run_function is None:
+    announce = announce or (lambda stage, message: None)
+    bench = run_function is None
+    if bench:
+        from campaigns.bench import dataset_conditions, warm_up
         from campaigns.bench import simulate_run as run_function
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
     with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
@@ -210,18 +221,34 @@ def run_campaign(
         )
         executed = len(pending)
         start = time.perf_counter()
+        per_run = None
+        if pending and bench:  # once here, before the workers start, so they load the compiled code instead of compiling it
+            announce("compile", f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
+            per_run = warm_up(spec)
         if pending:
-            with _client(workers, scheduler) as client, tqdm(
-                total=len(pending), disable=not progress, unit="run", desc=spec.name
-            ) as bar:
-                _execute(client, spec, samples, pending, run_function, store, bar)
+            slots = 1 if scheduler else workers
+            announce("cluster start",
+                     f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} (about 10-20 s)")
+            with _client(workers, scheduler) as client:
+                expected = f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run else "see the bar"
+                announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
+                with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
+                    _execute(client, spec, samples, pending, run_function, store, bar)
+        attrs = {"run_function": run_function_name(run_function)}
+        if bench:
+            conditions, base = dataset_conditions(spec)
+            attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
         results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                           "workers": scheduler or workers},
-                                 {"run_function": run_function_name(run_function)})
+                                           "workers": scheduler or workers}, attrs)
         from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
 
+        if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
+            runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
+            announce("fidelity audit", f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
+                     + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)" if per_run else ""))
         audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume,
-                       progress=progress, run_function=run_function, allow_version_mix=allow_version_mix)
+                       progress=progress, run_function=None if bench else run_function,
+                       allow_version_mix=allow_version_mix, announce=announce)
     return results
 
 

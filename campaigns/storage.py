@@ -302,7 +302,8 @@ class ChunkStore:
 
         ``execution`` (runs executed by this invocation, its wall time [s], the workers or scheduler)
         is recorded in the attributes as ``execution_*``: a resumed campaign reports its last leg.
-        ``attrs`` are further global attributes (e.g. the run function).
+        ``attrs`` are further global attributes as they are (e.g. the run function, the driver's
+        ``dataset_conditions``).
         """
         ds = build_results(self.spec, samples, [load_chunk(p, self.spec.features) for p in self.chunk_files()])
         for key, value in (execution or {}).items():

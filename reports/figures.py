@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import io
 import math
+import re
 from typing import NamedTuple
 
 import matplotlib
@@ -26,6 +27,12 @@ from scipy import stats
 DPI = 150
 #: Figure width [in]: the text width of an A4 page, so PDF figures are shown at their drawn size.
 WIDTH = 7.0
+#: Tallest figure [in]: an A4 page's text height less room for a caption.
+MAX_HEIGHT = 8.4
+#: Most traces (curves or distributions) drawn over each other on one axes; more become small multiples.
+MAX_TRACES = 4
+#: Characters per line of a wrapped tick or axis label (a long parameter name breaks after "." or "_").
+LABEL_WIDTH = 30
 _STYLE = {
     "font.size": 9.0,
     "axes.titlesize": 9.5,
@@ -65,11 +72,50 @@ class Panel(NamedTuple):
     items: tuple
 
 
-def _new(nrows: int, ncols: int, height: float) -> Figure:
-    fig = Figure(figsize=(WIDTH, height), layout="constrained")
+def _new(nrows: int, ncols: int, height: float, **subplots) -> Figure:
+    # drawn at the PNG's resolution, so text extents measured on the canvas are those of the stored image;
+    # never taller than a page leaves for a figure and its caption
+    fig = Figure(figsize=(WIDTH, min(height, MAX_HEIGHT)), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
-    fig.subplots(nrows, ncols, squeeze=False)
+    fig.subplots(nrows, ncols, squeeze=False, **subplots)
     return fig
+
+
+def wrap(text: str, width: int = LABEL_WIDTH) -> str:
+    """Break a long identifier after ``.``, ``_`` or a space so that no line exceeds ``width`` characters (where it can).
+
+    ``sensors.preload_load_cell_offset_tempco_range1`` becomes
+    ``sensors.preload_load_cell_`` / ``offset_tempco_range1``: the whole name stays readable, so no key is needed.
+    """
+    lines, line = [], ""
+    for token in re.split(r"(?<=[._ ])", text):
+        if line and len(line) + len(token) > width:
+            lines.append(line.rstrip())
+            line = ""
+        line += token
+    return "\n".join(lines + [line.rstrip()]) if line else "\n".join(lines)
+
+
+def _scaled(values: np.ndarray, label: str) -> tuple[np.ndarray, str]:
+    """Values of a plain-number axis scaled by a power of ten written into the label (no offset text to collide)."""
+    finite = np.abs(values[np.isfinite(values)])
+    if finite.size == 0 or finite.max() == 0:
+        return values, label
+    exponent = int(math.floor(math.log10(finite.max())))
+    if -2 <= exponent <= 3:
+        return values, label
+    return values / 10.0**exponent, f"{label} ×1e{exponent}"
+
+
+def _legend_outside(fig: Figure, axes, ncols: int = 4, **options) -> None:
+    """One legend for the whole figure below the axes, each label once, never over data."""
+    handles = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, handle)
+    if handles:
+        fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(len(handles), ncols),
+                   frameon=False, **options)
 
 
 def _png(fig: Figure) -> bytes:
@@ -90,9 +136,9 @@ def _styled(draw):
 
 
 def _tidy_x(ax) -> None:
-    """Few x ticks, and scientific notation for tiny or huge values, so tick labels never collide."""
+    """Few x ticks without an offset text (values come scaled by :func:`_scaled`), so tick labels never collide."""
     ax.xaxis.set_major_locator(MaxNLocator(5))
-    ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4), useOffset=True)
+    ax.ticklabel_format(axis="x", style="plain", useOffset=False)
 
 
 def _density(ax, group: Group) -> bool:
@@ -123,31 +169,50 @@ def _density(ax, group: Group) -> bool:
 def distributions(panels: list[Panel]) -> bytes:
     """Histograms (probability density) with a Gaussian kernel density per group, panels side by side.
 
-    Each panel's ``items`` are :class:`Group` s drawn over each other, each
-    with its own bins so that narrow and wide distributions both show. A group
-    without spread is a vertical line; a panel of such groups has no density scale.
+    Up to :data:`MAX_TRACES` groups are drawn over each other with one legend below the
+    panels; more groups become small multiples, one row per group sharing the value axis
+    (each row scaled to its own density, so narrow and wide distributions both show).
+    A group without spread is a vertical line.
     """
-    fig = _new(1, len(panels), 3.0)
-    for ax, panel in zip(fig.axes, panels):
-        densities = [_density(ax, group) for group in panel.items]
-        if not any(np.isfinite(group.values).any() for group in panel.items):
-            ax.text(0.5, 0.5, "no successful run", transform=ax.transAxes, ha="center", va="center", color="grey")
-        if not any(densities):
-            ax.set_yticks([])
-        ax.set_ylim(bottom=0.0)
-        ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
-        _tidy_x(ax)
-        ax.legend(loc="best")
+    n_groups = max(len(panel.items) for panel in panels)
+    stacked = n_groups > MAX_TRACES
+    rows = n_groups if stacked else 1
+    fig = _new(rows, len(panels), 0.9 + 0.62 * rows if stacked else 2.9, sharex="col")
+    grid = np.array(fig.axes).reshape(rows, len(panels))
+    for column, panel in enumerate(panels):
+        cells = [[group] for group in panel.items] if stacked else [list(panel.items)]
+        for row, (ax, groups) in enumerate(zip(grid[:, column], cells)):
+            drawn = [_density(ax, group) for group in groups]
+            if not any(np.isfinite(group.values).any() for group in groups):
+                ax.text(0.5, 0.5, "no successful run", transform=ax.transAxes, ha="center", va="center", color="grey")
+            ax.set_ylim(bottom=0.0)
+            if stacked:
+                ax.set_yticks([])
+                used = int(np.isfinite(groups[0].values).sum())
+                ax.set_ylabel(f"{groups[0].label}\nn = {used}", rotation=0, ha="right", va="center")
+                if row < rows - 1:
+                    ax.tick_params(labelbottom=False)
+            else:
+                ax.set_ylabel(panel.ylabel)
+                if not any(drawn):
+                    ax.set_yticks([])
+            _tidy_x(ax)
+        grid[0, column].set_title(panel.title)
+        grid[-1, column].set_xlabel(panel.xlabel)
+    if not stacked:  # the rows of small multiples name their data set and n themselves
+        _legend_outside(fig, fig.axes, ncols=3)
     return _png(fig)
 
 
 @_styled
-def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band: float | None, xlabel: str, title: str) -> bytes:
+def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band: float | None, xlabel: str, title: str,
+            muted: str | None = None) -> bytes:
     """Ranked horizontal bars with confidence intervals, the strongest at the top.
 
     Parameters
     ----------
     labels : list of str
+        Parameter names; long ones are wrapped (:func:`wrap`).
     estimate, lower, upper : array_like
         Bar lengths and their interval (same order as ``labels``, already ranked).
     interval : str
@@ -156,38 +221,48 @@ def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band:
         A second coefficient drawn as diamonds (label, values).
     band : float, optional
         Half-width of the grey band around zero of coefficients indistinguishable from noise.
+    muted : str, optional
+        Why these statistics are not to be trusted (e.g. too few runs): the bars are drawn
+        grey and the reason is written over the chart.
     """
     n = len(labels)
-    fig = _new(1, 1, 1.3 + 0.27 * max(n, 3))
+    wrapped = [wrap(label) for label in labels]
+    lines = sum(label.count("\n") + 1 for label in wrapped)
+    fig = _new(1, 1, 0.95 + 0.13 * max(lines, 4) + 0.06 * n)
     ax = fig.axes[0]
     y = np.arange(n)[::-1]
     estimate, lower, upper = (np.asarray(v, dtype=float) for v in (estimate, lower, upper))
-    colors = np.where(estimate >= 0, "#c0504d", "#4f81bd")
+    colors = np.where(estimate >= 0, "#c0504d", "#4f81bd") if muted is None else np.full(n, "#b0b0b0")
     ax.barh(y, estimate, color=colors, alpha=0.75, height=0.65, label="Spearman ρ")
     # drawn about the interval's midpoint: a percentile interval need not contain the estimate
-    ax.errorbar((lower + upper) / 2, y, xerr=(upper - lower) / 2, fmt="none", ecolor="black", capsize=2.5, lw=0.9,
-                label=interval)
+    ax.errorbar((lower + upper) / 2, y, xerr=(upper - lower) / 2, fmt="none", ecolor="black" if muted is None else "#909090",
+                capsize=2.5, lw=0.9, label=interval)
     if marker is not None:
-        ax.plot(np.asarray(marker[1], dtype=float), y, "D", color="black", ms=3.5, mfc="white", label=marker[0])
+        ax.plot(np.asarray(marker[1], dtype=float), y, "D", color="black" if muted is None else "#909090", ms=3.5, mfc="white",
+                label=marker[0])
     if band:
         ax.axvspan(-band, band, color="grey", alpha=0.2, lw=0, label="|ρ| indistinguishable from 0")
     ax.axvline(0.0, color="black", lw=0.8)
-    ax.set_yticks(y, labels)
+    ax.set_yticks(y, wrapped, fontsize=7.5)
     ax.set_xlim(-1.05, 1.05)
     ax.set_ylim(-0.7, n - 0.3)
     ax.grid(axis="y", visible=False)
-    ax.set(xlabel=xlabel, title=title)
-    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=4, fontsize=7.5, frameon=False)
+    ax.set(xlabel=xlabel, title=title + (f" — {muted}" if muted else ""))
+    if muted:
+        ax.title.set_color("#707070")
+    _legend_outside(fig, [ax], ncols=4, fontsize=7.5)
     return _png(fig)
 
 
 @_styled
 def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str, ylabel: str,
             vmin: float, vmax: float, cmap: str, center: float | None = None) -> bytes:
-    """A labelled colour matrix with each cell's value written in it (NaN cells blank)."""
+    """A labelled colour matrix with each cell's value written in it (NaN cells blank, long row labels wrapped)."""
     matrix = np.asarray(matrix, dtype=float)
     rows, cols = matrix.shape
-    fig = _new(1, 1, 1.4 + 0.26 * max(rows, 4))
+    row_labels = [wrap(label) for label in row_labels]
+    lines = max((label.count("\n") + 1 for label in row_labels), default=1)
+    fig = _new(1, 1, 1.4 + (0.1 + 0.11 * lines) * max(rows, 4))
     ax = fig.axes[0]
     norm = TwoSlopeNorm(center, vmin, vmax) if center is not None else None
     image = ax.imshow(np.ma.masked_invalid(matrix), cmap=cmap, aspect="auto", norm=norm,
@@ -199,7 +274,7 @@ def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str,
                 dark = 0.299 * red + 0.587 * green + 0.114 * blue < 0.5  # perceived luminance of the cell
                 ax.text(j, i, f"{matrix[i, j]:.2f}", ha="center", va="center", fontsize=7, color="white" if dark else "black")
     ax.set_xticks(range(cols), col_labels)
-    ax.set_yticks(range(rows), row_labels)
+    ax.set_yticks(range(rows), row_labels, fontsize=7.5 if lines > 1 else 8.0)
     ax.grid(False)
     ax.set(xlabel=xlabel, ylabel=ylabel)
     fig.colorbar(image, ax=ax, label=colorbar_label, shrink=0.8)
@@ -208,40 +283,57 @@ def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str,
 
 @_styled
 def scatter(panels: list[Panel]) -> bytes:
-    """Scatter panels on a two-column grid; ``items`` are :class:`Line` s drawn as points."""
+    """Scatter panels on a two-column grid; ``items`` are :class:`Line` s drawn as points.
+
+    The x label (a parameter name with its unit) is wrapped; plain-number axes carry
+    their power of ten in the label, never as an offset text.
+    """
     ncols = 2 if len(panels) > 1 else 1
     nrows = math.ceil(len(panels) / ncols)
-    fig = _new(nrows, ncols, 0.6 + 2.6 * nrows)
+    fig = _new(nrows, ncols, 0.7 + 2.7 * nrows)
     for ax, panel in zip(fig.axes, panels):
+        xlabel = panel.xlabel
         for item in panel.items:
-            ax.plot(item.x, item.y, "o", ms=3.0, alpha=0.6, color=item.color, mec="none", label=item.label)
-        ax.set(xlabel=panel.xlabel, ylabel=panel.ylabel)
-        ax.set_title(panel.title, fontsize=8)
+            x, xlabel = _scaled(np.asarray(item.x, dtype=float), panel.xlabel)
+            ax.plot(x, item.y, "o", ms=3.0, alpha=0.6, color=item.color, mec="none", label=item.label)
+        ax.set_xlabel(wrap(xlabel, 44))
+        ax.set_ylabel(wrap(panel.ylabel, 24))
         _tidy_x(ax)
     for ax in fig.axes[len(panels):]:
         ax.set_visible(False)
-    handles, labels = fig.axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 7), markerscale=1.5)
+    _legend_outside(fig, fig.axes, ncols=7, markerscale=1.5)
     return _png(fig)
 
 
 @_styled
-def time_series(panels: list[Panel]) -> bytes:
-    """Stacked time-series panels sharing the time axis; ``items`` are :class:`Line` s."""
-    fig = _new(len(panels), 1, 0.5 + 1.9 * len(panels))
+def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
+    """Stacked time-series panels sharing the time axis; ``items`` are :class:`Line` s.
+
+    Each panel has its legend to the right of the axes, never over the data (small
+    multiples name their line in the title instead); callers keep at most :data:`MAX_TRACES` lines per panel (small multiples otherwise).
+    ``sharey`` gives every panel the same value axis (small multiples of one quantity).
+    """
+    compact = sharey and len(panels) > 3
+    fig = _new(len(panels), 1, (0.6 + 1.05 * len(panels)) if compact else (0.45 + 1.25 * len(panels)))
     for ax in fig.axes[1:]:
         ax.sharex(fig.axes[0])
+        if sharey:
+            ax.sharey(fig.axes[0])
     for ax, panel in zip(fig.axes, panels):
         for line in panel.items:
             ax.plot(line.x, line.y, line.style, color=line.color, lw=1.0, label=line.label)
-        ax.set(title=panel.title, ylabel=panel.ylabel)
-        if len(panel.items) > 1:
-            ax.legend(loc="best")
+        ax.set_title(panel.title, fontsize=8.5 if compact else None)
+        if not sharey:
+            ax.set_ylabel(wrap(panel.ylabel, 22))
+        ax.yaxis.set_major_locator(MaxNLocator(4 if compact else 5))
+        if not compact:  # every signal named in the figure, beside its axes
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=7.5)
+    if sharey:  # one label for the shared value axis, along the whole column
+        fig.supylabel(panels[0].ylabel, fontsize=9.0)
     for ax in fig.axes[:-1]:
         ax.tick_params(labelbottom=False)
     fig.axes[-1].set_xlabel(panels[-1].xlabel)
     return _png(fig)
-
 
 @_styled
 def detection(curves: list[Line], *, power: float, false_alarm_rate: float, requirement: tuple[str, float],

@@ -21,12 +21,15 @@ class Paragraph:
 class Callout:
     """A short verdict set apart from the text.
 
-    ``tone`` is ``"good"`` (a requirement met), ``"bad"`` (not met, or failures)
-    or ``"info"`` (something missing or to keep in mind).
+    ``tone`` is ``"good"`` (a requirement met), ``"bad"`` (not met, or failures),
+    ``"info"`` (something missing or to keep in mind) or ``"muted"`` (insufficient data).
+    ``link`` is the key of the section that holds the details (the executive summary
+    points every finding to its section); empty for none.
     """
 
     text: str
     tone: str = "info"
+    link: str = ""
 
 
 @dataclass(frozen=True)
@@ -38,12 +41,17 @@ class Heading:
 
 @dataclass(frozen=True)
 class Table:
-    """A numbered table; every cell is already formatted text."""
+    """A numbered table; every cell is already formatted text.
+
+    ``muted`` flags rows whose statistics rest on too few runs: renderers grey them out
+    (the row itself says why).
+    """
 
     number: int
     caption: str
     header: tuple[str, ...]
     rows: tuple[tuple[str, ...], ...]
+    muted: tuple[bool, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -80,6 +88,9 @@ class Report:
         reports of the same input.
     facts : tuple of (str, str)
         Key facts of the title page.
+    executive : tuple of Block
+        The executive summary on page 1: the question, the verdicts, the data sets, the
+        top influences, the failures and the fidelity audit, each linking to its section.
     sections : tuple of Section
     """
 
@@ -87,4 +98,10 @@ class Report:
     subtitle: str
     generated_at: str
     facts: tuple[tuple[str, str], ...]
+    executive: tuple[Block, ...] = field(default=())
     sections: tuple[Section, ...] = field(default=())
+
+    def link_text(self, key: str) -> str:
+        """``§6 Observability``: how a link to the section ``key`` reads."""
+        number = next(i for i, s in enumerate(self.sections, start=1) if s.key == key)
+        return f"§{number} {self.sections[number - 1].title}"

@@ -18,26 +18,27 @@ from importlib import resources
 from pathlib import Path
 
 from reports.errors import ReportError
-from reports.model import Figure, Report
+from reports.model import Callout, Figure, Report
 
 
 def _document(report: Report, figure_names: dict[int, str]) -> dict:
-    """The report as JSON-ready data; figures refer to their PNG files."""
-    sections = []
-    for section in report.sections:
-        blocks = []
-        for block in section.blocks:
-            if isinstance(block, Figure):
-                blocks.append({"type": "Figure", "number": block.number, "caption": block.caption, "path": figure_names[block.number]})
-            else:
-                blocks.append({"type": type(block).__name__, **asdict(block)})
-        sections.append({"key": section.key, "title": section.title, "blocks": blocks})
+    """The report as JSON-ready data; figures refer to their PNG files, links carry their text."""
+
+    def block_data(block) -> dict:
+        if isinstance(block, Figure):
+            return {"type": "Figure", "number": block.number, "caption": block.caption, "path": figure_names[block.number]}
+        data = {"type": type(block).__name__, **asdict(block)}
+        if isinstance(block, Callout) and block.link:
+            data["link_text"] = report.link_text(block.link)
+        return data
+
     return {
         "title": report.title,
         "subtitle": report.subtitle,
         "generated_at": report.generated_at,
         "facts": [list(f) for f in report.facts],
-        "sections": sections,
+        "executive": [block_data(b) for b in report.executive],
+        "sections": [{"key": s.key, "title": s.title, "blocks": [block_data(b) for b in s.blocks]} for s in report.sections],
     }
 
 
@@ -69,8 +70,8 @@ def render_pdf(report: Report, path: str | Path, timestamp: datetime) -> Path:
     with tempfile.TemporaryDirectory(prefix="benchtwin-report-") as tmp:
         root = Path(tmp)
         names = {}
-        for section in report.sections:
-            for block in section.blocks:
+        for blocks in [report.executive] + [section.blocks for section in report.sections]:
+            for block in blocks:
                 if isinstance(block, Figure):
                     names[block.number] = f"figure-{block.number}.png"
                     (root / names[block.number]).write_bytes(block.png)

@@ -3,6 +3,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${1:-}"
+# setuptools' notice about editable installs of a flat layout is about our packaging, not the user's business
+export PYTHONWARNINGS="ignore:Editable installation"
 python3 -m venv .venv
 .venv/bin/python -m pip install --quiet --upgrade pip
 if [ -n "$extras" ]; then

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 import twin
@@ -120,6 +121,16 @@ def cmd_accuracy(args) -> int:
     return 0
 
 
+class Stages:
+    """Announces each named stage of a long job as it starts, with the time elapsed so far."""
+
+    def __init__(self):
+        self.start = time.perf_counter()
+
+    def __call__(self, stage: str, message: str) -> None:
+        print(f"[{time.perf_counter() - self.start:6.0f} s] {stage}: {message}", flush=True)
+
+
 def cmd_campaign_run(args) -> int:
     import campaigns
 
@@ -128,16 +139,20 @@ def cmd_campaign_run(args) -> int:
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
+    announce = Stages()
     results = campaigns.run_campaign(spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume,
-                                     allow_version_mix=args.allow_version_mix)
+                                     allow_version_mix=args.allow_version_mix, announce=announce)
     print(f"wrote {results}")
     if args.analyze:
+        announce("analysis", "correlations with bootstrap intervals, separation, observability (about 10-60 s)")
         print(f"wrote {campaigns.analyze(results)}")
     if args.report:
         from reports import build_report
 
+        announce("report", "figures, HTML and PDF (about 30-90 s)")
         for kind, path in build_report(results, out_dir=out).items():
             print(f"wrote {kind} report: {path.resolve()}")
+    announce("done", f"total {time.perf_counter() - announce.start:.0f} s")
     return 0
 
 

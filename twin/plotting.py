@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -13,10 +14,51 @@ import xarray as xr  # noqa: E402
 
 _MICRO = 1e6
 _MILLI = 1e3
+_KELVIN_OFFSET = 273.15
+
+
+def _panels(ds: xr.Dataset) -> list[tuple[str, str, list[tuple[str, np.ndarray, dict]]]]:
+    """The panels the run's signals allow: (title, y label, [(legend label, values, line style)]).
+
+    A signal the run did not produce (a subsystem at a reduced fidelity, an output not
+    requested) gives no panel, so no panel is ever drawn empty.
+    """
+    panels = []
+    lines = [(label, ds[name].values * _MILLI, style) for label, name, style in (
+        ("demand", "position_demand", {"lw": 1.0}),
+        ("sled (true)", "nut1_position", {"lw": 1.0, "ls": "--"}),
+        ("linear encoder", "linear_encoder_position", {"lw": 0.8})) if name in ds]
+    panels.append(("position demand and response", "position [mm]", lines))
+    lines = [("true", (ds["nut1_position"] - ds["screw_equivalent_position"]).values * _MICRO, {"lw": 0.8})]
+    if {"screw_angle_measured", "linear_encoder_position"} <= set(ds.data_vars):
+        lead_arm = ds.attrs["screw_lead"] / (2 * np.pi)
+        measured = ds["linear_encoder_position"] - lead_arm * ds["screw_angle_measured"]
+        lines.append(("encoders", measured.values * _MICRO, {"lw": 0.6, "alpha": 0.8}))
+    panels.append(("nut minus screw equivalent position", "x_n1 − p·θ_s/2π [µm]", lines))
+    lines = [(label, ds[name].values, style) for label, name, style in (
+        ("true", "motor_current", {"lw": 0.6}), ("measured", "motor_current_measured", {"lw": 0.5, "alpha": 0.7}))
+        if name in ds]
+    if lines:
+        panels.append(("motor current", "motor current [A]", lines))
+    lines = [(label, ds[name].values / _MILLI, style) for label, name, style in (
+        ("preload", "preload_force", {"lw": 1.0}), ("external force", "external_force", {"lw": 1.0}),
+        ("force demand", "force_demand", {"lw": 0.8, "ls": ":"})) if name in ds]
+    if lines:
+        panels.append(("preload and external force", "force [kN]", lines))
+    if "speed_command" in ds:
+        panels.append(("motor speed command (after the 11-bit input)", "speed command [rad/s]",
+                       [("command", ds["speed_command"].values, {"lw": 0.6})]))
+    if "winding_temperature" in ds:
+        panels.append(("winding temperature", "temperature [°C]",
+                       [("winding", ds["winding_temperature"].values - _KELVIN_OFFSET, {"lw": 1.0})]))
+    return panels
 
 
 def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
-    """Six-panel overview of a run: position, nut-minus-screw, current, forces, speed command, temperature.
+    """Overview of a run on a two-column grid: position, nut-minus-screw, current, forces, speed command, temperature.
+
+    Only the panels of signals the run produced are drawn (the winding temperature, for
+    instance, exists only when the thermal model runs); each legend sits right of its axes.
 
     Parameters
     ----------
@@ -26,63 +68,28 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
         If given, the figure is saved there (format from the suffix) and closed.
     """
     t = ds["time"].values
-    fig, axes = plt.subplots(3, 2, figsize=(11, 8.5), sharex=True, constrained_layout=True)
-    ax = axes[0, 0]
-    ax.plot(t, ds["position_demand"] * _MILLI, label="demand", lw=1.0)
-    ax.plot(t, ds["nut1_position"] * _MILLI, label="sled (true)", lw=1.0, ls="--")
-    if "linear_encoder_position" in ds:
-        ax.plot(t, ds["linear_encoder_position"] * _MILLI, label="linear encoder", lw=0.8)
-    ax.set_ylabel("position [mm]")
-    ax.set_title("(a) position demand and response")
-    ax.legend(fontsize=8)
-
-    ax = axes[0, 1]
-    ax.plot(t, (ds["nut1_position"] - ds["screw_equivalent_position"]) * _MICRO, lw=0.8, label="true")
-    if "screw_angle_measured" in ds:
-        lead_arm = ds.attrs["screw_lead"] / (2 * np.pi)
-        measured = ds["linear_encoder_position"] - lead_arm * ds["screw_angle_measured"]
-        ax.plot(t, measured * _MICRO, lw=0.6, alpha=0.8, label="encoders")
-        ax.legend(fontsize=8)
-    ax.set_ylabel("x_n1 - p*theta_s/2pi [um]")
-    ax.set_title("(b) nut minus screw equivalent position")
-
-    ax = axes[1, 0]
-    ax.plot(t, ds["motor_current"], lw=0.6, label="true")
-    if "motor_current_measured" in ds:
-        ax.plot(t, ds["motor_current_measured"], lw=0.5, alpha=0.7, label="measured")
-        ax.legend(fontsize=8)
-    ax.set_ylabel("motor current [A]")
-    ax.set_title("(c) motor current")
-
-    ax = axes[1, 1]
-    ax.plot(t, ds["preload_force"], lw=1.0, label="preload")
-    ax.plot(t, ds["external_force"], lw=1.0, label="external force")
-    if "chamber1_pressure" in ds:
-        ax.plot(t, ds["force_demand"], lw=0.8, ls=":", label="force demand")
-    ax.set_ylabel("force [N]")
-    ax.set_title("(d) preload and external force")
-    ax.legend(fontsize=8)
-
-    ax = axes[2, 0]
-    ax.plot(t, ds["speed_command"], lw=0.6)
-    ax.set_ylabel("speed command [rad/s]")
-    ax.set_title("(e) motor speed command (after the 11-bit input)")
-    ax.set_xlabel("time [s]")
-
-    ax = axes[2, 1]
-    if "winding_temperature" in ds:
-        ax.plot(t, ds["winding_temperature"] - 273.15, lw=1.0)
-        ax.set_title("(f) winding temperature")
-    else:
-        ax.set_title("(f) winding temperature: not modelled (motor_thermal=frozen)")
-    ax.set_ylabel("winding temperature [degC]")
-    ax.set_xlabel("time [s]")
-
-    fig.suptitle(f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}, backlash feature "
-                 f"{float(ds['backlash_feature']) * _MICRO:.3f} um measured, "
-                 f"{float(ds['backlash_feature_true']) * _MICRO:.3f} um true")
-    for a in axes.flat:
-        a.grid(True, alpha=0.3)
+    panels = _panels(ds)
+    rows = (len(panels) + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(12, 0.9 + 2.3 * rows), sharex=True, constrained_layout=True, squeeze=False)
+    for k, (ax, (title, ylabel, lines)) in enumerate(zip(axes.flat, panels)):
+        for label, values, style in lines:
+            ax.plot(t, values, label=label, **style)
+        ax.set_title(f"({'abcdef'[k]}) {title}", fontsize=10)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        if len(lines) > 1:
+            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    if len(panels) % 2:  # the last panel's neighbour is hidden: its time labels go on the panel above
+        axes[-2, 1].tick_params(labelbottom=True)
+        axes[-2, 1].set_xlabel("time [s]")
+    title = (f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}; backlash feature (Eq. 9.12) "
+             f"{float(ds['backlash_feature']) * _MICRO:.3f} µm measured, {float(ds['backlash_feature_true']) * _MICRO:.3f} µm "
+             "true signals")
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=11)
     if path is not None:
         fig.savefig(path, dpi=110)
         plt.close(fig)

@@ -11,7 +11,7 @@ import xarray as xr
 
 from reports.content import build
 from reports.inputs import load_inputs
-from reports.model import Callout, Figure, Table
+from reports.model import Callout, Figure, Paragraph, Table
 from reports.units import display_scale, quantity
 
 
@@ -37,8 +37,8 @@ def test_optional_sections_say_not_available(report):
     speed, fidelity = _section(report, "speed"), _section(report, "fidelity")
     assert "not available" in _blocks(speed, Callout)[0].text
     assert not _blocks(speed, Figure)
-    (table,) = _blocks(fidelity, Table)  # the synthetic model reports no fidelity: the audit says why it did not run
-    assert ("fidelity_audit", "not run (the run function reports no fidelity)") in table.rows
+    # the synthetic model reports no fidelity: the audit says why it did not run
+    assert "Audit result: not run (the run function reports no fidelity)." in [c.text for c in _blocks(fidelity, Callout)]
 
 
 #: Bench-named traces added to the synthetic campaign's results: (units, values over the trace time).
@@ -79,8 +79,9 @@ def extended(campaign, tmp_path_factory):
     traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape), {"units": unit})
               for name, (unit, values) in BENCH_TRACES.items()}
     results = results.assign(traces).assign_attrs(
-        fidelity_ds1="pneumatics=full, current_loop=ideal", fidelity_audit="passed",
-        fidelity_audit_ds1="speedup x1.40; backlash_feature: mean shift +0.0010 um -> pass",
+        fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="passed",
+        fidelity_audit_ds2="speedup x0.73; backlash_feature: mean shift +0.0018 um, max paired 0.0257 um, MC error "
+                           "0.0862 um, KS p 1.00 -> pass",  # the format of campaigns.fidelity_audit.summary_attrs
     )
     return build(dataclasses.replace(inputs, results=results), "T")
 
@@ -95,11 +96,13 @@ def test_speed_accuracy_section_from_a_work_precision_study(extended):
     assert ("quantizers_off_reference_stats", "nfev=1234, njev=56") in study.rows
 
 
-def test_fidelity_attributes_are_shown(extended):
-    (table,) = _blocks(_section(extended, "fidelity"), Table)
-    assert table.rows == (("fidelity_requested", "auto"), ("fidelity_audit", "passed"),
-                          ("fidelity_ds1", "pneumatics=full, current_loop=ideal"),
-                          ("fidelity_audit_ds1", "speedup x1.40; backlash_feature: mean shift +0.0010 um -> pass"))
+def test_fidelity_audit_in_words_and_micrometres(extended):
+    fidelity = _section(extended, "fidelity")
+    levels, audit = _blocks(fidelity, Table)
+    assert levels.rows == (("ds2", "pneumatics = full, current_loop = ideal"),)
+    assert audit.rows == (("ds2", "backlash_feature", "+0.0018 µm", "0.0257 µm", "0.0862 µm", "1.00", "pass", "0.73"),)
+    assert "full-fidelity wall time / automatic wall time" in audit.caption
+    assert any("speedup below 1, i.e. the automatic runs took longer" in p.text for p in _blocks(fidelity, Paragraph))
 
 
 def test_bench_traces_get_the_thesis_panels(extended):
@@ -109,8 +112,9 @@ def test_bench_traces_get_the_thesis_panels(extended):
 
 
 def test_every_figure_and_table_is_numbered_in_order(report):
-    figures = [b for s in report.sections for b in s.blocks if isinstance(b, Figure)]
-    tables = [b for s in report.sections for b in s.blocks if isinstance(b, Table)]
+    blocks = [*report.executive] + [b for s in report.sections for b in s.blocks]  # page 1 first
+    figures = [b for b in blocks if isinstance(b, Figure)]
+    tables = [b for b in blocks if isinstance(b, Table)]
     assert [f.number for f in figures] == list(range(1, len(figures) + 1))
     assert [t.number for t in tables] == list(range(1, len(tables) + 1))
     assert all(f.png.startswith(b"\x89PNG") and len(f.caption) > 40 for f in figures)
@@ -139,5 +143,5 @@ def test_a_data_set_without_successful_runs(inputs):
     report = build(dataclasses.replace(inputs, results=results, analysis=analysis_dataset(results)), "T")
     failures = _section(report, "failures")
     assert _blocks(failures, Callout)[0].text.startswith("32 of 90 runs failed")
-    assert any(f.key == "distribution-backlash_feature-ds4" for f in _blocks(_section(report, "distributions"), Figure))
+    assert any(f.key == "distribution-backlash_feature" for f in _blocks(_section(report, "distributions"), Figure))
     assert any(c.text.startswith("backlash_feature: insufficient data: ds4 has 0 ok runs") for c in _blocks(_section(report, "observability"), Callout))

@@ -32,7 +32,7 @@ def test_html_has_every_section_with_captioned_figures(report):
         assert f'href="#{key}"' in html  # in the table of contents
     figures = re.findall(r'<figure id="figure-(\d+)">\s*<img src="data:image/png;base64,[A-Za-z0-9+/=]+" alt="[^"]+">\s*'
                          r"<figcaption><b>Figure (\d+)\.</b> [^<]{40,}</figcaption>", html)
-    assert len(figures) >= 15
+    assert len(figures) >= 12  # per-data-set distributions are small multiples of one figure, not a figure each
     assert [int(a) for a, _ in figures] == list(range(1, len(figures) + 1))
     assert "@media print" in html
 

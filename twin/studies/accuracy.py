@@ -17,7 +17,10 @@ from twin.studies.control_baseline import compare
 from twin.studies.stability import stability_map
 from twin.studies.work_precision import STEP_LADDER, TOLERANCE_LADDER, environment, run_study
 
-QUICK = {"steps": STEP_LADDER[:6], "tolerances": TOLERANCE_LADDER[::2], "repeats": 1}
+#: ``--quick``: three steps, one adaptive baseline at one tolerance, one timing, 0.25 s simulated and no
+#: stability map: under a minute on an idle 2-core machine (the full study takes many minutes).
+QUICK = {"steps": STEP_LADDER[:3], "tolerances": TOLERANCE_LADDER[2:3], "baselines": ("scipy_lsoda",), "repeats": 1}
+QUICK_DURATION = 0.25
 
 
 def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 1.5, *, quick: bool = False,
@@ -25,11 +28,17 @@ def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 
     """Run the work-precision study (and the stability map, the python-control baseline and,
     with ``campaign_runs > 0``, the campaign-level comparison) into ``out_dir``.
 
-    ``quick`` trims the step ladder to 1.25e-4 ... 3.9e-6 s, the tolerance ladder to three
-    values and times each run once (for a first look; the full study takes minutes).
+    ``quick`` trims the step ladder to 1.25e-4 ... 3.1e-5 s and the adaptive baselines to
+    ``scipy_lsoda`` at one tolerance, times each run once, simulates at most :data:`QUICK_DURATION` seconds and skips the
+    stability map (a first look in under a minute; the full study takes many minutes).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if quick:
+        duration, stability = min(duration, QUICK_DURATION), False
+        progress(f"quick study: {QUICK_DURATION} s simulated, steps {', '.join(f'{s:.3g}' for s in QUICK['steps'])} s, "
+                 f"{', '.join(QUICK['baselines'])} at rtol {', '.join(f'{t:g}' for t in QUICK['tolerances'])}, "
+                 "no stability map; the tight-tolerance reference of each panel is the slowest step")
     study = run_study(scene, duration, progress=progress, **(QUICK if quick else {}))
     study.to_netcdf(out / "work_precision.nc", engine="netcdf4")
     study.to_dataframe().to_csv(out / "work_precision.csv")

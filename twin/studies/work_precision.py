@@ -130,15 +130,20 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
                                                      if k.startswith("solver_"))
         progress(f"[{panel}] reference {REFERENCE}: {reference_time:.2f} s, status {reference.attrs['status']}")
         runs = [(m, dt, np.nan) for m in methods for dt in steps] + [(b, np.nan, r) for b in baselines for r in tolerances]
-        for method, dt, rtol in runs:
+        for k, (method, dt, rtol) in enumerate(runs, start=1):
             options = {"integrator": method, "fidelity": fidelity}
             options.update({"dt": dt} if np.isfinite(dt) else {"rtol": rtol})
             ds, wall = timed(scene, repeats, **options)
             metrics = errors(ds, reference)
             records.append({"panel": panel, "method": method, "dt": dt, "rtol": rtol, "wall_time": wall,
                             "status": ds.attrs["status"], **metrics})
-            progress(f"[{panel}] {method:20s} dt={dt:9.3g} rtol={rtol:7.1g} wall={wall:8.4f} s "
-                     f"feature error={metrics['feature_error']:.3g} m status={ds.attrs['status']}")
+            # every entry a number or the reason it is none: adaptive methods have no fixed step, fixed steps no rtol
+            setting = f"dt={dt:9.3g} s (fixed step)    " if np.isfinite(dt) else f"rtol={rtol:7.1g} (adaptive step)"
+            outcome = (f"feature error={metrics['feature_error']:.3g} m" if ds.attrs["status"] == "ok" else
+                       f"status={ds.attrs['status']}: no error (the step is beyond this method's stability limit, "
+                       "see the stability map)" if ds.attrs["status"] == "diverged" else
+                       f"status={ds.attrs['status']}: no error ({ds.attrs.get('failure_reason', '')})")
+            progress(f"[{panel} {k}/{len(runs)}] {method:20s} {setting} wall={wall:8.4f} s {outcome}")
     return _to_dataset(records, attrs)
 
 

@@ -1,0 +1,94 @@
+"""Page 1 of the report states what analysis.nc holds: every verdict, bound and n, verbatim; and an older
+analysis without a verdict says "not available" rather than a verdict the report composed."""
+
+from __future__ import annotations
+
+import re
+import shutil
+
+import numpy as np
+import pypdf
+import pytest
+import xarray as xr
+
+import reports
+
+
+def _page_one(pdf) -> str:
+    return " ".join(pypdf.PdfReader(pdf).pages[0].extract_text().split())
+
+
+def _executive_html(html_path) -> str:
+    html = html_path.read_text(encoding="utf-8").replace("<wbr>", "")
+    section = re.search(r'<section id="executive".*?</section>', html, re.S).group(0)
+    return " ".join(re.sub(r"<[^>]+>", " ", section).split())
+
+
+def _contract_analysis(analysis: xr.Dataset) -> xr.Dataset:
+    """The analysis with the CONTRACT.md verdict variables, as campaigns.analysis writes them (kept when present)."""
+    if "requirement_statement" in analysis:
+        return analysis
+    features = [str(f) for f in analysis["feature"].values]
+    verdicts = ["not met", "met", "undetermined"][: len(features)]
+    n = int(analysis["n_used"].min())
+    statements = [f"{v}: minimum detectable backlash {1.9 + k:.1f} µm (95 % bootstrap CI {1.4 + k:.1f}–{2.6 + k:.1f} µm; "
+                  f"{n} ok runs per sweep data set, 3 data sets) against the 1 µm requirement of Table 9.3"
+                  for k, v in enumerate(verdicts)]
+    sufficient = (analysis["n_used"] >= 10).astype(np.int8)
+    return analysis.assign(
+        requirement_verdict=("feature", np.array(verdicts, dtype=object)),
+        requirement_statement=("feature", np.array(statements, dtype=object)),
+        data_sufficient=sufficient.assign_attrs(flag_values=[0, 1], flag_meanings="insufficient sufficient"),
+    ).assign_attrs(min_ok_runs=10, requirement=1e-6, requirement_source="Table 9.3: minimum detectable linear backlash 1 µm")
+
+
+@pytest.fixture(scope="module")
+def with_verdicts(campaign, generated_at, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("verdicts")
+    shutil.copyfile(campaign, folder / "results.nc")
+    with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
+        analysis = _contract_analysis(stored.load())
+    analysis.to_netcdf(folder / "analysis.nc")
+    return folder, reports.build_report(folder / "results.nc", out_dir=folder / "report", generated_at=generated_at)
+
+
+def test_page_one_states_every_verdict_bound_and_n_of_the_analysis(with_verdicts):
+    folder, paths = with_verdicts
+    page, html = _page_one(paths["pdf"]), _executive_html(paths["html"])
+    with xr.open_dataset(folder / "analysis.nc") as analysis:
+        for feature in analysis["feature"].values:
+            statement = " ".join(str(analysis["requirement_statement"].sel(feature=feature).item()).split())
+            assert statement in page, f"page 1 lacks the analysis's statement for {feature}"
+            assert statement in html
+            verdict = str(analysis["requirement_verdict"].sel(feature=feature).item())
+            assert statement.startswith(verdict)
+        measured = [str(f) for f in analysis["feature"].values if not str(f).endswith("_true")]
+        for dataset in analysis["dataset"].values:
+            used = min(int(analysis["n_used"].sel(dataset=dataset, feature=f)) for f in measured)
+            row = re.search(rf"{dataset} .*?(\d+) of (\d+)", page)
+            assert row and int(row.group(1)) == used, f"page 1 gives another n for {dataset}"
+
+
+def test_page_one_links_each_finding_to_its_section(with_verdicts):
+    _, paths = with_verdicts
+    html = paths["html"].read_text(encoding="utf-8")
+    section = re.search(r'<section id="executive".*?</section>', html, re.S).group(0)
+    for key in ("observability", "correlations", "failures", "fidelity"):
+        assert f'href="#{key}"' in section
+    assert "§6 Observability" in _page_one(paths["pdf"])
+
+
+def test_an_older_analysis_gives_no_verdict(campaign, generated_at, tmp_path):
+    """An analysis.nc written before requirement_verdict existed: page 1 says "not available", composes nothing."""
+    shutil.copyfile(campaign, tmp_path / "results.nc")
+    new = ["requirement_verdict", "requirement_statement", "data_sufficient", "first_order_index", "first_order_index_ci",
+           "effect_size", "effect_size_ci", "minimum_detectable_backlash_ci"]
+    with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
+        old = stored.load().drop_vars(new, errors="ignore")
+    old.attrs.pop("min_ok_runs", None)
+    old.to_netcdf(tmp_path / "analysis.nc")
+    paths = reports.build_report(tmp_path / "results.nc", out_dir=tmp_path / "report", generated_at=generated_at)
+    page = _page_one(paths["pdf"])
+    assert "Requirement verdict: not available" in page
+    assert not re.search(r"\b(meets|not met|met)\b", page.replace("not available", ""))
+    assert "a rank correlation, not an effect size" in page  # the influences fall back to |Spearman ρ|, labelled
