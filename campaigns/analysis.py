@@ -26,6 +26,16 @@ from scipy import stats
 
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
+REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm"
+#: Ok runs a data set needs before any statistic of it is computed. The detection threshold is the 95 %
+#: quantile of the reference (false-alarm rate 5 %) and the minimum detectable backlash is where the detection
+#: probability reaches 95 %: both are resolved only when one run is at most 5 % of the sample, i.e. n >= 20.
+#: Below that the bootstrap has too few distinct resamples for a 95 % interval (docs/campaigns.md, Analysis).
+MIN_OK_RUNS = 20
+_VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not met / undetermined / insufficient data"}
+_STATEMENT_ATTRS = {"long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, in one sentence"}
+#: Spawn-key tag of the observability bootstrap's random stream (the correlation bootstraps use (dataset, feature)).
+_OBSERVABILITY_STREAM = 1_000_003
 #: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
 _EXPLAINED = 1e-18
 
@@ -127,6 +137,14 @@ def overlap_coefficient(a, b, bins: int | None = None) -> float:
     return float(np.minimum(pa, pb).sum())
 
 
+def _detection_probabilities(reference: np.ndarray, test: np.ndarray, false_alarm_rate: float) -> np.ndarray:
+    """:func:`detection_probability` of each row of ``test`` (shape (B, n_t)) against the same row of ``reference`` (B, n_r)."""
+    upward = np.median(test, axis=-1) >= np.median(reference, axis=-1)
+    high = np.quantile(reference, 1.0 - false_alarm_rate, axis=-1)
+    low = np.quantile(reference, false_alarm_rate, axis=-1)
+    return np.where(upward, np.mean(test > high[:, None], axis=-1), np.mean(test < low[:, None], axis=-1))
+
+
 def detection_probability(reference, test, false_alarm_rate: float = 0.05) -> float:
     """Probability that a ``test`` run is flagged by a threshold with the given false-alarm rate.
 
@@ -138,9 +156,7 @@ def detection_probability(reference, test, false_alarm_rate: float = 0.05) -> fl
     reference, test = np.asarray(reference, dtype=float), np.asarray(test, dtype=float)
     if len(reference) == 0 or len(test) == 0:
         return math.nan
-    if np.median(test) >= np.median(reference):
-        return float(np.mean(test > np.quantile(reference, 1.0 - false_alarm_rate)))
-    return float(np.mean(test < np.quantile(reference, false_alarm_rate)))
+    return float(_detection_probabilities(reference[None, :], test[None, :], false_alarm_rate)[0])
 
 
 def minimum_detectable(levels, probabilities, power: float = 0.95) -> tuple[float, float, float]:
@@ -172,14 +188,138 @@ def minimum_detectable(levels, probabilities, power: float = 0.95) -> tuple[floa
     return estimate, float(levels[k - 1]), float(levels[k])
 
 
+def bootstrap_minimum_detectable(
+    levels,
+    samples: list,
+    reference: int,
+    *,
+    false_alarm_rate: float = 0.05,
+    power: float = 0.95,
+    n_boot: int = 1000,
+    confidence: float = 0.95,
+    seed=None,
+) -> dict:
+    """Minimum detectable level along a sweep, with bootstrap confidence bounds.
+
+    Each bootstrap replicate resamples the runs of every sweep data set with
+    replacement (independently per data set, the reference included), recomputes
+    the detection probabilities against the resampled reference and the sweep
+    levels bracketing the crossing of ``power`` (:func:`minimum_detectable`).
+    Between two sweep levels the data say nothing, so the bounds are sweep
+    levels: the lower bound is the ``(1 - confidence) / 2`` quantile of the
+    replicates' last level *not* detected (the minimum lies above it), the upper
+    bound the ``(1 + confidence) / 2`` quantile of their first level detected
+    (``inf`` where more than that fraction never reaches ``power``). Quantiles
+    are order statistics (no interpolation, so ``inf`` is handled exactly), and
+    the bounds are widened, if needed, to contain the bracket of the estimate.
+
+    Parameters
+    ----------
+    levels : array_like, shape (s,)
+        Swept condition value of each data set.
+    samples : list of array_like
+        Used feature values of each data set.
+    reference : int
+        Index of the reference data set (zero level) in ``levels``.
+    false_alarm_rate, power : float
+    n_boot : int, default 1000
+    confidence : float, default 0.95
+    seed : int, Generator or None
+
+    Returns
+    -------
+    dict
+        ``probability`` (per data set), ``estimate`` (interpolated, NaN when
+        ``power`` is never reached), ``bracket`` and ``bounds`` (each ``(lower,
+        upper)``), the replicates' interpolated minima ``replicates`` (``inf``:
+        not reached).
+    """
+    levels = np.asarray(levels, dtype=float)
+    samples = [np.asarray(s, dtype=float) for s in samples]
+    probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) for s in samples])
+    estimate, lower, upper = minimum_detectable(levels, probability, power)
+    rng = np.random.default_rng(seed)
+    resampled = [s[rng.integers(0, len(s), (n_boot, len(s)))] for s in samples]
+    boot = np.stack([_detection_probabilities(resampled[reference], r, false_alarm_rate) for r in resampled], axis=1)
+    brackets = np.array([minimum_detectable(levels, p, power) for p in boot])
+    alpha = 0.5 * (1.0 - confidence)
+    bounds = (
+        min(float(np.quantile(brackets[:, 1], alpha, method="inverted_cdf")), lower),
+        max(float(np.quantile(brackets[:, 2], 1.0 - alpha, method="inverted_cdf")), upper),
+    )
+    return {
+        "probability": probability,
+        "estimate": estimate,
+        "bracket": (lower, upper),
+        "bounds": bounds,
+        "replicates": np.where(np.isnan(brackets[:, 0]), math.inf, brackets[:, 0]),
+    }
+
+
 def requirement_verdict(lower: float, upper: float, requirement: float = BACKLASH_REQUIREMENT) -> str:
-    """``"yes"`` if the bracket of the minimum detectable level lies at or below ``requirement``,
-    ``"no"`` if at or above it (its lower level is not detected), else ``"undetermined"``."""
+    """Verdict on the requirement from the bounds of the minimum detectable level.
+
+    ``"met"`` when the upper bound (a level detected) is within ``requirement``;
+    ``"not met"`` when the lower bound (a level not detected: the minimum lies
+    above it) is at or above it; ``"undetermined"`` otherwise, and when a bound
+    is unknown (NaN).
+    """
     if upper <= requirement:
-        return "yes"
+        return "met"
     if lower >= requirement:
-        return "no"
+        return "not met"
     return "undetermined"
+
+
+def _micrometres(value: float) -> str:
+    return f"{value * 1e6:.3g} µm"
+
+
+def requirement_statement(
+    verdict: str,
+    estimate: float,
+    bounds: tuple[float, float],
+    n_used: dict[str, int],
+    *,
+    confidence: float = 0.95,
+    power: float = 0.95,
+    min_ok_runs: int = MIN_OK_RUNS,
+    largest_level: float = math.nan,
+) -> str:
+    """The one sentence that states the verdict on the Table 9.3 requirement, from the numbers.
+
+    Parameters
+    ----------
+    verdict : str
+        From :func:`requirement_verdict`, or ``"insufficient data"``.
+    estimate : float
+        Interpolated minimum detectable backlash [m] (NaN: not reached along the sweep).
+    bounds : tuple of float
+        Bootstrap bounds [m] (lower: a level not detected, upper: a level detected).
+    n_used : dict
+        Ok runs of each sweep data set (empty: no sweep).
+    confidence, power, min_ok_runs, largest_level
+        As used for the numbers (``largest_level``: the largest backlash of the sweep).
+    """
+    against = f"against the {_micrometres(BACKLASH_REQUIREMENT)} requirement of Table 9.3"
+    if not n_used:
+        return f"insufficient data: the spec has no observability sweep, so no minimum detectable backlash is estimated {against}"
+    short = [f"{name} has {n} ok run{'s' if n != 1 else ''}" for name, n in n_used.items() if n < min_ok_runs]
+    if short:
+        return (
+            f"insufficient data: {', '.join(short)} (at least {min_ok_runs} per sweep data set are needed), "
+            f"so no minimum detectable backlash is estimated {against}"
+        )
+    counts = sorted(set(n_used.values()))
+    runs = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
+    lower, upper = bounds
+    upper_text = f"at most {_micrometres(upper)}" if math.isfinite(upper) else f"possibly beyond the sweep ({_micrometres(largest_level)})"
+    level = "" if math.isfinite(estimate) else f"not reached up to {_micrometres(largest_level)}: "
+    value = _micrometres(estimate) if math.isfinite(estimate) else f"detection probability below {power * 100:g} %"
+    return (
+        f"{verdict}: minimum detectable backlash {level}{value} ({confidence * 100:g} % bootstrap bounds: above "
+        f"{_micrometres(lower)}, {upper_text}; {runs} ok runs per sweep data set, {len(n_used)} data sets) {against}"
+    )
 
 
 def _used(results: xr.Dataset, feature: str) -> xr.DataArray:
@@ -187,9 +327,18 @@ def _used(results: xr.Dataset, feature: str) -> xr.DataArray:
 
 
 def observability_sweep(
-    results: xr.Dataset, feature: str, datasets: list[str], *, false_alarm_rate: float = 0.05, power: float = 0.95
+    results: xr.Dataset,
+    feature: str,
+    datasets: list[str],
+    *,
+    false_alarm_rate: float = 0.05,
+    power: float = 0.95,
+    n_boot: int = 1000,
+    confidence: float = 0.95,
+    min_ok_runs: int = MIN_OK_RUNS,
+    seed=None,
 ) -> xr.Dataset:
-    """Detection probability along a backlash sweep and the minimum detectable backlash.
+    """Detection probability along a backlash sweep, the minimum detectable backlash and the verdict.
 
     Parameters
     ----------
@@ -202,6 +351,11 @@ def observability_sweep(
     false_alarm_rate, power : float
         The detection threshold flags ``false_alarm_rate`` of the reference runs;
         the minimum detectable backlash is where the detection probability reaches ``power``.
+    n_boot, confidence, seed
+        Bootstrap of :func:`bootstrap_minimum_detectable`.
+    min_ok_runs : int
+        Ok runs every sweep data set needs; below it the verdict is ``"insufficient data"``
+        and the sweep statistics of that data set are NaN.
 
     Returns
     -------
@@ -209,47 +363,66 @@ def observability_sweep(
         ``sweep_backlash(sweep_point)``, ``sweep_detection_probability(sweep_point)``,
         the scalar ``minimum_detectable_backlash`` (the Table 9.3 requirement in its
         attributes), ``minimum_detectable_bracket(bound)`` (the sweep levels around
-        it) and ``meets_requirement`` (``"yes"``, ``"no"`` or ``"undetermined"``:
-        the requirement lies inside the bracket, refine the sweep).
+        the estimate), ``minimum_detectable_backlash_ci(bound)``,
+        ``requirement_verdict`` and ``requirement_statement``.
     """
     backlash = np.array([float(results["condition_backlash"].sel(dataset=n)) for n in datasets])
-    reference_name = datasets[int(np.flatnonzero(backlash == 0.0)[0])]
-
-    def values(name: str) -> np.ndarray:
-        sel = results[feature].sel(dataset=name)
-        return sel.values[_used(results, feature).sel(dataset=name).values]
-
-    reference = values(reference_name)
-    probability = np.array([detection_probability(reference, values(n), false_alarm_rate) for n in datasets])
-    minimum, lower, upper = minimum_detectable(backlash, probability, power)
+    reference = int(np.flatnonzero(backlash == 0.0)[0])
+    used = _used(results, feature)
+    samples = [results[feature].sel(dataset=n).values[used.sel(dataset=n).values] for n in datasets]
+    n_used = {n: len(s) for n, s in zip(datasets, samples)}
+    nan2 = (math.nan, math.nan)
+    if min(n_used.values()) < min_ok_runs:
+        enough = [len(s) >= min_ok_runs and n_used[datasets[reference]] >= min_ok_runs for s in samples]
+        probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan for s, ok in zip(samples, enough)])
+        estimate, bracket, bounds, verdict = math.nan, nan2, nan2, "insufficient data"
+    else:
+        found = bootstrap_minimum_detectable(
+            backlash, samples, reference, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
+            confidence=confidence, seed=seed,
+        )
+        probability, estimate, bracket, bounds = found["probability"], found["estimate"], found["bracket"], found["bounds"]
+        verdict = requirement_verdict(*bounds)
+    statement = requirement_statement(
+        verdict, estimate, bounds, n_used, confidence=confidence, power=power, min_ok_runs=min_ok_runs,
+        largest_level=float(backlash.max()),
+    )
     return xr.Dataset(
         {
             "sweep_backlash": ("sweep_point", backlash, {"units": "m", "long_name": "backlash of the sweep data set"}),
             "sweep_detection_probability": (
                 "sweep_point",
                 probability,
-                {"units": "1", "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against {reference_name}"},
+                {"units": "1", "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against {datasets[reference]} (NaN: insufficient data)"},
             ),
             "minimum_detectable_backlash": (
                 (),
-                minimum,
+                estimate,
                 {
                     "units": "m",
-                    "long_name": f"smallest backlash detected with probability {power:g} at false-alarm rate {false_alarm_rate:g} (linear interpolation along the sweep; NaN: not reached)",
+                    "long_name": f"smallest backlash detected with probability {power:g} at false-alarm rate {false_alarm_rate:g} (linear interpolation along the sweep; NaN: not reached or insufficient data)",
                     "requirement": BACKLASH_REQUIREMENT,
-                    "requirement_source": "Table 9.3: minimum detectable linear backlash 1 µm",
+                    "requirement_source": REQUIREMENT_SOURCE,
                 },
             ),
             "minimum_detectable_bracket": (
                 "bound",
-                np.array([lower, upper]),
+                np.array(bracket),
                 {"units": "m", "long_name": "sweep levels bracketing minimum_detectable_backlash (inf: never detected)"},
             ),
-            "meets_requirement": (
-                (),
-                requirement_verdict(lower, upper),
-                {"long_name": "minimum detectable backlash within the Table 9.3 requirement (1 µm): yes / no / undetermined (the requirement lies inside the bracket: refine the sweep)"},
+            "minimum_detectable_backlash_ci": (
+                "bound",
+                np.array(bounds),
+                {
+                    "units": "m",
+                    "long_name": "bootstrap bounds of the minimum detectable backlash: lower = a sweep level not detected "
+                    "(the minimum lies above it), upper = a sweep level detected (inf: not reached)",
+                    "confidence": confidence,
+                    "n_boot": n_boot,
+                },
             ),
+            "requirement_verdict": ((), verdict, _VERDICT_ATTRS),
+            "requirement_statement": ((), statement, _STATEMENT_ATTRS),
         },
         coords={
             "sweep_point": ("sweep_point", np.array(datasets, dtype=object), {"long_name": "data set of the sweep"}),
@@ -266,8 +439,13 @@ def analysis_dataset(
     false_alarm_rate: float = 0.05,
     power: float = 0.95,
     seed: int = 0,
+    min_ok_runs: int = MIN_OK_RUNS,
 ) -> xr.Dataset:
-    """Compute every statistic of :func:`analyze` on an opened results dataset."""
+    """Compute every statistic of :func:`analyze` on an opened results dataset.
+
+    A data set with fewer than ``min_ok_runs`` used runs of a feature is flagged
+    in ``data_sufficient`` and gets NaN statistics for that feature.
+    """
     parameters = [v for v in results.data_vars if results[v].attrs.get("role") == "sampled"]
     features = [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]
     names = [str(n) for n in results["dataset"].values]
@@ -284,10 +462,10 @@ def analysis_dataset(
         for f, feature in enumerate(features):
             mask = _used(results, feature).sel(dataset=name).values
             y = row[feature].values[mask]
-            used_values[d, f] = y
             n_used[d, f] = len(y)
-            if len(y) < 3:
+            if len(y) < min_ok_runs:
                 continue
+            used_values[d, f] = y
             mean[d, f], std[d, f] = y.mean(), y.std(ddof=1)
             X = np.stack([row[p].values[mask] for p in parameters]) if parameters else np.empty((0, len(y)))
             rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(d, f)))
@@ -298,8 +476,8 @@ def analysis_dataset(
                 ci[method][d, f, :, 0], ci[method][d, f, :, 1] = lower, upper
             out["prcc"][d, f] = prcc(X.T, y)
     for f in range(len(features)):
-        for a in range(len(names)):
-            for b in range(len(names)):
+        for a, b in ((a, b) for a in range(len(names)) for b in range(len(names))):
+            if (a, f) in used_values and (b, f) in used_values:
                 overlap[f, a, b] = overlap_coefficient(used_values[a, f], used_values[b, f])
                 detection[f, a, b] = detection_probability(used_values[b, f], used_values[a, f], false_alarm_rate)
     statuses = sorted(set(results["status"].values.ravel().tolist()))
@@ -311,6 +489,16 @@ def analysis_dataset(
         "n_used": (("dataset", "feature"), n_used, {"long_name": "runs used (status ok, finite feature)"}),
         "n_excluded": (("dataset", "feature"), n_runs - n_used, {"long_name": "runs excluded from the statistics"}),
         "n_status": (("dataset", "status"), n_status, {"long_name": "runs per status"}),
+        "data_sufficient": (
+            ("dataset", "feature"),
+            (n_used >= min_ok_runs).astype(np.int8),
+            {
+                "long_name": f"at least {min_ok_runs} used runs (else every statistic of the data set is NaN)",
+                "flag_values": np.array([0, 1], dtype=np.int8),
+                "flag_meanings": "insufficient_data sufficient_data",
+                "min_ok_runs": min_ok_runs,
+            },
+        ),
         "feature_mean": (("dataset", "feature"), mean, {"long_name": "mean of the feature over used runs"}),
         "feature_std": (("dataset", "feature"), std, {"long_name": "standard deviation of the feature over used runs"}),
         "pearson": (corr_dims, out["pearson"], {"units": "1", "long_name": "Pearson correlation"}),
@@ -337,11 +525,20 @@ def analysis_dataset(
     sweep = json.loads(results.attrs["spec_json"])["spec"]["observability"]["sweep"]
     if sweep:
         per_feature = [
-            observability_sweep(results, f, sweep, false_alarm_rate=false_alarm_rate, power=power) for f in features
+            observability_sweep(
+                results, feature, sweep, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
+                confidence=confidence, min_ok_runs=min_ok_runs,
+                seed=np.random.SeedSequence(seed, spawn_key=(_OBSERVABILITY_STREAM, f)),
+            )
+            for f, feature in enumerate(features)
         ]
         combined = xr.concat([s.drop_vars("sweep_backlash") for s in per_feature], dim="feature")
         analysis = analysis.merge(combined.assign_coords(feature=analysis["feature"]))
         analysis["sweep_backlash"] = per_feature[0]["sweep_backlash"]
+    else:
+        statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
+        analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object), _VERDICT_ATTRS)
+        analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object), _STATEMENT_ATTRS)
     analysis.attrs = {
         "Conventions": "CF-1.8",
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",
@@ -351,8 +548,34 @@ def analysis_dataset(
         "false_alarm_rate": false_alarm_rate,
         "detection_power": power,
         "backlash_sweep": json.dumps(sweep),
+        "min_ok_runs": min_ok_runs,
+        "requirement": BACKLASH_REQUIREMENT,
+        "requirement_units": "m",
+        "requirement_source": REQUIREMENT_SOURCE,
     }
     return analysis
+
+
+def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
+    """What a user must see of an analysis: per feature, the requirement statement, and the insufficient data sets.
+
+    Returns
+    -------
+    tuple of list of str
+        ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature, and one
+        warning per feature with data sets below ``min_ok_runs`` ok runs.
+    """
+    statements, warnings = [], []
+    min_ok_runs = int(analysis.attrs["min_ok_runs"])
+    for feature in (str(f) for f in analysis["feature"].values):
+        statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
+        n_used = analysis["n_used"].sel(feature=feature)
+        short = [f"{d} ({int(n)} ok run{'s' if n != 1 else ''})" for d, n in zip(analysis["dataset"].values, n_used.values) if n < min_ok_runs]
+        if short:
+            warnings.append(
+                f"{feature}: insufficient data in {', '.join(short)}: fewer than {min_ok_runs} ok runs, their statistics are NaN"
+            )
+    return statements, warnings
 
 
 def analyze(results_path: str | Path, out_path: str | Path | None = None, **options) -> Path:

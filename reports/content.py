@@ -539,15 +539,10 @@ def _observability(b: _Builder):
     )
     minimum = {f: float(a["minimum_detectable_backlash"].sel(feature=f)) for f in b.features}
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
-    for feature in b.features:
-        if not math.isfinite(minimum[feature]):
-            yield Callout(f"{feature}: the detection probability never reaches {power:.0%} along the sweep; "
-                          f"the {quantity(requirement, 'm')} requirement (Table 9.3) is not met.", "bad")
-            continue
-        meets = bool(a["meets_requirement"].sel(feature=feature))
-        yield Callout(f"{feature}: minimum detectable backlash {quantity(minimum[feature], 'm')}, "
-                      + ("meets" if meets else "does not meet") + f" the {quantity(requirement, 'm')} requirement (Table 9.3).",
-                      "good" if meets else "bad")
+    for feature in b.features:  # the verdict is the analysis's (campaigns.analysis), never composed here
+        verdict = str(a["requirement_verdict"].sel(feature=feature).item())
+        yield Callout(f"{feature}: {a['requirement_statement'].sel(feature=feature).item()}.",
+                      {"met": "good", "not met": "bad"}.get(verdict, "info"))
     if (backlash > 0).any():
         smallest = int(np.flatnonzero(backlash == backlash[backlash > 0].min())[0])
         bounded = [f for f in b.features if probability[f][smallest] >= power]

@@ -138,9 +138,19 @@ def cmd_campaign_run(args) -> int:
 
 
 def cmd_campaign_analyze(args) -> int:
-    import campaigns
+    import xarray as xr
 
-    print(f"wrote {campaigns.analyze(args.results, args.out)}")
+    import campaigns
+    from campaigns.analysis import summary
+
+    path = campaigns.analyze(args.results, args.out)
+    print(f"wrote {path}")
+    with xr.open_dataset(path, engine="netcdf4") as analysis:
+        statements, warnings = summary(analysis)
+    for line in statements:
+        print(line)
+    for line in warnings:
+        print(f"warning: {line}", file=sys.stderr)
     return 0
 
 

@@ -129,10 +129,12 @@ def test_minimum_detectable_interpolates_the_sweep():
     assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == (pytest.approx(5e-6), 0.0, 5e-6)  # order-free
     estimate, lower, upper = minimum_detectable([0.0, 5e-6], [0.05, 0.5], 0.95)
     assert math.isnan(estimate) and (lower, upper) == (5e-6, math.inf)
-    assert requirement_verdict(0.5e-6, 0.8e-6) == "yes"
-    assert requirement_verdict(5e-6, 40e-6) == "no"
+    assert requirement_verdict(0.5e-6, 0.8e-6) == "met"
+    assert requirement_verdict(0.5e-6, 1e-6) == "met"  # 1 um itself detected
+    assert requirement_verdict(5e-6, 40e-6) == "not met"
+    assert requirement_verdict(1e-6, 1.5e-6) == "not met"  # 1 um not detected: the minimum lies above it
     assert requirement_verdict(0.0, 5e-6) == "undetermined"
-    assert requirement_verdict(5e-6, math.inf) == "no"
+    assert requirement_verdict(5e-6, math.inf) == "not met"
     assert requirement_verdict(*minimum_detectable([0.0, 5e-6], [0.05, math.nan])[1:]) == "undetermined"
 
 
@@ -153,7 +155,10 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         assert 0 < float(minimum) <= 5e-6 and minimum.attrs["requirement"] == 1e-6
         bracket = a["minimum_detectable_bracket"].sel(feature="backlash_feature")
         assert list(bracket.values) == [0.0, 5e-6]  # 5 um already detected: the 1 um verdict needs a finer sweep
-        assert a["meets_requirement"].sel(feature="backlash_feature") == "undetermined"
+        # the bootstrap bounds are the same sweep levels (5 um is detected in every resample): no verdict on 1 um
+        assert list(a["minimum_detectable_backlash_ci"].sel(feature="backlash_feature").values) == [0.0, 5e-6]
+        assert a["requirement_verdict"].sel(feature="backlash_feature") == "undetermined"
+        assert (a["data_sufficient"] == 1).all() and a.attrs["min_ok_runs"] == 20
         assert float(a["overlap"].sel(feature="backlash_feature", dataset="ds2", reference="ds4")) == 0.0
 
 
@@ -179,12 +184,14 @@ def test_analysis_reports_exclusions_by_status():
                 **{f"feature/{f}": np.array([r["features"][f] for r in records]) for f in spec.features},
             }
         )
-    a = analysis_dataset(build_results(spec, samples, chunks), n_boot=50)
+    a = analysis_dataset(build_results(spec, samples, chunks), n_boot=50, min_ok_runs=5)
     assert int(a["n_used"].sel(dataset="ds2", feature="backlash_feature")) == 8
     assert int(a["n_excluded"].sel(dataset="ds2", feature="backlash_feature_true")) == 2  # whole run excluded
     assert int(a["n_status"].sel(dataset="ds2", status="error")) == 1
     assert int(a["n_status"].sel(dataset="ds2", status="failed")) == 1
     # a data set without any successful run: NaN statistics, and no verdict on the requirement
     assert int(a["n_used"].sel(dataset="ds6", feature="backlash_feature")) == 0
+    assert (a["data_sufficient"].sel(dataset="ds6") == 0).all() and (a["data_sufficient"].sel(dataset="ds2") == 1).all()
     assert np.isnan(a["spearman"].sel(dataset="ds6")).all()
-    assert (a["meets_requirement"] == "undetermined").all()
+    assert (a["requirement_verdict"] == "insufficient data").all()
+    assert "ds6 has 0 ok runs" in str(a["requirement_statement"].sel(feature="backlash_feature").item())

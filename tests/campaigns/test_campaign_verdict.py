@@ -1,0 +1,150 @@
+"""The requirement verdict: known answers on synthetic sweeps, bootstrap bounds, insufficient data (analysis.nc and CLI).
+
+The synthetic sweeps have a Gaussian feature ``f = backlash + N(0, sigma)``. Detection at false-alarm rate
+alpha = 5 % with power 95 % then needs a shift of ``(z_0.95 + z_0.95) sigma = 3.29 sigma``: that is the true
+minimum detectable backlash of each sweep.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy import stats
+
+from campaigns.analysis import MIN_OK_RUNS, analysis_dataset, bootstrap_minimum_detectable
+
+#: The observability spec's sweep levels [m].
+LEVELS = (0.0, 0.5e-6, 1e-6, 1.5e-6, 2e-6, 3e-6, 5e-6)
+#: Shift detected with probability 95 % at false-alarm rate 5 %, in standard deviations of the feature.
+DETECTABLE_SHIFT = 2 * stats.norm.ppf(0.95)
+
+
+def sweep_results(sigma: float, levels=LEVELS, *, runs: int = 100, ok_runs: int | None = None, seed: int = 0) -> xr.Dataset:
+    """A results dataset of a backlash sweep with feature ``f = backlash + N(0, sigma)`` and one inert parameter."""
+    rng = np.random.default_rng(seed)
+    names = [f"b{k}" for k in range(len(levels))]
+    feature = np.asarray(levels)[:, None] + rng.normal(0.0, sigma, (len(levels), runs))
+    status = np.full(feature.shape, "ok", dtype=object)
+    if ok_runs is not None:
+        status[:, ok_runs:], feature[:, ok_runs:] = "error", math.nan
+    return xr.Dataset(
+        {
+            "f": (("dataset", "run"), feature, {"role": "feature", "units": "m"}),
+            "p.inert": (("dataset", "run"), rng.uniform(size=feature.shape), {"role": "sampled", "units": "1"}),
+            "status": (("dataset", "run"), status),
+            "condition_backlash": ("dataset", np.asarray(levels, dtype=float), {"units": "m"}),
+        },
+        coords={"dataset": names, "run": np.arange(runs)},
+        attrs={"spec_json": json.dumps({"spec": {"observability": {"sweep": names}}})},
+    )
+
+
+def verdict_of(analysis: xr.Dataset) -> tuple[str, str, np.ndarray, float]:
+    a = analysis.sel(feature="f")
+    return str(a["requirement_verdict"].item()), str(a["requirement_statement"].item()), a["minimum_detectable_backlash_ci"].values, float(a["minimum_detectable_backlash"])
+
+
+def test_clearly_met():
+    # truth 3.29 * 0.1 um = 0.33 um: the 0.5 um data set is detected in every resample
+    verdict, statement, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(0.1e-6), n_boot=300))
+    assert verdict == "met" and (lower, upper) == (0.0, 0.5e-6) and lower <= estimate <= upper
+    assert statement.startswith("met: minimum detectable backlash ")
+    assert "above 0 µm, at most 0.5 µm; 100 ok runs per sweep data set, 7 data sets" in statement
+
+
+def test_clearly_not_met():
+    # truth 3.29 um: detection is far below 95 % at 1.5 um (about 42 %)
+    verdict, statement, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(1e-6), n_boot=300))
+    assert verdict == "not met" and lower >= 1.5e-6 and lower <= 3.29e-6 <= upper and lower <= estimate <= upper
+    assert statement.startswith("not met: ")
+
+
+def test_never_detected_along_the_sweep_is_not_met_with_an_infinite_upper_bound(tmp_path):
+    verdict, statement, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(5e-6), n_boot=300))
+    assert verdict == "not met" and math.isnan(estimate) and lower >= 1e-6 and upper == math.inf
+    assert "not reached up to 5 µm" in statement and "possibly beyond the sweep" in statement
+    path = tmp_path / "analysis.nc"
+    analysis_dataset(sweep_results(5e-6), n_boot=50).to_netcdf(path, engine="netcdf4")
+    with xr.open_dataset(path, engine="netcdf4") as stored:  # inf and NaN survive the file
+        assert stored["minimum_detectable_backlash_ci"].sel(feature="f", bound="upper") == math.inf
+
+
+def test_a_bracket_straddling_the_requirement_is_undetermined():
+    # truth 3.29 * 0.35 um = 1.15 um lies in the gap 0.5-2 um of this coarse sweep: the data cannot say which side of 1 um
+    for seed in range(3):
+        results = sweep_results(0.35e-6, (0.0, 0.5e-6, 2e-6, 5e-6), seed=seed)
+        verdict, statement, (lower, upper), _ = verdict_of(analysis_dataset(results, n_boot=300))
+        assert verdict == "undetermined" and (lower, upper) == (0.5e-6, 2e-6)
+        assert statement.startswith("undetermined: ")
+
+
+def test_the_interpolated_estimate_is_not_a_verdict():
+    """0 and 5 um only (the old demo sweep): the interpolation gives 4.7 um, the truth may be anywhere in 0-5 um."""
+    verdict, _, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(0.1e-6, (0.0, 5e-6)), n_boot=300))
+    assert estimate == pytest.approx(5e-6 * 0.90 / 0.95) and (lower, upper) == (0.0, 5e-6) and verdict == "undetermined"
+
+
+def test_bounds_contain_the_estimate_and_the_truth_on_a_fine_sweep():
+    """Levels every 0.25 um, 1000 runs: the bounds hold the true 3.29 sigma, and the replicates' interpolated minima."""
+    sigma, levels = 0.5e-6, np.arange(0, 21) * 0.25e-6
+    results = sweep_results(sigma, levels, runs=1000, seed=4)
+    samples = [results["f"].sel(dataset=n).values for n in results["dataset"].values]
+    found = bootstrap_minimum_detectable(levels, samples, 0, n_boot=300, seed=1)
+    lower, upper = found["bounds"]
+    assert lower <= found["estimate"] <= upper and lower < DETECTABLE_SHIFT * sigma <= upper
+    assert found["bracket"][0] >= lower and found["bracket"][1] <= upper
+    assert lower <= np.quantile(found["replicates"], 0.025) and np.quantile(found["replicates"], 0.975) <= upper
+    assert upper - lower <= 1e-6  # and they say something: at most four sweep steps apart
+
+
+def test_the_bootstrap_is_deterministic_in_its_seed():
+    results = sweep_results(0.3e-6)
+    xr.testing.assert_identical(analysis_dataset(results, n_boot=100, seed=3), analysis_dataset(results, n_boot=100, seed=3))
+    samples = [results["f"].sel(dataset=n).values for n in results["dataset"].values]
+    same = [bootstrap_minimum_detectable(LEVELS, samples, 0, n_boot=100, seed=s)["replicates"] for s in (7, 7, 8)]
+    np.testing.assert_array_equal(same[0], same[1])
+    assert not np.array_equal(same[0], same[2])
+
+
+def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
+    a = analysis_dataset(sweep_results(0.1e-6, ok_runs=1), n_boot=50)
+    verdict, statement, ci, estimate = verdict_of(a)
+    assert verdict == "insufficient data" and np.isnan(ci).all() and math.isnan(estimate)
+    assert statement.startswith("insufficient data: b0 has 1 ok run, ") and f"at least {MIN_OK_RUNS} per sweep data set" in statement
+    assert (a["data_sufficient"] == 0).all() and (a["n_used"] == 1).all() and a.attrs["min_ok_runs"] == MIN_OK_RUNS
+    for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability", "sweep_detection_probability"):
+        assert np.isnan(a[name]).all(), name
+    # one data set short is enough: the others keep their statistics, the verdict is withheld
+    results = sweep_results(0.1e-6)
+    results["status"][2, MIN_OK_RUNS - 1 :] = "error"
+    a = analysis_dataset(results, n_boot=50)
+    assert list(a["data_sufficient"].sel(feature="f").values) == [1, 1, 0, 1, 1, 1, 1]
+    assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
+    assert np.isnan(a["feature_mean"].sel(dataset="b2")).all() and np.isfinite(a["feature_mean"].sel(dataset="b1")).all()
+    assert f"b2 has {MIN_OK_RUNS - 1} ok runs" in str(a["requirement_statement"].sel(feature="f").item())
+
+
+def test_a_spec_without_sweep_has_no_verdict():
+    results = sweep_results(0.1e-6)
+    results.attrs["spec_json"] = json.dumps({"spec": {"observability": {"sweep": []}}})
+    a = analysis_dataset(results, n_boot=50)
+    assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
+    assert "no observability sweep" in str(a["requirement_statement"].sel(feature="f").item())
+
+
+def test_cli_prints_the_statement_and_the_insufficient_data_sets(tmp_path):
+    sweep_results(0.1e-6, ok_runs=1).to_netcdf(tmp_path / "results.nc", engine="netcdf4")
+    done = subprocess.run([sys.executable, "-m", "twin.cli", "campaign", "analyze", str(tmp_path / "results.nc")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    with xr.open_dataset(tmp_path / "analysis.nc", engine="netcdf4") as a:
+        statement = str(a["requirement_statement"].sel(feature="f").item())
+        assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
+    assert f"f: {statement}" in done.stdout.splitlines()
+    assert "warning: f: insufficient data in b0 (1 ok run), b1 (1 ok run)" in done.stderr
