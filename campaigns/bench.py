@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
-from campaigns.catalog import CONDITION_UNITS, lookup_nominal
+from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.engine.features import FEATURES
 from twin.errors import InputError
@@ -99,7 +99,7 @@ class BenchCatalog:
             self.scene_names = list(twin.list_scenes())
             from twin.scenes import CONDITIONS
 
-            self.condition_names = [c for c in CONDITIONS if c in CONDITION_UNITS]
+            self.condition_names = [c for c in CONDITIONS if c in CONDITION_UNITS or c in CONDITION_CHOICES]
         except InputError:
             raise
         except Exception as exc:  # twin missing or broken: report it as a spec problem

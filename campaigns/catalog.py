@@ -35,6 +35,11 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+#: Scene conditions a data set may set to one of a few named choices (``zero_procedure``, ``cylinder``,
+#: ``preload_configuration``), from the same table.
+CONDITION_CHOICES: dict[str, tuple[str, ...]] = {name: condition.choices for name, condition in CONDITIONS.items()
+                                                 if condition.choices}
+
 #: Prefix of uncertainty targets that are scene conditions rather than parameters.
 SCENE_PREFIX = "scene."
 

@@ -25,7 +25,7 @@ from typing import Annotated, Literal
 import pydantic
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
-from campaigns.catalog import CONDITION_UNITS, SCENE_PREFIX, Catalog
+from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, SCENE_PREFIX, Catalog
 from twin.errors import InputError
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
@@ -199,7 +199,8 @@ class Traces(_Strict):
 
 def _known_condition(name: str, info: ValidationInfo) -> str:
     catalog = _catalog(info)
-    known = [c for c in (catalog.condition_names if catalog is not None else CONDITION_UNITS) if c in CONDITION_UNITS]
+    settable = {**CONDITION_UNITS, **CONDITION_CHOICES}
+    known = [c for c in (catalog.condition_names if catalog is not None else settable) if c in settable]
     if name not in known:
         raise ValueError(f"unknown condition {name}; the model's scenes accept: {', '.join(known)}")
     return name
@@ -215,12 +216,27 @@ class Dataset(_Strict):
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
     scene: str | None = None
     description: str = ""
-    conditions: dict[ConditionName, float] = {}
+    conditions: dict[ConditionName, float | str] = {}
 
     @field_validator("scene")
     @classmethod
     def _known_scene(cls, scene: str | None, info: ValidationInfo) -> str | None:
         return Base._known_scene(scene, info) if scene is not None else None
+
+    @field_validator("conditions")
+    @classmethod
+    def _condition_values(cls, conditions: dict[str, float | str]) -> dict[str, float | str]:
+        """A numeric condition takes a number, a choice condition one of its choices (every problem listed)."""
+        problems = []
+        for name, value in conditions.items():
+            choices = CONDITION_CHOICES.get(name)
+            if choices is not None and value not in choices:
+                problems.append(f"{name}: {value!r} is not one of {', '.join(choices)}")
+            elif choices is None and isinstance(value, str):
+                problems.append(f"{name}: must be a number [{CONDITION_UNITS.get(name, '')}], got {value!r}")
+        if problems:
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
+        return conditions
 
 
 class Observability(_Strict):

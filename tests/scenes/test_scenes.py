@@ -14,7 +14,7 @@ TABLE_9_4 = {  # data set: (backlash [m], preload [N], external force [N])
 
 
 def test_shipped_scenes():
-    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4, "ds1_preloaded", "ds5_preloaded"}
+    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4}
 
 
 @pytest.mark.parametrize("name", sorted(TABLE_9_4))
