@@ -95,16 +95,6 @@ def test_reference_path_matches_compiled_loop():
     assert reference.attrs["solver_nfev"] > 0 and reference.attrs["solver_steps"] > 0
 
 
-def test_rk4_limit_follows_theory():
-    """Largest stable RK4 step within 15 % of 2.8 / omega_max at a loaded state (preload + 8 kN)."""
-    scene = loaded_scene(1000.0, 8000.0, duration=0.15)
-    params = twin.load_parameters()
-    model, x0, inputs = loaded_state(scene, params)
-    omega = highest_frequency(jacobian(model, x0, t=scene.duration, u=inputs))
-    limit = largest_stable_step(scene, params, "rk4")
-    assert limit == pytest.approx(THEORY["rk4"] / omega, rel=0.15)
-
-
 def test_work_precision_round_trip_and_replot(tmp_path):
     study = run_study("ds4", 0.1, steps=(6.25e-5, 3.125e-5), methods=("rk4",), tolerances=(1e-6,),
                       baselines=("scipy_lsoda",), repeats=1, progress=lambda line: None)
