@@ -54,9 +54,11 @@ def test_friction_stribeck_dip_between_breakaway_and_viscous_rise():
 
 
 def test_winding_resistance_is_linear_through_the_datasheet_point():
-    assert winding_resistance(T_RESISTANCE_REFERENCE, 5.2, 0.0039) == 5.2
-    assert winding_resistance(T_RESISTANCE_REFERENCE + 100.0, 5.2, 0.0039) == pytest.approx(5.2 * 1.39, rel=1e-12)
-    assert winding_resistance(T_RESISTANCE_REFERENCE - 20.0, 5.2, 0.0039) == pytest.approx(5.2 * (1 - 0.078), rel=1e-12)
+    """R(T) = R_20 (1 + alpha (T - 20 degC)), the datasheet resistance at 20 degC (Table B.1)."""
+    assert T_RESISTANCE_REFERENCE == 293.15
+    assert winding_resistance(293.15, 5.2, 0.0039) == 5.2
+    assert winding_resistance(393.15, 5.2, 0.0039) == pytest.approx(5.2 * 1.39, rel=1e-12)
+    assert winding_resistance(273.15, 5.2, 0.0039) == pytest.approx(5.2 * (1 - 0.078), rel=1e-12)
 
 
 def test_current_derivative_equilibrium_and_time_constant():

@@ -313,3 +313,6 @@ def test_exact_contact_rejects_bad_input():
     # a sphere in a tighter concave seat is conforming, not Hertzian
     with pytest.raises(ValueError, match="rho11"):
         hertz_contact_exact(1.0 / R_B, 1.0 / R_B, -1.0 / R_B, -2.0 / R_B, E_STAR)
+    # the limit: a sphere in a seat of its own radius has A = B = 0, a contact area without Hertz pressure
+    with pytest.raises(ValueError, match="rho11"):
+        hertz_contact_exact(1.0 / R_B, 1.0 / R_B, -1.0 / R_B, -1.0 / R_B, E_STAR)

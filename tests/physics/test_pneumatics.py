@@ -69,6 +69,7 @@ def test_flow_continuous_at_regime_boundaries(ratio):
 def test_flow_zero_and_continuous_at_equal_pressures():
     p = 5.0e5
     assert flow(p, p) == 0.0
+    assert flow(0.0, 0.0) == 0.0  # two evacuated ports: nothing to flow (and no division by p_up)
     eps = 1e-9
     forward, backward = flow(p, p * (1.0 - eps)), flow(p, p * (1.0 + eps))
     assert forward > 0.0 > backward
