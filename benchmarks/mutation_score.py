@@ -35,6 +35,7 @@ import io
 import math
 import os
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -44,7 +45,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-COPIED = ("twin", "sensors", "campaigns", "reports", "tests", "pyproject.toml")
+COPIED = ("twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
 PROJECT_PACKAGES = ("twin", "sensors", "campaigns", "reports")
 
 #: Module -> unit tests that exercise it without running the full compiled loop.
@@ -140,8 +141,9 @@ def run_tests(copy: Path, tests: list[str], timeout: float) -> bool:
 
 
 def score_set(name: str, modules: list[str], copy: Path, sample: int | None, seed: int, timeout: float,
-              progress) -> dict:
-    """Mutate every (or a sample of the) mutation point(s) of ``modules``; return the tally and survivors."""
+              progress, only: set | None = None) -> dict:
+    """Mutate every (or a sample of the) mutation point(s) of ``modules``; return the tally and survivors.
+    ``only``: test just these (module, operator, occurrence) triples (``--recheck``)."""
     from cosmic_ray.mutating import mutate_code
     from cosmic_ray.plugins import get_operator
 
@@ -156,6 +158,8 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
     total = len(mutants)
     if sample is not None and sample < total:
         mutants = sorted(random.Random(seed).sample(mutants, sample), key=lambda m: (m[0], m[3]))
+    if only is not None:
+        mutants = [m for m in mutants if (m[0], m[1].removeprefix("core/"), m[2]) in only]
     killed, survivors = 0, []
     start = time.perf_counter()
     for i, (module, operator, occurrence, line) in enumerate(mutants, 1):
@@ -208,6 +212,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=60.0, help="seconds per mutant before it counts as killed")
     parser.add_argument("--min-score", type=float, default=None, help="exit 1 when a set scores below this (0-1)")
     parser.add_argument("--verbose", action="store_true", help="print every mutant's outcome")
+    parser.add_argument("--recheck", type=Path, help="re-test only the survivors listed in an earlier output of "
+                                                      "this script (after adding tests that should kill them)")
     args = parser.parse_args(argv)
     if args.quick:
         args.sets, args.sample = ["physics"], args.sample or 40
@@ -216,6 +222,11 @@ def main(argv: list[str] | None = None) -> int:
         env = dict(os.environ, NUMBA_DISABLE_JIT="1")
         return subprocess.call([sys.executable, __file__, *(argv if argv is not None else sys.argv[1:])], env=env)
 
+    only = None
+    if args.recheck:
+        listed = re.finditer(r"survived (\S+?):(\d+) (\S+) #(\d+)", args.recheck.read_text())
+        only = {(m[1], m[3], int(m[4])) for m in listed}
+        args.all = args.all or args.sample is None
     copy = make_copy()
     os.chdir(copy)
     sys.path.insert(0, str(copy))
@@ -225,11 +236,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         for name in args.sets:
             result = score_set(name, SETS[name], copy, None if args.all else args.sample, args.seed, args.timeout,
-                               progress)
+                               progress, only)
             tested, killed = result["tested"], result["killed"]
             low, high = wilson(killed, tested)
             sampled = f"a sample of {tested} of {result['mutants_total']}" if tested < result["mutants_total"] \
                 else f"all {tested}"
+            if tested == 0:
+                continue
             print(f"{name}: {killed}/{tested} mutants killed = {killed / tested:.1%} "
                   f"(95 % CI {low:.1%}-{high:.1%}; {sampled} mutants of {len(result['modules'])} modules; "
                   f"{result['seconds']:.0f} s)")
