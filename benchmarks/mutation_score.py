@@ -228,6 +228,7 @@ def main(argv: list[str] | None = None) -> int:
         only = {(m[1], m[3], int(m[4])) for m in listed}
         args.all = args.all or args.sample is None
     copy = make_copy()
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(1))  # so that the copy is removed
     os.chdir(copy)
     sys.path.insert(0, str(copy))
     sys.path.insert(0, str(copy / "tests"))
