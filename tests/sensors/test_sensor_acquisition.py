@@ -72,8 +72,9 @@ def test_noise_rejects_bad_arguments():
         draw_uniform_noise(np.random.default_rng(0), 10, -0.1)
     with pytest.raises(ValueError, match="rng"):
         draw_uniform_noise(np.random.RandomState(0), 10, 0.1)
-    with pytest.raises(ValueError, match="n"):
-        draw_uniform_noise(np.random.default_rng(0), -1, 0.1)
+    for n in (-1, -3, 2.5):
+        with pytest.raises(ValueError, match="n: number of noise samples"):
+            draw_uniform_noise(np.random.default_rng(0), n, 0.1)
 
 
 def test_range_is_three_sigma():
