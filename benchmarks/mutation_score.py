@@ -134,8 +134,7 @@ def run_tests(copy: Path, tests: list[str], timeout: float) -> bool:
     try:
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             code = pytest.main(["-x", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy),
-                                *[t if t.startswith("-") or not t.startswith("tests/") else str(copy / t)
-                                  for t in tests]])
+                                *[str(copy / t) if t.startswith("tests/") else t for t in tests]])
     except _Timeout:
         return False
     finally:
