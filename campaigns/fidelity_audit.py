@@ -125,9 +125,10 @@ def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str 
     if problems:
         raise InputError("fidelity audit", problems)
     spec = load_spec(spec_path or Path(__file__).parent / "specs" / "thesis_backlash.toml")
+    name = Path(scene).stem  # a scene file's data set is named after the file, as the CLI's output directory
     spec = spec.model_copy(update={
-        "name": f"fidelity_audit_{scene}",
-        "datasets": [Dataset(name=scene, scene=scene)],
+        "name": f"fidelity_audit_{name}",
+        "datasets": [Dataset(name=name, scene=scene)],
         "runs_per_dataset": runs,
         "traces": Traces(),
         "observability": Observability(),
@@ -138,6 +139,6 @@ def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str 
     with xr.open_dataset(Path(results).parent / "fidelity_audit" / "fidelity_audit.nc") as handle:
         audit = handle.load()
     with xr.open_dataset(results) as handle:
-        audit.attrs["fidelity_auto"] = handle.attrs.get(f"fidelity_{scene}", "")
+        audit.attrs["fidelity_auto"] = handle.attrs.get(f"fidelity_{name}", "")
         audit.attrs["summary"] = "\n".join(f"{k}: {v}" for k, v in handle.attrs.items() if k.startswith("fidelity_audit"))
     return audit

@@ -10,3 +10,8 @@ Modules: :mod:`sensors.encoder` (linear and torque-meter encoders),
 :mod:`sensors.acquisition` (converters, noise, uncertainty convention),
 :mod:`sensors.parameters`. Conventions: ``docs/sensors.md``.
 """
+
+# Key numba's cache on the source before any sensor module is compiled (see twin.compiled_cache).
+from twin import compiled_cache  # noqa: E402
+
+compiled_cache.configure()

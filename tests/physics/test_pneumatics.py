@@ -69,6 +69,7 @@ def test_flow_continuous_at_regime_boundaries(ratio):
 def test_flow_zero_and_continuous_at_equal_pressures():
     p = 5.0e5
     assert flow(p, p) == 0.0
+    assert flow(0.0, 0.0) == 0.0  # two evacuated ports: nothing to flow (and no division by p_up)
     eps = 1e-9
     forward, backward = flow(p, p * (1.0 - eps)), flow(p, p * (1.0 + eps))
     assert forward > 0.0 > backward
@@ -292,6 +293,17 @@ def test_end_stroke_damper_acts_only_within_its_travel():
     assert pn.end_stroke_damper_force(0.015, 5.0, *DAMPER) == 0.0
     # Beyond full deflection the head stop takes over.
     assert pn.end_stroke_damper_force(-1e-4, 0.0, *DAMPER) > 4000.0 + 0.5 * par("end_stop_stiffness") * 1e-4
+    # Not yet touching at x = travel, even while approaching the head.
+    assert pn.end_stroke_damper_force(travel, -0.3, *DAMPER) == 0.0
+    assert pn.end_stroke_damper_force(STROKE - travel, 0.3, *DAMPER) == 0.0
+
+
+def test_end_stroke_damper_damping_resists_the_approach_at_both_ends():
+    """k delta + c |v| while the piston moves into the damper, at the cap end (v < 0) and the rod end (v > 0)."""
+    k, c = par("damper_stiffness"), par("damper_damping")
+    assert c > 0.0
+    assert pn.end_stroke_damper_force(0.006, -0.01, *DAMPER) == pytest.approx(k * 0.010 + c * 0.01, rel=1e-12)
+    assert pn.end_stroke_damper_force(STROKE - 0.006, 0.01, *DAMPER) == pytest.approx(-(k * 0.010 + c * 0.01), rel=1e-12)
 
 
 def test_load_cell_deflection_at_nominal_force():
@@ -404,6 +416,22 @@ def test_validation_rejects_bad_input_naming_the_field(changes, fields):
         pn.validate_pneumatics(bad)
     for field in fields:
         assert field in str(info.value)
+
+
+@pytest.mark.parametrize("key, value, other", [
+    ("valve_leakage_fraction", -0.5, None),                                   # non-negative, even above -1
+    ("nominal_flow_downstream_pressure", "nominal_flow_upstream_pressure", None),  # equal pressures: no flow
+    ("valve_mid_voltage", "valve_command_min", None),                        # the range's edge is outside
+    ("damper_travel", 0.6, "stroke"),                                        # two travels of 0.6 stroke overlap
+])
+def test_validation_boundaries(key, value, other):
+    if isinstance(value, str):
+        value = PARAMS["pneumatics." + value]
+    elif other is not None:
+        value *= PARAMS["pneumatics." + other]
+    bad = dict(PARAMS, **{"pneumatics." + key: value})
+    with pytest.raises(ValueError, match="pneumatics." + key):
+        pn.validate_pneumatics(bad)
 
 
 def test_validation_lists_every_problem_at_once():

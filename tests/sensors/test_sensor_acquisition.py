@@ -8,6 +8,7 @@ import pytest
 from sensors.acquisition import (
     convert,
     draw_uniform_noise,
+    first_order_lag,
     quantize,
     sigma_from_range,
     validate_converter,
@@ -71,11 +72,24 @@ def test_noise_rejects_bad_arguments():
         draw_uniform_noise(np.random.default_rng(0), 10, -0.1)
     with pytest.raises(ValueError, match="rng"):
         draw_uniform_noise(np.random.RandomState(0), 10, 0.1)
-    with pytest.raises(ValueError, match="n"):
-        draw_uniform_noise(np.random.default_rng(0), -1, 0.1)
+    for n in (-1, -3, 2.5):
+        with pytest.raises(ValueError, match="n: number of noise samples"):
+            draw_uniform_noise(np.random.default_rng(0), n, 0.1)
 
 
 def test_range_is_three_sigma():
     assert sigma_from_range(0.006) == pytest.approx(0.002)
     with pytest.raises(ValueError, match="half_range"):
         sigma_from_range(-1.0)
+
+
+def test_first_order_lag_is_the_exact_discretisation():
+    """tau dy/dt + y = u: a step input decays as exp(-dt/tau); a ramp settles to the lag u - tau du/dt, whatever
+    dt is against tau; dt <= 0 leaves the output as it was."""
+    tau = 2e-3
+    for dt in (1e-4, 2e-3, 5e-2):
+        assert first_order_lag(1.0, 3.0, 3.0, dt, tau) == pytest.approx(3.0 - 2.0 * math.exp(-dt / tau), rel=1e-12)
+        # on the ramp u = 10 t, starting on its steady lag y = u - tau * 10, the output stays on it
+        u0, u1 = 10.0 * 0.5, 10.0 * (0.5 + dt)
+        assert first_order_lag(u0 - 10.0 * tau, u0, u1, dt, tau) == pytest.approx(u1 - 10.0 * tau, rel=1e-12)
+    assert first_order_lag(0.7, 1.0, 5.0, 0.0, tau) == 0.7

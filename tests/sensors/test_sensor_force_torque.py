@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from sensors.acquisition import convert
 from sensors.analog import (
     AN_DAQ_BITS,
     AN_FULL_SCALE,
@@ -16,6 +17,7 @@ from sensors.analog import (
     AS_FILTERED,
     AS_SIZE,
     analog_init,
+    analog_parameters,
     analog_read,
     analog_step,
     transducer_voltage,
@@ -23,6 +25,7 @@ from sensors.analog import (
 from sensors.hall import hall_current_step
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.torque_meter import torque_meter_parameters
+from twin.parameters import load_parameters
 
 T25 = 298.15  # K, the nominal 25 degC of Sec. 9.4
 FINE_DAQ = {"sensors.daq_bits": 32.0}  # isolates the sensor model from DAQ quantisation
@@ -214,3 +217,38 @@ def test_a_step_spanning_several_refreshes_shows_the_last_one():
     assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)
     analog_step(state, 25.0, 2.9e-3, p)  # no refresh until 3 ms
     assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)
+
+
+CHANNEL = dict(full_scale=100.0, output_full_scale=10.0, gain=1.0, offset=0.0, tau=0.0, refresh_period=0.0,
+               output_bits=0.0, daq_full_scale=10.0, daq_bits=16.0, noise_half_width=0.0)
+
+
+def test_sensor_output_converter_quantises_before_the_daq():
+    """A sensor with its own D/A (the torque meter's) reads the D/A code, converted again by the DAQ: with a
+    coarse 4-bit output the reading falls on the D/A's grid, not on the 16-bit DAQ's."""
+    coarse = analog_parameters(**{**CHANNEL, "output_bits": 4.0})
+    state = np.zeros(AS_SIZE)
+    analog_init(state, 33.0, 0.0, coarse)
+    volts = convert(convert(3.3, 10.0, 4.0), 10.0, 16.0)
+    assert analog_read(state, 0.0, coarse) == pytest.approx(volts * 100.0 / 10.0, rel=1e-12)
+    assert abs(analog_read(state, 0.0, coarse) - 33.0) > 1.0  # the 4-bit step is 1.4 V = 14 units
+    smooth = analog_parameters(**CHANNEL)
+    analog_init(state, 33.0, 0.0, smooth)
+    assert analog_read(state, 0.0, smooth) == pytest.approx(33.0, abs=100.0 / 2**15)
+
+
+@pytest.mark.parametrize("field, value", [("gain", -0.5), ("full_scale", -0.5), ("tau", -0.5),
+                                          ("refresh_period", -0.5), ("noise_half_width", -0.5)])
+def test_channel_rejects_out_of_range_values_naming_them(field, value):
+    with pytest.raises(ValueError, match=rf"^{field}: must be"):
+        analog_parameters(**{**CHANNEL, field: value})
+
+
+def test_each_channel_holds_its_output_at_its_own_rate():
+    """Torque meter: 1 kHz refresh (Table B.5); load cell: its measuring rate (Table B.13); the preload cell's
+    analog conditioner has no hold at all (its 10 kHz filter is the only dynamics)."""
+    room = 298.15
+    rate = load_parameters("bench").value("sensors.load_cell_measuring_rate")
+    assert torque_meter_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1e-3)
+    assert load_cell_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1.0 / rate)
+    assert preload_load_cell_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == 0.0

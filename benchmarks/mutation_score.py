@@ -1,0 +1,263 @@
+"""Mutation score of the test suite: how many deliberate bugs in a module set the unit tests catch.
+
+Usage::
+
+    .venv/bin/python benchmarks/mutation_score.py --quick            # CI: physics set, 40 sampled mutants
+    .venv/bin/python benchmarks/mutation_score.py --sets physics sensors --sample 150
+    .venv/bin/python benchmarks/mutation_score.py --sets analysis --all
+
+Mutants come from cosmic-ray's operators (``cosmic_ray.mutating.mutate_code``), restricted to the
+kinds of slip a physics code makes: arithmetic swaps (``+ -``, ``* /``), comparison swaps (``< <=``,
+``> >=``, ``== !=``), a dropped or added negation, a changed number constant, ``and``/``or``,
+``True``/``False``, ``break``/``continue`` and a loop that never runs. (Bit operators, ``%``, ``//``,
+``is``, decorator removal and decorator arguments are left out: the code has no bit logic, and
+``@njit`` or its ``cache=True`` make no difference when the tests run uncompiled.)
+
+Why not cosmic-ray's own runner: it starts one test process per mutant, ~10 s here just to import
+the stack; this script keeps one process per module set, with ``NUMBA_DISABLE_JIT=1`` so a
+mutated numba function needs no recompilation, and for each mutant writes the mutated source into
+a private copy of the repository, drops the project's modules from ``sys.modules`` and runs
+``pytest.main`` on the unit tests that cover the module (``TESTS``), stopping at the first
+failure. A mutant is *killed* when a test fails or errors (a mutant that breaks the import
+counts too, as cosmic-ray's "incompetent"), or runs past ``--timeout`` (SIGALRM); it *survives*
+when the tests pass. Score = killed / tested. With ``--sample N`` a fixed-seed random sample of N
+mutants per set is tested and the score comes with a 95 % Wilson interval.
+
+The copy lives in a temporary directory, so an interrupted run never leaves a mutant behind in
+the working tree.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import math
+import os
+import random
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+COPIED = ("twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
+PROJECT_PACKAGES = ("twin", "sensors", "campaigns", "reports")
+
+#: Module -> unit tests that exercise it without running the full compiled loop.
+TESTS = {
+    "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py"],
+    "twin/physics/coupling.py": ["tests/physics/test_components.py"],
+    "twin/physics/friction.py": ["tests/physics/test_components.py"],
+    "twin/physics/groove.py": ["tests/physics/test_groove.py", "tests/physics/test_hertz.py"],
+    "twin/physics/hertz.py": ["tests/physics/test_hertz.py"],
+    "twin/physics/motor.py": ["tests/physics/test_components.py"],
+    "twin/physics/pneumatics.py": ["tests/physics/test_pneumatics.py"],
+    "twin/physics/preload.py": ["tests/physics/test_components.py"],
+    "sensors/acquisition.py": ["tests/sensors/test_sensor_acquisition.py", "tests/sensors/test_sensor_force_torque.py",
+                               "tests/sensors/test_sensor_compiled_loop.py"],
+    "sensors/analog.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
+    "sensors/encoder.py": ["tests/sensors/test_sensor_encoder.py", "tests/sensors/test_sensor_encoder_speed.py",
+                           "tests/sensors/test_sensor_compiled_loop.py"],
+    "sensors/hall.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
+    "sensors/load_cell.py": ["tests/sensors/test_sensor_force_torque.py"],
+    "sensors/parameters.py": ["tests/sensors/test_sensor_parameters.py"],
+    "sensors/resolver.py": ["tests/sensors/test_sensor_resolver.py", "tests/sensors/test_sensor_compiled_loop.py"],
+    "sensors/torque_meter.py": ["tests/sensors/test_sensor_force_torque.py"],
+    # its end-to-end test runs a whole synthetic campaign (minutes): the unit tests only
+    "campaigns/analysis.py": ["tests/campaigns/test_campaign_analysis.py", "-k", "not synthetic_campaign"],
+}
+SETS = {
+    "physics": [m for m in TESTS if m.startswith("twin/physics/")],
+    "sensors": [m for m in TESTS if m.startswith("sensors/")],
+    "analysis": ["campaigns/analysis.py"],
+}
+
+_ARITHMETIC = [("Add", "Sub"), ("Sub", "Add"), ("Mul", "Div"), ("Div", "Mul"), ("Pow", "Mul")]
+_COMPARISON = [("Lt", "LtE"), ("LtE", "Lt"), ("Gt", "GtE"), ("GtE", "Gt"), ("Eq", "NotEq"), ("NotEq", "Eq"),
+               ("Lt", "Gt"), ("Gt", "Lt")]
+OPERATORS = ([f"core/ReplaceBinaryOperator_{a}_{b}" for a, b in _ARITHMETIC]
+             + [f"core/ReplaceComparisonOperator_{a}_{b}" for a, b in _COMPARISON]
+             + ["core/ReplaceUnaryOperator_USub_UAdd", "core/AddNot", "core/NumberReplacer",
+                "core/ReplaceAndWithOr", "core/ReplaceOrWithAnd", "core/ReplaceTrueWithFalse",
+                "core/ReplaceFalseWithTrue", "core/ReplaceBreakWithContinue", "core/ZeroIterationForLoop"])
+
+
+def enumerate_mutants(module: str, source: str) -> list[tuple[str, str, int, int]]:
+    """Every (module, operator, occurrence, line) cosmic-ray's operators offer in ``source``."""
+    from cosmic_ray.ast import ast_nodes, get_ast
+    from cosmic_ray.plugins import get_operator
+
+    tree = get_ast(source)
+    lines = source.splitlines()
+    mutants = []
+    for name in OPERATORS:
+        operator = get_operator(name)()
+        positions = [start for node in ast_nodes(tree) for start, _ in operator.mutation_positions(node)]
+        mutants += [(module, name, occurrence, start[0]) for occurrence, start in enumerate(positions)
+                    if not lines[start[0] - 1].lstrip().startswith("@")]  # decorator arguments, e.g. cache=True
+    return mutants
+
+
+def wilson(killed: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """95 % Wilson score interval of a proportion."""
+    if n == 0:
+        return math.nan, math.nan
+    p = killed / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return centre - half, centre + half
+
+
+class _Timeout(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise _Timeout()
+
+
+def run_tests(copy: Path, tests: list[str], timeout: float) -> bool:
+    """Run ``tests`` in-process on the copy's current sources; True when they all pass."""
+    import pytest
+
+    for name in list(sys.modules):
+        top = name.split(".")[0]
+        if top in PROJECT_PACKAGES or name.startswith(("test_", "conftest", "bench_helpers", "tests")):
+            del sys.modules[name]
+    signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            code = pytest.main(["-x", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy),
+                                *[str(copy / t) if t.startswith("tests/") else t for t in tests]])
+    except _Timeout:
+        return False
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    return code == 0
+
+
+def score_set(name: str, modules: list[str], copy: Path, sample: int | None, seed: int, timeout: float,
+              progress, only: set | None = None) -> dict:
+    """Mutate every (or a sample of the) mutation point(s) of ``modules``; return the tally and survivors.
+    ``only``: test just these (module, operator, occurrence) triples (``--recheck``)."""
+    from cosmic_ray.mutating import mutate_code
+    from cosmic_ray.plugins import get_operator
+
+    originals = {m: (copy / m).read_text() for m in modules}
+    for module in modules:
+        if not run_tests(copy, TESTS[module], 10 * timeout):
+            raise SystemExit(f"{module}: its tests fail without any mutation; fix them first")
+    imported = Path(sys.modules["twin"].__file__).resolve()
+    if copy.resolve() not in imported.parents:
+        raise SystemExit(f"the tests imported {imported}, not the mutated copy in {copy}")
+    mutants = [mutant for m in modules for mutant in enumerate_mutants(m, originals[m])]
+    total = len(mutants)
+    if sample is not None and sample < total:
+        mutants = sorted(random.Random(seed).sample(mutants, sample), key=lambda m: (m[0], m[3]))
+    if only is not None:
+        mutants = [m for m in mutants if (m[0], m[1].removeprefix("core/"), m[2]) in only]
+    killed, survivors = 0, []
+    start = time.perf_counter()
+    for i, (module, operator, occurrence, line) in enumerate(mutants, 1):
+        mutated = mutate_code(originals[module], get_operator(operator)(), occurrence)
+        if mutated is None:
+            killed += 1  # nothing to mutate: counted as killed so it cannot inflate the survivors
+            continue
+        (copy / module).write_text(mutated)
+        try:
+            survived = run_tests(copy, TESTS[module], timeout)
+        finally:
+            (copy / module).write_text(originals[module])
+        if survived:
+            survivors.append((module, line, operator.removeprefix("core/"), occurrence,
+                              _changed_line(originals[module], mutated)))
+        else:
+            killed += 1
+        progress(f"[{name}] {i}/{len(mutants)} {'SURVIVED' if survived else 'killed  '} {module}:{line} "
+                 f"{operator.removeprefix('core/')} #{occurrence}")
+    return {"set": name, "modules": modules, "mutants_total": total, "tested": len(mutants), "killed": killed,
+            "survivors": survivors, "seconds": time.perf_counter() - start}
+
+
+def _changed_line(original: str, mutated: str) -> str:
+    for a, b in zip(original.splitlines(), mutated.splitlines()):
+        if a != b:
+            return f"{a.strip()}  ->  {b.strip()}"
+    return "(no textual change)"
+
+
+def make_copy() -> Path:
+    """A private copy of the sources and tests (mutants are written only there)."""
+    copy = Path(tempfile.mkdtemp(prefix="benchtwin-mutants-"))
+    for item in COPIED:
+        source = ROOT / item
+        if source.is_dir():
+            shutil.copytree(source, copy / item, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+        else:
+            shutil.copy2(source, copy / item)
+    return copy
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sets", nargs="+", choices=sorted(SETS), default=["physics", "sensors", "analysis"])
+    parser.add_argument("--sample", type=int, help="test a fixed-seed random sample of this many mutants per set")
+    parser.add_argument("--all", action="store_true", help="test every mutant (default when --sample is absent)")
+    parser.add_argument("--quick", action="store_true", help="CI mode: the physics set, a 40-mutant sample")
+    parser.add_argument("--seed", type=int, default=20)
+    parser.add_argument("--timeout", type=float, default=60.0, help="seconds per mutant before it counts as killed")
+    parser.add_argument("--min-score", type=float, default=None, help="exit 1 when a set scores below this (0-1)")
+    parser.add_argument("--verbose", action="store_true", help="print every mutant's outcome")
+    parser.add_argument("--recheck", type=Path, help="re-test only the survivors listed in an earlier output of "
+                                                      "this script (after adding tests that should kill them)")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.sets, args.sample = ["physics"], args.sample or 40
+    if os.environ.get("NUMBA_DISABLE_JIT") != "1":
+        # the environment must be set before numba is imported: re-run this script with it
+        env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+        return subprocess.call([sys.executable, __file__, *(argv if argv is not None else sys.argv[1:])], env=env)
+
+    only = None
+    if args.recheck:
+        listed = re.finditer(r"survived (\S+?):(\d+) (\S+) #(\d+)", args.recheck.read_text())
+        only = {(m[1], m[3], int(m[4])) for m in listed}
+        args.all = args.all or args.sample is None
+    copy = make_copy()
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(1))  # so that the copy is removed
+    os.chdir(copy)
+    sys.path.insert(0, str(copy))
+    sys.path.insert(0, str(copy / "tests"))
+    progress = print if args.verbose else (lambda line: None)
+    failed = False
+    try:
+        for name in args.sets:
+            result = score_set(name, SETS[name], copy, None if args.all else args.sample, args.seed, args.timeout,
+                               progress, only)
+            tested, killed = result["tested"], result["killed"]
+            low, high = wilson(killed, tested)
+            sampled = f"a sample of {tested} of {result['mutants_total']}" if tested < result["mutants_total"] \
+                else f"all {tested}"
+            if tested == 0:
+                continue
+            print(f"{name}: {killed}/{tested} mutants killed = {killed / tested:.1%} "
+                  f"(95 % CI {low:.1%}-{high:.1%}; {sampled} mutants of {len(result['modules'])} modules; "
+                  f"{result['seconds']:.0f} s)")
+            for module, line, operator, occurrence, change in result["survivors"]:
+                print(f"    survived {module}:{line} {operator} #{occurrence}: {change}")
+            if args.min_score is not None and killed / tested < args.min_score:
+                failed = True
+    finally:
+        os.chdir(ROOT)
+        shutil.rmtree(copy, ignore_errors=True)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,102 @@
+"""`twin accuracy` and `twin fidelity audit` end to end, with their printed and stored numbers checked."""
+
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from scipy.stats import linregress
+
+from campaigns import fidelity_audit
+from twin import cli
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "twin.cli", *args], capture_output=True, text=True, timeout=1200)
+
+
+def test_accuracy_quick_study(tmp_path):
+    """A quick study of 50 ms of ds4: every run ok, RK4's errors fall with the step, the baseline table printed
+    is the one stored, and --replot redraws the chart from the stored data."""
+    result = run("accuracy", "--quick", "--no-stability", "--scene", "ds4", "--duration", "0.05", "--out", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert f"wrote work_precision: {tmp_path / 'work_precision.png'}" in result.stdout
+    with xr.open_dataset(tmp_path / "work_precision.nc") as study:
+        study = study.load()
+    assert study.attrs["scene"] == "ds4" and study.attrs["duration"] == 0.05
+    off = study.where(study.panel == "quantizers_off", drop=True)
+    # the 125 us step is past the explicit methods' stability limits (~4e-5 s): the guard reports it
+    for method in ("rk4", "semi_implicit_euler"):
+        coarse = off.where((off.method == method) & (off.dt == 1.25e-4), drop=True)
+        assert list(coarse.status.values) == ["diverged"], method
+    stable = off.where((off.dt < 1e-4) | np.isnan(off.dt), drop=True)
+    assert (stable.status == "ok").all()
+    # the nut-position error falls at each method's order over the ladder (measured slopes 1.00 and 1.99)
+    for method, order in (("semi_implicit_euler", 1.0), ("rosenbrock_w2", 2.0)):
+        runs = stable.where(stable.method == method, drop=True)
+        slope = linregress(np.log(runs.dt.values), np.log(runs.nut_position_error.values)).slope
+        assert slope == pytest.approx(order, abs=0.1), method
+    table = pd.read_csv(tmp_path / "control_baseline.csv")
+    for row in table.itertuples():
+        printed = re.search(re.escape(row.method) + r"\s+(\S+)\s+(\S+)", result.stdout)
+        assert printed and float(printed.group(2)) == pytest.approx(row.error, rel=1e-5, abs=1e-300), row.method
+    assert table.error.iloc[0] == 0.0 and table.error.iloc[2] < 1e-9  # reference; RK4 on it
+    (tmp_path / "work_precision.png").unlink()
+    again = run("accuracy", "--replot", "--out", str(tmp_path))
+    assert again.returncode == 0 and (tmp_path / "work_precision.png").stat().st_size > 10_000
+
+
+SHORT_SCENE = 'base = "ds4"\nname = "ds4_short"\nduration = 1.0\n'
+
+
+def _paired_shift(out, feature):
+    """Mean of the paired differences auto - full of ``feature``, from the two results files directly."""
+    with xr.open_dataset(out / "results.nc") as auto, xr.open_dataset(out / "fidelity_audit" / "results.nc") as full:
+        runs = full.sizes["run"]
+        return float((auto[feature].isel(run=slice(0, runs)) - full[feature]).mean())
+
+
+def _printed_shifts(text):
+    return {m.group(1): float(m.group(2)) * 1e-6 for m in re.finditer(r"(backlash_\w+): mean shift ([-+]\d+\.\d+) um", text)}
+
+
+def test_fidelity_audit_passes_on_a_scene_file(tmp_path):
+    """Two sampled runs of a 1 s scene file, auto against full: the printed mean shifts are the paired means of
+    the stored results (to the 1e-4 um printed), and the verdict follows from them and the 0.1 um tolerance."""
+    scene = tmp_path / "short.toml"
+    scene.write_text(SHORT_SCENE)
+    out = tmp_path / "audit"
+    result = run("fidelity", "audit", str(scene), "--runs", "2", "--workers", "1", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "encoders=" in result.stdout.splitlines()[0]  # the automatic configuration comes first
+    shifts = _printed_shifts(result.stdout)
+    assert set(shifts) == {"backlash_feature", "backlash_feature_true"}
+    for feature, printed in shifts.items():
+        assert printed == pytest.approx(_paired_shift(out, feature), abs=0.6e-10), feature
+    with xr.open_dataset(out / "fidelity_audit" / "fidelity_audit.nc") as audit:
+        expected = bool(((np.abs(audit.mean_shift) < fidelity_audit.MEAN_SHIFT_TOLERANCE)
+                         & (audit.ks_pvalue >= fidelity_audit.KS_LEVEL)).all())
+    verdict = "fidelity_audit: passed: auto is indistinguishable" if expected else "fidelity_audit: FLAGGED"
+    assert verdict in result.stdout
+    assert expected, "auto differs from full fidelity on the short ds4: a rule to fix (docs/fidelity.md)"
+
+
+def test_fidelity_audit_flags_a_shift_beyond_the_tolerance(tmp_path, monkeypatch, capsys):
+    """The FLAGGED branch, end to end in-process: with the tolerance below the measured shift the audit names
+    every data set/feature over it and the rule to fix, and still exits 0 (a finding, not an error)."""
+    monkeypatch.setattr(fidelity_audit, "MEAN_SHIFT_TOLERANCE", 1e-13)
+    scene = tmp_path / "short.toml"
+    scene.write_text(SHORT_SCENE)
+    out = tmp_path / "audit"
+    assert cli.main(["fidelity", "audit", str(scene), "--runs", "2", "--workers", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    shifts = _printed_shifts(printed)
+    over = [f for f in ("backlash_feature", "backlash_feature_true") if abs(_paired_shift(out, f)) >= 1e-13]
+    assert over, "auto and full gave identical features: the test needs a nonzero shift"
+    assert f"fidelity_audit: FLAGGED (rule to fix): {', '.join('short/' + f for f in over)}" in printed
+    for feature in over:
+        assert f"{feature}: mean shift" in printed and shifts[feature] == pytest.approx(_paired_shift(out, feature), abs=0.6e-10)
+        assert re.search(feature + r": mean shift [^;]*-> FLAGGED", printed)
