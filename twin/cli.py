@@ -145,7 +145,7 @@ def cmd_campaign_run(args) -> int:
     print(f"wrote {results}")
     if args.analyze:
         announce("analysis", "correlations with bootstrap intervals, separation, observability (about 10-60 s)")
-        print(f"wrote {campaigns.analyze(results)}")
+        _print_analysis(campaigns.analyze(results))
     if args.report:
         from reports import build_report
 
@@ -162,15 +162,12 @@ def _bench_run():
     return simulate_run
 
 
-def cmd_campaign_analyze(args) -> int:
+def _print_analysis(path: Path) -> None:
+    """Name the analysis file, then print its verdict statements (stdout) and insufficient-data warnings (stderr)."""
     import xarray as xr
 
-    import campaigns
     from campaigns.analysis import summary
-    from campaigns.storage import check_output
 
-    out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force)
-    path = campaigns.analyze(args.results, out)
     print(f"wrote {path}")
     with xr.open_dataset(path, engine="netcdf4") as analysis:
         statements, warnings = summary(analysis)
@@ -178,6 +175,14 @@ def cmd_campaign_analyze(args) -> int:
         print(line)
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
+
+
+def cmd_campaign_analyze(args) -> int:
+    import campaigns
+    from campaigns.storage import check_output
+
+    out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force)
+    _print_analysis(campaigns.analyze(args.results, out))
     return 0
 
 
