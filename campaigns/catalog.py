@@ -28,17 +28,23 @@ def condition_units() -> dict[str, str]:
     return {**{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric}, "external_force": "N"}
 
 
+@cache
+def condition_choices() -> dict[str, tuple[str, ...]]:
+    """Scene conditions a data set may set to one of a few named choices (``zero_procedure``, ``cylinder``,
+    ``preload_configuration``) and their choices, from the same table (imported on first use)."""
+    from twin.scenes import CONDITIONS
+
+    return {name: condition.choices for name, condition in CONDITIONS.items() if condition.choices}
+
+
 def __getattr__(name: str):
-    """``CONDITION_UNITS``: :func:`condition_units`, computed on first access (PEP 562)."""
+    """``CONDITION_UNITS`` and ``CONDITION_CHOICES``: :func:`condition_units` and :func:`condition_choices`,
+    computed on first access (PEP 562)."""
     if name == "CONDITION_UNITS":
         return condition_units()
+    if name == "CONDITION_CHOICES":
+        return condition_choices()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-#: Scene conditions a data set may set to one of a few named choices (``zero_procedure``, ``cylinder``,
-#: ``preload_configuration``), from the same table.
-CONDITION_CHOICES: dict[str, tuple[str, ...]] = {name: condition.choices for name, condition in CONDITIONS.items()
-                                                 if condition.choices}
 
 #: Prefix of uncertainty targets that are scene conditions rather than parameters.
 SCENE_PREFIX = "scene."
