@@ -99,11 +99,17 @@ def _correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, co
     def resampled(v: np.ndarray) -> np.ndarray:
         return _resampled_ranks(v, idx) if spearman else v[idx]
 
-    yb = resampled(y)  # once, shared by every parameter
+    def standardized(v: np.ndarray) -> np.ndarray:
+        """Rows centred and scaled to unit norm (NaN rows without variance): a Pearson correlation is then a dot product."""
+        centred = v - v.mean(axis=-1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return centred / np.sqrt((centred * centred).sum(axis=-1, keepdims=True))
+
+    yb = standardized(resampled(y))  # once, shared by every parameter
     alpha = 0.5 * (1.0 - confidence)
     lower, upper = np.full(len(X), math.nan), np.full(len(X), math.nan)
     for j, x in enumerate(X):
-        boot = _pearson(resampled(x), yb)
+        boot = np.clip((standardized(resampled(x)) * yb).sum(axis=-1), -1.0, 1.0)
         boot = boot[np.isfinite(boot)]  # resamples without variance have no correlation
         if len(boot):
             lower[j], upper[j] = np.quantile(boot, [alpha, 1.0 - alpha])
