@@ -9,6 +9,7 @@ import pytest
 from sensors.encoder import (
     ENC_EDGE,
     ENC_PERIOD,
+    ENC_PRECISION_AMPLITUDE,
     ENC_S_BACKWARD,
     ENC_S_COUNT,
     ENC_S_COUNT0,
@@ -244,3 +245,16 @@ def test_validation_names_the_field():
         linear_encoder_parameters({"sensors.linear_encoder_phase_eror": 0.1})
     with pytest.raises(ValueError, match="sensors.torque_meter_encoder_pulses_per_turn"):
         torque_meter_encoder_parameters({"sensors.torque_meter_encoder_pulses_per_turn": 2000.5})
+
+
+def test_precision_error_only_at_the_edge_accurate_level():
+    """The scale's precision error e_p sin(2 pi x / lambda_p) is read at fidelity 2 only; the quantised and ideal
+    levels read the true position."""
+    worn = {"sensors.linear_encoder_precision": 3e-6, "sensors.linear_encoder_precision_wavelength": 0.02}
+    x = 0.007
+    for fidelity in (0, 1):
+        assert scale_position(x, linear_encoder_parameters(worn, fidelity=fidelity)) == x
+    p = linear_encoder_parameters(worn, fidelity=2)
+    amplitude = p[ENC_PRECISION_AMPLITUDE]
+    assert amplitude != 0.0
+    assert scale_position(x, p) == pytest.approx(x + amplitude * math.sin(2 * math.pi * x / 0.02), rel=1e-12, abs=1e-15)

@@ -1,5 +1,5 @@
 """Speed against accuracy: closed-loop convergence order, the divergence guard's failure modes,
-the reference path, the stability limits and the work-precision data round trip."""
+the reference path and the work-precision data round trip (the stability limits: test_study_drivers)."""
 
 import numpy as np
 import pytest
@@ -10,8 +10,6 @@ import twin
 from bench_helpers import plant_fidelity
 from twin.engine.integrators import ORDER
 from twin.studies.accuracy import replot
-from twin.studies.stability import THEORY, largest_stable_step, loaded_scene, loaded_state
-from twin.engine.linearize import highest_frequency, jacobian
 from twin.studies.work_precision import errors, run_study
 
 SMOOTH = {"reducer.backlash": 0.0}  # no contact transitions: the torsional joint never opens
