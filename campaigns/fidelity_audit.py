@@ -25,6 +25,8 @@ from campaigns.spec import CampaignSpec, Dataset, FidelityAudit, Observability, 
 from campaigns.storage import atomic_write
 from twin.errors import InputError
 
+#: The default spec of ``twin fidelity audit``: the thesis study's uncertainty table, seed, features and solver.
+THESIS_SPEC = Path(__file__).parent / "specs" / "thesis_backlash.toml"
 MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the bench must detect (Table 9.3)
 KS_LEVEL = 0.05
 
@@ -124,7 +126,7 @@ def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str 
         problems += exc.problems
     if problems:
         raise InputError("fidelity audit", problems)
-    spec = load_spec(spec_path or Path(__file__).parent / "specs" / "thesis_backlash.toml")
+    spec = load_spec(spec_path or THESIS_SPEC)
     name = Path(scene).stem  # a scene file's data set is named after the file, as the CLI's output directory
     spec = spec.model_copy(update={
         "name": f"fidelity_audit_{name}",

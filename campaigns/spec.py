@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import pydantic
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, SCENE_PREFIX, Catalog
 from twin.errors import InputError
@@ -210,13 +210,28 @@ def _known_condition(name: str, info: ValidationInfo) -> str:
 ConditionName = Annotated[str, AfterValidator(_known_condition)]
 
 
+def _condition_value(value):
+    """A finite number or a word; which of the two a condition takes is checked against the scene table
+    (:meth:`Dataset._condition_values`), so one bad value gives one problem, not one per type tried."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"must be a number or one of the condition's choices, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"Input should be a finite number (got {value!r})")
+    return float(value)
+
+
+ConditionValue = Annotated[float | str, PlainValidator(_condition_value)]
+
+
 class Dataset(_Strict):
     """A named set of condition overrides applied to a scene (Table 9.4)."""
 
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
     scene: str | None = None
     description: str = ""
-    conditions: dict[ConditionName, float | str] = {}
+    conditions: dict[ConditionName, ConditionValue] = {}
 
     @field_validator("scene")
     @classmethod
