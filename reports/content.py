@@ -253,6 +253,12 @@ def _influences(b: _Builder, feature: str) -> str:
     unit = b.results[feature].attrs.get("units", "")
     if "effect_size" in a:
         effect = np.abs(a["effect_size"].sel(feature=feature, dataset=sufficient).transpose("parameter", "dataset").values)
+        if "first_order_index_ci" in a:  # an index whose interval includes 0 is not an influence the data resolve
+            lower = a["first_order_index_ci"].sel(feature=feature, dataset=sufficient, bound="lower")
+            effect = np.where(lower.transpose("parameter", "dataset").values > 0.0, effect, np.nan)
+        if not np.isfinite(effect).any():
+            return (f"{feature}: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) in any "
+                    "data set: the spread is not explained by a sampled tolerance at this sample size.")
         best = np.nanargmax(np.where(np.isfinite(effect), effect, -np.inf), axis=1)
         strength = np.array([effect[j, best[j]] for j in range(len(parameters))])
         items = []
@@ -540,6 +546,42 @@ def _correlations(b: _Builder):
     yield b.table("The three strongest parameters per data set: Spearman ρ with its bootstrap interval, and PRCC; "
                   "greyed rows rest on too few runs and are not findings.",
                   ("Feature", "Data set", "Rank", "Parameter", "Spearman ρ [interval]", "PRCC", "Data"), rows, muted)
+    if "first_order_index" in a and "effect_size" in a:
+        yield from _sensitivity_table(b, parameters)
+
+
+def _sensitivity_table(b: _Builder, parameters: list[str]):
+    """The three largest first-order indices per data set with their intervals and effect sizes (analysis.nc)."""
+    a = b.analysis
+    method = a["first_order_index"].attrs.get("method", "given-data first-order index")
+    yield Paragraph(
+        f"Rank correlations cannot see a tolerance whose effect is not monotone (a V-shaped dependence has ρ ≈ 0), and "
+        f"a strong ρ may belong to a negligible effect. The first-order index ({method}) is the share of the feature's "
+        "variance a tolerance explains alone, monotone or not; the effect size is how much it moves the feature (the "
+        "standard deviation of the feature's conditional mean over the tolerance's range). An index whose interval "
+        "includes 0 is not resolved by this many runs."
+    )
+    rows, muted = [], []
+    for feature in b.measured:
+        unit = b.results[feature].attrs.get("units", "")
+        for name in b.datasets:
+            sel = a.sel(dataset=name, feature=feature)
+            reason = b.insufficient(name, feature)
+            index = sel["first_order_index"].values
+            for j in _ranked(index)[:3]:
+                lo, hi = sel["first_order_index_ci"].values[j]
+                rows.append((feature, name, parameters[j], f"{index[j]:.2f} [{lo:.2f}, {hi:.2f}]",
+                             quantity(float(sel["effect_size"].values[j]), unit),
+                             f"{sel['spearman'].values[j]:+.2f}", "yes" if lo > 0 else "no (interval includes 0)",
+                             reason or "–"))
+                muted.append(reason is not None or not lo > 0)
+            if reason and not np.isfinite(index).any():
+                rows.append((feature, name, "–", "–", "–", "–", "–", reason))
+                muted.append(True)
+    yield b.table("The three largest first-order indices per data set, with their bootstrap intervals, the effect size "
+                  "and Spearman ρ beside them; greyed rows are not resolved or rest on too few runs.",
+                  ("Feature", "Data set", "Parameter", "First-order index [interval]", "Effect size", "Spearman ρ",
+                   "Resolved", "Data"), rows, muted)
 
 
 # --- Scatter plots -----------------------------------------------------------------------------------

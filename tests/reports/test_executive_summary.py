@@ -92,3 +92,20 @@ def test_an_older_analysis_gives_no_verdict(campaign, generated_at, tmp_path):
     assert "Requirement verdict: not available" in page
     assert not re.search(r"\b(meets|not met|met)\b", page.replace("not available", ""))
     assert "a rank correlation, not an effect size" in page  # the influences fall back to |Spearman ρ|, labelled
+
+
+def test_an_unresolved_index_is_not_listed_as_an_influence(campaign, generated_at, tmp_path):
+    """A first-order index whose bootstrap interval includes 0 is noise at this sample size: page 1 names no
+    tolerance as an influence and says that none is resolved, instead of ranking the noise."""
+    shutil.copyfile(campaign, tmp_path / "results.nc")
+    with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
+        analysis = _contract_analysis(stored.load())
+    assert "first_order_index_ci" in analysis
+    lower = analysis["first_order_index_ci"].sel(bound="lower")
+    analysis["first_order_index_ci"] = analysis["first_order_index_ci"].where(
+        analysis["bound"] != "lower", -np.abs(lower) - 0.01)
+    analysis.to_netcdf(tmp_path / "analysis.nc")
+    paths = reports.build_report(tmp_path / "results.nc", out_dir=tmp_path / "report", generated_at=generated_at)
+    summary = _executive_html(paths["html"])
+    assert "first-order index is resolved above zero (95 % bootstrap interval) in any data set" in summary
+    assert " moves it by " not in summary
