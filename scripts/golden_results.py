@@ -1,0 +1,54 @@
+"""Re-generate the golden results file of ``tests/campaigns/test_golden_results.py``.
+
+Run it only when the model changes on purpose (the campaign results are meant to stay bit-identical
+otherwise), and say in the commit why the numbers moved::
+
+    .venv/bin/python scripts/golden_results.py
+
+It runs the small thesis campaign ``tests/campaigns/data/golden_thesis_small.toml`` (fixed seed) and
+stores its ``results.nc`` without the machine-dependent parts (``wall_time``, the provenance and
+execution attributes) as ``tests/campaigns/data/golden_thesis_small.nc``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import xarray as xr
+
+import campaigns
+
+DATA = Path(__file__).resolve().parent.parent / "tests" / "campaigns" / "data"
+SPEC = DATA / "golden_thesis_small.toml"
+GOLDEN = DATA / "golden_thesis_small.nc"
+
+
+def comparable(ds: xr.Dataset) -> xr.Dataset:
+    """The part of a results file that must not depend on the machine, the workers or the date."""
+    return ds.drop_vars("wall_time").drop_attrs()
+
+
+def run_golden_campaign(out_dir: Path) -> xr.Dataset:
+    """Run the golden spec into ``out_dir`` and return its comparable results (loaded in memory)."""
+    results = campaigns.run_campaign(campaigns.load_spec(SPEC), out_dir, workers=1, progress=False)
+    with xr.open_dataset(results) as ds:
+        return comparable(ds).load()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=GOLDEN, help=f"where to write (default {GOLDEN})")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = run_golden_campaign(Path(tmp) / "out")
+    encoding = {name: {"zlib": True, "complevel": 9} for name in ds.data_vars if ds[name].dtype.kind in "fiu"}
+    ds.to_netcdf(args.out, encoding=encoding)
+    print(f"wrote {args.out} ({args.out.stat().st_size} bytes, {len(ds.data_vars)} variables)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,64 @@
+"""Golden results: a small thesis campaign with a fixed seed gives the same ``results.nc`` data as stored.
+
+The campaign is ``tests/campaigns/data/golden_thesis_small.toml`` (the thesis study, Sec. 9.4, reduced to
+2 runs on data sets 1, 2 and 4, one traced run each); the stored results are
+``tests/campaigns/data/golden_thesis_small.nc``. Every data variable (sampled values, statuses, features,
+traces) and every coordinate is compared; ``wall_time`` and the provenance/execution attributes measure
+the machine and the day, and are left out.
+
+Tolerance: none, the comparison is exact. The project promises bit-identical results for the same spec and
+seed (docs/campaigns.md), and nothing in the model licenses a rounding difference: the sampling is numpy's
+PCG64 (platform independent), and the compiled code is built without ``fastmath``, so LLVM neither
+contracts multiply-adds into FMA nor reorders sums, whatever the host CPU's instruction set. A refactoring
+that changes a single bit (an operation reordered, a constant computed another way) fails here, which is
+the point: such a change is a model change and must be made on purpose.
+
+When the model changes on purpose, regenerate the golden file and say why in the commit::
+
+    .venv/bin/python scripts/golden_results.py
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+ROOT = Path(__file__).resolve().parents[2]
+_spec = importlib.util.spec_from_file_location("golden_results", ROOT / "scripts" / "golden_results.py")
+golden_results = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(golden_results)
+
+
+def _differences(new: xr.Dataset, golden: xr.Dataset) -> list[str]:
+    """One line per variable or coordinate that differs, with the largest difference for numbers."""
+    lines = []
+    if set(new.variables) != set(golden.variables):
+        lines.append(f"variables: new has {sorted(set(new.variables) - set(golden.variables))}, "
+                     f"golden has {sorted(set(golden.variables) - set(new.variables))}")
+    for name in sorted(set(new.variables) & set(golden.variables)):
+        a, b = new[name], golden[name]
+        if a.dims != b.dims or a.shape != b.shape:
+            lines.append(f"{name}: shape {dict(a.sizes)} != golden {dict(b.sizes)}")
+        elif a.dtype.kind == "f":
+            if not np.array_equal(a.values, b.values, equal_nan=True):
+                lines.append(f"{name}: max |new - golden| = {np.nanmax(np.abs(a.values - b.values)):.3g}")
+        elif a.dtype.kind != "f" and not np.array_equal(a.values, b.values):
+            lines.append(f"{name}: {a.values.ravel()[:6]} != golden {b.values.ravel()[:6]}")
+        if a.attrs != b.attrs:
+            lines.append(f"{name}: attributes {a.attrs} != golden {b.attrs}")
+    return lines
+
+
+@pytest.mark.slow
+def test_small_thesis_campaign_reproduces_the_golden_results(tmp_path):
+    new = golden_results.run_golden_campaign(tmp_path / "out")
+    with xr.open_dataset(golden_results.GOLDEN) as stored:
+        golden = stored.load()
+    assert (new["status"] == "ok").all(), "golden runs must succeed"
+    differences = _differences(new, golden)
+    assert not differences, ("results differ from the golden file (regenerate it only for a model change on "
+                             "purpose: scripts/golden_results.py):\n" + "\n".join(differences))
