@@ -109,7 +109,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_accuracy(args) -> int:
-    from twin.studies.accuracy import replot, run_accuracy
+    from app.studies.accuracy import replot, run_accuracy
 
     if args.replot:
         paths = replot(args.out)

@@ -17,7 +17,7 @@ from machine import header
 import twin
 import twin.engine.simulate
 from twin.fidelity import full_plant
-from twin.studies.control_baseline import compare
+from app.studies.control_baseline import compare
 
 
 def median_wall(scene, repeats=5, **options):

@@ -3,7 +3,7 @@
 A report never runs a simulation: it reads ``results.nc`` (written by
 :mod:`campaigns.storage`), ``analysis.nc`` (:mod:`campaigns.analysis`; computed
 in memory from the results when absent) and, optionally, the speed-versus-accuracy
-study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`twin.studies.work_precision`). Every problem is a :class:`ReportError` that
+study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`app.studies.work_precision`). Every problem is a :class:`ReportError` that
 names the file.
 """
 

@@ -12,10 +12,10 @@ from pathlib import Path
 import pandas as pd
 import xarray as xr
 
-from twin.studies.charts import campaign_accuracy_chart, stability_chart, work_precision_chart
-from twin.studies.control_baseline import compare
-from twin.studies.stability import stability_map
-from twin.studies.work_precision import STEP_LADDER, TOLERANCE_LADDER, environment, run_study
+from app.studies.charts import campaign_accuracy_chart, stability_chart, work_precision_chart
+from app.studies.control_baseline import compare
+from app.studies.stability import stability_map
+from app.studies.work_precision import STEP_LADDER, TOLERANCE_LADDER, environment, run_study
 
 #: ``--quick``: three steps, one adaptive baseline at one tolerance, one timing, 0.25 s simulated and no
 #: stability map: under a minute on an idle 2-core machine (the full study takes many minutes).

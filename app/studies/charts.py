@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from twin.studies.work_precision import quantization_floor  # noqa: E402
+from app.studies.work_precision import quantization_floor  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
                 "quantizers_on": "quantizers on (encoders, resolver, converters)"}

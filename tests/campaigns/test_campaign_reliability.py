@@ -30,7 +30,7 @@ from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError
 from campaigns.storage import CampaignError, OutputLock, atomic_write, load_chunk
 from campaigns.testing import SyntheticModel, synthetic_run
 from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
-from twin.cli import main
+from app.cli import main
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

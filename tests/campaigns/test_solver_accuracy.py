@@ -5,7 +5,7 @@ import pytest
 import xarray as xr
 
 from campaigns.solver_accuracy import compare_features
-from twin.studies.charts import campaign_accuracy_chart
+from app.studies.charts import campaign_accuracy_chart
 
 
 def _results(values):

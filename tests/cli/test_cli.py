@@ -7,7 +7,7 @@ import xarray as xr
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "twin.cli", *args], capture_output=True, text=True, timeout=600)
+    return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=600)
 
 
 def test_simulate_writes_dataset_and_plot(tmp_path):

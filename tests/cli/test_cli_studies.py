@@ -16,7 +16,7 @@ from twin import cli
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "twin.cli", *args], capture_output=True, text=True, timeout=1200)
+    return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=1200)
 
 
 def test_accuracy_quick_study(tmp_path):

@@ -9,8 +9,8 @@ from scipy.stats import linregress
 import twin
 from bench_helpers import plant_fidelity
 from twin.engine.integrators import ORDER
-from twin.studies.accuracy import replot
-from twin.studies.work_precision import errors, run_study
+from app.studies.accuracy import replot
+from app.studies.work_precision import errors, run_study
 
 SMOOTH = {"reducer.backlash": 0.0}  # no contact transitions: the torsional joint never opens
 

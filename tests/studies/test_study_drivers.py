@@ -7,9 +7,9 @@ import xarray as xr
 
 import twin
 from twin.engine.linearize import highest_frequency, jacobian
-from twin.studies import accuracy
-from twin.studies.control_baseline import compare
-from twin.studies.stability import THEORY, loaded_scene, loaded_state, stability_map
+from app.studies import accuracy
+from app.studies.control_baseline import compare
+from app.studies.stability import THEORY, loaded_scene, loaded_state, stability_map
 
 
 @pytest.fixture(scope="module")

@@ -125,7 +125,7 @@ def requested_levels(fidelity) -> tuple[dict[str, str], list[str]]:
 
 
 #: Instruments and output converters ideal: with ``"default": "full"`` this is the bench's full
-#: plant seen through perfect sensors, the setting of the solver studies (twin.studies).
+#: plant seen through perfect sensors, the setting of the solver studies (app.studies).
 IDEAL_INSTRUMENTS = {"encoders": "ideal", "analog_sensors": "ideal", "torque_meter_refresh": "ideal",
                      "output_converters": "ideal"}
 
