@@ -248,7 +248,7 @@ def sensor_channel(
 
     with ``dT = room_temperature - sensors.reference_temperature`` [K]. The
     DAQ and the electrical noise come from the ``sensors`` group (``values``,
-    validated by :func:`sensors.parameters.validate_sensor_values`).
+    as given to :func:`sensors.parameters.sensor_values`).
     """
     if not (math.isfinite(room_temperature) and room_temperature > 0.0):
         raise ValueError(f"room_temperature: must be a finite absolute temperature > 0 K, got {room_temperature!r}")

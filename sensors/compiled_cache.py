@@ -10,8 +10,10 @@ still holds the old callee, and a run silently executes the old physics.
 of every ``.py`` file of the packages numba compiles from (``twin`` and
 ``sensors``): any source edit selects a fresh, empty cache directory. It must
 run before the first ``@njit(cache=True)`` decorator executes (numba fixes a
-function's cache location when it is decorated), so ``twin/__init__.py`` and
-``sensors/__init__.py`` call it before importing anything compiled.
+function's cache location when it is decorated), so ``sensors/__init__.py``
+calls it before importing anything compiled, and ``twin/__init__.py`` imports
+``sensors`` first. It lives in ``sensors``, the bottom layer, so that both
+compiled packages can use it without an upward import.
 
 Child processes (dask workers, the campaign sandbox) inherit the environment
 variable and, importing ``twin`` themselves, recognise the directory as
@@ -27,7 +29,7 @@ from pathlib import Path
 
 #: Prefix of the per-source-hash cache directories.
 KEY_PREFIX = "benchtwin-"
-#: Packages whose modules hold ``numba`` functions (directories next to ``twin``).
+#: Packages whose modules hold ``numba`` functions (directories next to ``sensors``).
 COMPILED_PACKAGES = ("twin", "sensors")
 
 
@@ -37,7 +39,7 @@ def source_hash(root: Path | None = None) -> str:
     Parameters
     ----------
     root : Path, optional
-        Directory holding the packages; by default the one holding this ``twin`` package.
+        Directory holding the packages; by default the one holding this ``sensors`` package.
     """
     root = Path(__file__).resolve().parent.parent if root is None else root
     digest = hashlib.sha256()

@@ -74,7 +74,7 @@ from typing import Mapping
 import numba
 import numpy as np
 
-from sensors.parameters import validate_sensor_values
+from sensors.parameters import sensor_values
 
 ENC_FIDELITY = 0
 ENC_RESOLUTION = 1
@@ -210,12 +210,12 @@ def encoder_parameters(
     return p
 
 
-def linear_encoder_parameters(params: Mapping[str, float] | None = None, *, fidelity: int = 2) -> np.ndarray:
+def linear_encoder_parameters(params: Mapping[str, float], *, fidelity: int = 2) -> np.ndarray:
     """Parameter array of the sled's linear encoder (Table B.4) from the ``sensors`` group.
 
     One Table 9.5 row ("Asymmetry in each phase") drives both phases.
     """
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     return encoder_parameters(
         resolution=v["sensors.linear_encoder_resolution"],
         phase_error=v["sensors.linear_encoder_phase_error"],
@@ -228,13 +228,13 @@ def linear_encoder_parameters(params: Mapping[str, float] | None = None, *, fide
     )
 
 
-def torque_meter_encoder_parameters(params: Mapping[str, float] | None = None, *, fidelity: int = 2) -> np.ndarray:
+def torque_meter_encoder_parameters(params: Mapping[str, float], *, fidelity: int = 2) -> np.ndarray:
     """Parameter array of the torque meter's rotary encoder (Table B.5), angles in rad.
 
     ``pulses_per_turn`` signal periods per revolution, x4 decoded. No
     precision error: Table 9.5 gives none for this encoder.
     """
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     pulses = v["sensors.torque_meter_encoder_pulses_per_turn"]
     if not float(pulses).is_integer():
         raise ValueError(f"sensors.torque_meter_encoder_pulses_per_turn: must be an integer, got {pulses!r}")

@@ -32,20 +32,20 @@ from typing import Mapping
 import numpy as np
 
 from sensors.analog import select_range, sensor_channel
-from sensors.parameters import validate_sensor_values
+from sensors.parameters import sensor_values
 
 
-def load_cell_parameters(params: Mapping[str, float] | None = None, *, room_temperature: float) -> np.ndarray:
+def load_cell_parameters(params: Mapping[str, float], *, room_temperature: float) -> np.ndarray:
     """Analog channel parameters of the external-force load cell (Table B.13).
 
     Parameters
     ----------
-    params : ParameterSet or mapping or None
-        ``sensors.*`` overrides of the bench values.
+    params : mapping
+        Validated parameter values, the whole ``sensors`` group (:func:`sensors.parameters.sensor_values`).
     room_temperature : float
         Room temperature of the test [K].
     """
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     return sensor_channel(
         v,
         room_temperature=room_temperature,
@@ -59,17 +59,17 @@ def load_cell_parameters(params: Mapping[str, float] | None = None, *, room_temp
     )
 
 
-def preload_load_cell_parameters(params: Mapping[str, float] | None = None, *, room_temperature: float) -> np.ndarray:
+def preload_load_cell_parameters(params: Mapping[str, float], *, room_temperature: float) -> np.ndarray:
     """Analog channel parameters of the preload load cell + conditioner on the selected range.
 
     Parameters
     ----------
-    params : ParameterSet or mapping or None
-        ``sensors.*`` overrides of the bench values.
+    params : mapping
+        Validated parameter values, the whole ``sensors`` group (:func:`sensors.parameters.sensor_values`).
     room_temperature : float
         Room temperature of the test [K].
     """
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     r = select_range(v, "sensors.preload_load_cell_range")
     return sensor_channel(
         v,

@@ -1,49 +1,34 @@
-"""Sensor parameters: the ``sensors`` group of a parameter set.
+"""Sensor parameters as data: the ``sensors`` group of a parameter set.
 
-The values, units, provenance and bounds live in
-``twin/parameters/bench/sensors.toml``; this module only resolves a caller's
-parameter set or overrides against that file, so bounds are checked by the
-same code as every other parameter (:class:`twin.parameters.ParameterSet`).
+The values, units, provenance and bounds live in ``twin/parameters/bench/sensors.toml`` and are checked by
+the parameter set that holds them (:class:`twin.parameters.ParameterSet`), once, when the set is loaded or
+changed. The sensor models take those values as a plain mapping of full names to SI values and import nothing
+from the bench model (``docs/architecture.md``: sensors are the bottom layer).
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Mapping
-
-from twin.parameters import BUILTIN_DIR, ParameterSet, load_parameters
+from collections.abc import Mapping
 
 GROUP = "sensors"
-SENSORS_TOML = BUILTIN_DIR / "bench" / "sensors.toml"
 
 
-@lru_cache(maxsize=1)
-def _bench_sensors() -> ParameterSet:
-    return load_parameters(SENSORS_TOML)
+class SensorValues(dict):
+    """``{"sensors.<key>": value}``; a missing name is an error that names it."""
+
+    def __missing__(self, name: str) -> float:
+        raise ValueError(f"{name}: missing from the sensor parameters given (pass the whole validated "
+                         f"'{GROUP}' group, e.g. twin.load_parameters('bench').values())")
 
 
-def validate_sensor_values(params: ParameterSet | Mapping[str, float] | None = None) -> dict[str, float]:
-    """Complete, validated ``{"sensors.<key>": value}`` dictionary.
+def sensor_values(params: Mapping[str, float]) -> SensorValues:
+    """The ``sensors.*`` entries of ``params`` (already validated values, SI units) as floats.
 
     Parameters
     ----------
-    params : ParameterSet or mapping or None
-        A parameter set (e.g. ``twin.load_parameters("bench")``), already
-        validated against its own files, or a mapping of full names to values
-        (SI units), validated here against the bench file. Entries of other
-        groups are ignored (they belong to other components); ``sensors.*``
-        entries override the bench values; missing ones take the bench values.
-
-    Raises
-    ------
-    twin.ParameterError
-        (a ``ValueError``) listing every unknown ``sensors.*`` name and every
-        value outside its bounds, each with the field name and what is allowed.
+    params : mapping
+        Full parameter names to values, e.g. ``twin.load_parameters("bench").values()``; entries of
+        other groups are ignored (they belong to other components).
     """
-    base = _bench_sensors()
-    if params is None:
-        return base.values()
-    ours = {name: value for name, value in params.items() if name.split(".", 1)[0] == GROUP}
-    if isinstance(params, ParameterSet):
-        return {**base.values(), **{name: parameter.value for name, parameter in ours.items()}}
-    return base.with_values(ours).values()
+    return SensorValues({name: float(value) for name, value in params.items()
+                         if name.split(".", 1)[0] == GROUP})

@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from sensors.acquisition import quantize
-from sensors.parameters import validate_sensor_values
+from sensors.parameters import sensor_values
 
 RES_RESOLUTION = 0
 RES_ACCURACY = 1
@@ -31,9 +31,9 @@ RES_HARMONIC = 3
 RES_SIZE = 4
 
 
-def resolver_parameters(params: Mapping[str, float] | None = None) -> np.ndarray:
+def resolver_parameters(params: Mapping[str, float]) -> np.ndarray:
     """Parameter array of the motor resolver from the ``sensors`` group."""
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     harmonic = v["sensors.resolver_error_harmonic"]
     if not float(harmonic).is_integer():
         raise ValueError(f"sensors.resolver_error_harmonic: must be an integer, got {harmonic!r}")

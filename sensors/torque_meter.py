@@ -26,17 +26,16 @@ from typing import Mapping
 import numpy as np
 
 from sensors.analog import select_range, sensor_channel
-from sensors.parameters import validate_sensor_values
+from sensors.parameters import sensor_values
 
 
-def torque_meter_parameters(params: Mapping[str, float] | None = None, *, room_temperature: float) -> np.ndarray:
+def torque_meter_parameters(params: Mapping[str, float], *, room_temperature: float) -> np.ndarray:
     """Analog channel parameters of the torque meter on its selected range.
 
     Parameters
     ----------
-    params : ParameterSet or mapping or None
-        Parameter set or ``{name: value}``; ``sensors.*`` entries override the
-        bench values (:func:`sensors.parameters.validate_sensor_values`).
+    params : mapping
+        Validated parameter values, the whole ``sensors`` group (:func:`sensors.parameters.sensor_values`).
     room_temperature : float
         Room temperature of the test [K] (scene condition ``room_temperature``).
 
@@ -45,7 +44,7 @@ def torque_meter_parameters(params: Mapping[str, float] | None = None, *, room_t
     numpy.ndarray
         Layout ``AN_*`` of :mod:`sensors.analog`.
     """
-    v = validate_sensor_values(params)
+    v = sensor_values(params)
     r = select_range(v, "sensors.torque_meter_range")
     return sensor_channel(
         v,

@@ -3,10 +3,9 @@
 Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -> features.
 """
 
-# First, before any numba function is decorated: key the compiled-code cache on the source (no stale code).
-from twin import compiled_cache
-
-compiled_cache.configure()
+# First, before any numba function is decorated: importing sensors keys the compiled-code cache on the
+# source (sensors.compiled_cache; no stale machine code).
+import sensors  # noqa: F401
 
 from twin.engine.simulate import simulate  # noqa: E402
 from twin.errors import InputError, OptionError, ParameterError, SceneError, SimulationFailed  # noqa: E402

@@ -5,6 +5,7 @@ import math
 import numba
 import numpy as np
 
+from bench_helpers import bench_sensors
 from sensors.acquisition import draw_uniform_noise
 from sensors.analog import AN_NOISE_HALF_WIDTH, AS_SIZE, analog_init, analog_read, analog_step
 from sensors.encoder import ENC_STATE_SIZE, encoder_init, encoder_reading, encoder_speed, encoder_step
@@ -40,11 +41,11 @@ def _loop(p_enc, p_tm, p_res, noise, out):
 
 
 def _run(seed):
-    p_enc = linear_encoder_parameters({"sensors.linear_encoder_phase_error": 0.3})
-    p_tm = torque_meter_parameters(room_temperature=303.15)
+    p_enc = linear_encoder_parameters(bench_sensors({"sensors.linear_encoder_phase_error": 0.3}))
+    p_tm = torque_meter_parameters(bench_sensors(), room_temperature=303.15)
     noise = draw_uniform_noise(np.random.default_rng(seed), SAMPLES, p_tm[AN_NOISE_HALF_WIDTH])
     out = np.empty((SAMPLES, 5))
-    _loop(p_enc, p_tm, resolver_parameters(), noise, out)
+    _loop(p_enc, p_tm, resolver_parameters(bench_sensors()), noise, out)
     return out
 
 

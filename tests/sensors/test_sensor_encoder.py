@@ -6,6 +6,7 @@ import numba
 import numpy as np
 import pytest
 
+from bench_helpers import bench_sensors
 from sensors.encoder import (
     ENC_EDGE,
     ENC_PERIOD,
@@ -209,7 +210,7 @@ def test_edge_time_is_interpolated_inside_the_step():
 
 
 def test_overspeed_flag_against_the_datasheet_maximum_frequency():
-    p = linear_encoder_parameters()
+    p = linear_encoder_parameters(bench_sensors())
     for v, expected in ((0.1, False), (0.3, True)):  # 25 kHz and 75 kHz signal
         state = np.zeros(ENC_STATE_SIZE)
         encoder_init(state, 0.0, 0.0, p)
@@ -219,8 +220,8 @@ def test_overspeed_flag_against_the_datasheet_maximum_frequency():
 
 
 def test_bench_encoders_use_the_datasheet_resolutions():
-    assert linear_encoder_parameters()[ENC_PERIOD] == pytest.approx(4e-6)
-    p = torque_meter_encoder_parameters()
+    assert linear_encoder_parameters(bench_sensors())[ENC_PERIOD] == pytest.approx(4e-6)
+    p = torque_meter_encoder_parameters(bench_sensors())
     assert p[ENC_PERIOD] == pytest.approx(2 * math.pi / 2000)  # 2000 pulses/turn
     assert encoder_count(2 * math.pi + 1e-9, p) == 8000.0  # x4 decoding
     assert scale_position(0.5, p) == 0.5  # no precision error on the torque meter encoder
@@ -238,13 +239,13 @@ def test_validation_names_the_field():
     with pytest.raises(ValueError, match="precision_amplitude"):
         encoder_parameters(resolution=1e-6, timer_period=TICK, precision_amplitude=0.1, precision_wavelength=0.32)
     with pytest.raises(ValueError, match="sensors.linear_encoder_phase_error"):  # beyond ±45 deg
-        linear_encoder_parameters({"sensors.linear_encoder_phase_error": math.radians(50.0)})
+        linear_encoder_parameters(bench_sensors({"sensors.linear_encoder_phase_error": math.radians(50.0)}))
     with pytest.raises(ValueError, match="sensors.linear_encoder_resolution"):
-        linear_encoder_parameters({"sensors.linear_encoder_resolution": -1e-6})
+        linear_encoder_parameters(bench_sensors({"sensors.linear_encoder_resolution": -1e-6}))
     with pytest.raises(ValueError, match="sensors.linear_encoder_phase_eror"):
-        linear_encoder_parameters({"sensors.linear_encoder_phase_eror": 0.1})
+        linear_encoder_parameters(bench_sensors({"sensors.linear_encoder_phase_eror": 0.1}))
     with pytest.raises(ValueError, match="sensors.torque_meter_encoder_pulses_per_turn"):
-        torque_meter_encoder_parameters({"sensors.torque_meter_encoder_pulses_per_turn": 2000.5})
+        torque_meter_encoder_parameters(bench_sensors({"sensors.torque_meter_encoder_pulses_per_turn": 2000.5}))
 
 
 def test_precision_error_only_at_the_edge_accurate_level():
@@ -253,8 +254,8 @@ def test_precision_error_only_at_the_edge_accurate_level():
     worn = {"sensors.linear_encoder_precision": 3e-6, "sensors.linear_encoder_precision_wavelength": 0.02}
     x = 0.007
     for fidelity in (0, 1):
-        assert scale_position(x, linear_encoder_parameters(worn, fidelity=fidelity)) == x
-    p = linear_encoder_parameters(worn, fidelity=2)
+        assert scale_position(x, linear_encoder_parameters(bench_sensors(worn), fidelity=fidelity)) == x
+    p = linear_encoder_parameters(bench_sensors(worn), fidelity=2)
     amplitude = p[ENC_PRECISION_AMPLITUDE]
     assert amplitude != 0.0
     assert scale_position(x, p) == pytest.approx(x + amplitude * math.sin(2 * math.pi * x / 0.02), rel=1e-12, abs=1e-15)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from bench_helpers import bench_sensors
 from sensors.encoder import (
     ENC_RESOLUTION,
     ENC_STATE_SIZE,
@@ -54,13 +55,13 @@ def test_switch_threshold_is_the_crossover_of_the_two_error_bounds():
     assert v_sw == pytest.approx(0.2)  # bench linear encoder, docs/sensors.md
     b_p, b_f = _bounds(v_sw, tick)
     assert v_sw * v_sw * tick / RES == pytest.approx(b_f)  # leading-order period bound equals frequency bound
-    p = torque_meter_encoder_parameters()
+    p = torque_meter_encoder_parameters(bench_sensors())
     assert speed_switch_threshold(p[ENC_RESOLUTION], tick, WINDOW) == pytest.approx(157.08, rel=1e-4)
 
 
 @pytest.mark.parametrize("v", [2e-4, 2e-3, 2e-2, -5e-3])
 def test_period_method_is_accurate_and_chosen_at_low_speed(v):
-    p = linear_encoder_parameters(fidelity=1)  # 40 MHz timer: v_sw = 0.2 m/s
+    p = linear_encoder_parameters(bench_sensors(), fidelity=1)  # 40 MHz timer: v_sw = 0.2 m/s
     tick = 2.5e-8
     est = _constant_speed_run(p, v, duration=max(0.03, 20 * RES / abs(v)))
     b_p, b_f = _bounds(abs(v), tick)
@@ -87,7 +88,7 @@ def test_frequency_method_is_accurate_and_chosen_at_high_speed(v):
 
 
 def test_period_method_reads_zero_on_dither_and_decays_after_a_stop():
-    p = linear_encoder_parameters(fidelity=1)
+    p = linear_encoder_parameters(bench_sensors(), fidelity=1)
     tick = 2.5e-8
     state = np.zeros(ENC_STATE_SIZE)
     encoder_init(state, 0.5e-6, 0.0, p)
@@ -111,7 +112,7 @@ def test_period_method_reads_zero_on_dither_and_decays_after_a_stop():
 
 
 def test_fidelity_zero_speed_is_the_exact_window_mean():
-    p = linear_encoder_parameters(fidelity=0)
+    p = linear_encoder_parameters(bench_sensors(), fidelity=0)
     state = np.zeros(ENC_STATE_SIZE)
     encoder_init(state, 0.0, 0.0, p)
     encoder_step(state, 1.234567e-7, 1e-3, p)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from bench_helpers import bench_sensors
 from sensors.acquisition import convert
 from sensors.analog import (
     AN_DAQ_BITS,
@@ -43,7 +44,7 @@ def _read_series(p, t, x):
 
 
 def test_torque_meter_misses_a_peak_between_refreshes_and_holds_one_it_samples():
-    p = torque_meter_parameters(room_temperature=T25)
+    p = torque_meter_parameters(bench_sensors(), room_temperature=T25)
     assert p[AN_REFRESH_PERIOD] == pytest.approx(1e-3)  # 1 kHz, Table B.5
     dt = 1e-5
     t = np.arange(1, 1001) * dt  # 10 ms
@@ -66,7 +67,7 @@ def test_torque_meter_misses_a_peak_between_refreshes_and_holds_one_it_samples()
 
 
 def test_torque_meter_saturates_at_the_dac_full_scale():
-    p = torque_meter_parameters(room_temperature=T25)
+    p = torque_meter_parameters(bench_sensors(), room_temperature=T25)
     reading = _read_series(p, np.array([1e-3, 2e-3]), np.array([80.0, -80.0]))
     assert reading[0] == pytest.approx(50.0 * (1 - 2**-15))
     assert reading[1] == pytest.approx(-50.0)
@@ -105,8 +106,8 @@ def test_torque_meter_saturates_at_the_dac_full_scale():
 )
 @pytest.mark.parametrize("delta_t", [10.0, -10.0])
 def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder, force, overrides, gain_tcs, offset_tcs, delta_t):
-    cold = builder({**overrides, **FINE_DAQ}, room_temperature=T25)
-    warm = builder({**overrides, **FINE_DAQ}, room_temperature=T25 + delta_t)
+    cold = builder(bench_sensors({**overrides, **FINE_DAQ}), room_temperature=T25)
+    warm = builder(bench_sensors({**overrides, **FINE_DAQ}), room_temperature=T25 + delta_t)
     full_scale = cold[AN_FULL_SCALE]
     expected = force * sum(gain_tcs) * delta_t + full_scale * sum(offset_tcs) * delta_t
     # transducer voltage, no quantisation: exact to rounding
@@ -122,22 +123,22 @@ def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder,
 
 def test_static_errors_act_on_gain_and_offset():
     p = load_cell_parameters(
-        {
+        bench_sensors({
             "sensors.load_cell_sensitivity_error": 1e-3,
             "sensors.load_cell_repeatability_error": -5e-4,
             "sensors.load_cell_offset": 2e-4,
-        },
+        }),
         room_temperature=T25,
     )
     assert p[AN_GAIN] == pytest.approx(1.0 + 1e-3 - 5e-4)
     assert p[AN_OFFSET] == pytest.approx(2e-4)
     assert p[AN_REFRESH_PERIOD] == pytest.approx(1 / 19200)  # Table B.13
-    q = preload_load_cell_parameters({"sensors.preload_load_cell_accuracy_error": 2e-3}, room_temperature=T25)
+    q = preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_accuracy_error": 2e-3}), room_temperature=T25)
     assert q[AN_FULL_SCALE] == 10e3 and q[AN_OFFSET] == pytest.approx(2e-3)  # 20 N on the 10 kN range
 
 
 def test_preload_conditioner_is_an_exact_first_order_lag_for_any_step():
-    p = preload_load_cell_parameters(room_temperature=T25)
+    p = preload_load_cell_parameters(bench_sensors(), room_temperature=T25)
     tau = p[AN_TAU]
     assert tau == pytest.approx(1 / (2 * math.pi * 10e3))  # 10 kHz cut-off, Table B.8
     rate = 4e6  # N/s ramp, then hold from t_hold
@@ -174,7 +175,7 @@ def test_hall_sensor_is_an_exact_first_order_lag():
 
 
 def test_noise_sample_adds_to_the_reading_in_volts():
-    p = load_cell_parameters(FINE_DAQ, room_temperature=T25)
+    p = load_cell_parameters(bench_sensors(FINE_DAQ), room_temperature=T25)
     assert p[AN_NOISE_HALF_WIDTH] == pytest.approx(0.25)  # ±2.5 %FS of 10 V
     assert p[AN_DAQ_BITS] == 32.0
     state = np.zeros(AS_SIZE)
@@ -184,13 +185,13 @@ def test_noise_sample_adds_to_the_reading_in_volts():
 
 def test_bad_inputs_name_the_field():
     with pytest.raises(ValueError, match="room_temperature"):
-        load_cell_parameters(room_temperature=-5.0)
+        load_cell_parameters(bench_sensors(), room_temperature=-5.0)
     with pytest.raises(ValueError, match="sensors.torque_meter_range"):
-        torque_meter_parameters({"sensors.torque_meter_range": 1.5}, room_temperature=T25)
+        torque_meter_parameters(bench_sensors({"sensors.torque_meter_range": 1.5}), room_temperature=T25)
     with pytest.raises(ValueError, match="sensors.load_cell_sensitivity_error"):  # beyond ±0.1 %Nom
-        load_cell_parameters({"sensors.load_cell_sensitivity_error": 0.01}, room_temperature=T25)
+        load_cell_parameters(bench_sensors({"sensors.load_cell_sensitivity_error": 0.01}), room_temperature=T25)
     with pytest.raises(ValueError, match="sensors.preload_load_cell_sensitivty_error_range1"):
-        preload_load_cell_parameters({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}, room_temperature=T25)
+        preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}), room_temperature=T25)
 
 
 @pytest.mark.parametrize(
@@ -203,14 +204,14 @@ def test_bad_inputs_name_the_field():
 @pytest.mark.parametrize("selected", [1, 2])
 def test_range_selection_picks_the_range_full_scale_and_errors(builder, selector, full_scale, error_name, selected):
     other = 3 - selected
-    p = builder({selector: float(selected), f"{error_name}{selected}": 0.002, f"{error_name}{other}": -0.002},
+    p = builder(bench_sensors({selector: float(selected), f"{error_name}{selected}": 0.002, f"{error_name}{other}": -0.002}),
                 room_temperature=T25)
     assert p[AN_FULL_SCALE] == full_scale[selected]
     assert p[AN_GAIN] == pytest.approx(1.002)
 
 
 def test_a_step_spanning_several_refreshes_shows_the_last_one():
-    p = torque_meter_parameters({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}, room_temperature=T25)
+    p = torque_meter_parameters(bench_sensors({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}), room_temperature=T25)
     state = np.zeros(AS_SIZE)
     analog_init(state, 0.0, 0.0, p)
     analog_step(state, 25.0, 2.5e-3, p)  # ramp 0 -> 25 N*m over one 2.5 ms step; refreshes at 1 and 2 ms
@@ -249,6 +250,6 @@ def test_each_channel_holds_its_output_at_its_own_rate():
     analog conditioner has no hold at all (its 10 kHz filter is the only dynamics)."""
     room = 298.15
     rate = load_parameters("bench").value("sensors.load_cell_measuring_rate")
-    assert torque_meter_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1e-3)
-    assert load_cell_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1.0 / rate)
-    assert preload_load_cell_parameters(None, room_temperature=room)[AN_REFRESH_PERIOD] == 0.0
+    assert torque_meter_parameters(bench_sensors(), room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1e-3)
+    assert load_cell_parameters(bench_sensors(), room_temperature=room)[AN_REFRESH_PERIOD] == pytest.approx(1.0 / rate)
+    assert preload_load_cell_parameters(bench_sensors(), room_temperature=room)[AN_REFRESH_PERIOD] == 0.0

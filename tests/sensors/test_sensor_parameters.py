@@ -7,8 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from sensors.parameters import SENSORS_TOML, validate_sensor_values
-from twin.parameters import load_parameters
+from sensors.parameters import sensor_values
+from twin.parameters import BUILTIN_DIR, load_parameters
+
+SENSORS_TOML = BUILTIN_DIR / "bench" / "sensors.toml"
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -105,13 +107,17 @@ def test_docs_map_every_row_including_other_groups(entries):
         assert f"`{target}`" in doc, target
 
 
-def test_validation_fills_defaults_ignores_other_groups_and_names_bad_fields():
-    values = validate_sensor_values({"motor.inertia": 1.0, "sensors.linear_encoder_precision": 4e-6})
-    assert values["sensors.linear_encoder_precision"] == 4e-6
-    assert values["sensors.linear_encoder_resolution"] == 1e-6
-    assert "motor.inertia" not in values
+def test_sensor_values_keep_their_group_and_name_a_missing_one():
+    values = sensor_values({"motor.inertia": 1.0, "sensors.linear_encoder_precision": 4e-6})
+    assert values == {"sensors.linear_encoder_precision": 4e-6}
+    with pytest.raises(ValueError, match="sensors.linear_encoder_resolution: missing"):
+        values["sensors.linear_encoder_resolution"]
+
+
+def test_bad_sensor_values_are_refused_by_the_parameter_set_naming_each_field():
+    """Bounds are checked once, by the parameter set that holds the values (sensors take them as data)."""
     with pytest.raises(ValueError) as err:
-        validate_sensor_values(
+        load_parameters(SENSORS_TOML).with_values(
             {"sensors.linear_encoder_phase_error": 1.0, "sensors.no_such_sensor": 0.0, "sensors.daq_bits": 1.0}
         )
     message = str(err.value)
@@ -119,8 +125,8 @@ def test_validation_fills_defaults_ignores_other_groups_and_names_bad_fields():
         assert field in message
 
 
-def test_a_parameter_set_is_taken_as_already_validated():
+def test_the_values_of_a_parameter_set_pass_unchanged():
     ps = load_parameters(SENSORS_TOML).with_values({"sensors.linear_encoder_precision": -3e-6})
-    values = validate_sensor_values(ps)
+    values = sensor_values(ps.values())
     assert values["sensors.linear_encoder_precision"] == -3e-6
     assert len(values) == len(ps)
