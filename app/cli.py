@@ -215,7 +215,7 @@ def cmd_fidelity_levels(args) -> int:
 
 
 def cmd_fidelity_audit(args) -> int:
-    from campaigns.fidelity_audit import audit_scene
+    from campaigns.scene_audit import audit_scene
 
     result = audit_scene(args.scene, args.out or Path("out") / f"fidelity_audit_{Path(args.scene).stem}",
                          runs=args.runs, spec_path=args.spec, workers=args.workers)

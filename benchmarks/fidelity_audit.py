@@ -19,7 +19,7 @@ from pathlib import Path
 from machine import header
 
 import twin
-from campaigns.fidelity_audit import audit_scene
+from campaigns.scene_audit import audit_scene
 
 DATASETS = ("ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7")
 

@@ -1,19 +1,26 @@
 """The bench twin as a campaign model: its catalog and the default run function.
 
-This is the only module of the package that calls ``twin``; it imports it lazily,
-so the campaign machinery (and its tests with the synthetic model) does not pay
-for numba compilation where no bench run happens.
+The campaign machinery (spec, sampling, runs, execution, storage, analysis) is a general
+runner; this module is where it meets the bench twin. The synthetic test model
+(:mod:`campaigns.testing`) runs without it.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from functools import lru_cache
 
+import numpy as np
+
+import twin
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.engine.features import FEATURES
+from twin.engine.layout import OUTPUT_NAMES
 from twin.errors import InputError
+from twin.scenes import CONDITIONS
+from twin.scenes.profiles import profile_values
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.engine.features` (a light module: no numba compilation on import).
@@ -33,11 +40,6 @@ def dataset_conditions(spec) -> tuple[dict, dict]:
     ``external_force_peak`` [N], the largest |force demand| of the scene. Returns
     ``({dataset: {condition: {"value", "unit"}}}, the base scene's conditions in the same form)``.
     """
-    import numpy as np
-
-    from twin.scenes import CONDITIONS
-    from twin.scenes.profiles import profile_values
-
     def described(scene) -> dict:
         entries = {k: {"value": float(v) if isinstance(v, (int, float)) else str(v),
                        "unit": CONDITIONS[k][0] if k in CONDITIONS and isinstance(v, (int, float)) else ""}
@@ -56,10 +58,6 @@ def warm_up(spec) -> float:
     Runs a short stretch of the first data set's scene, then the whole scene once; returns
     the wall time of that compiled run [s], from which the driver estimates the campaign's duration.
     """
-    import time
-
-    import twin
-
     dataset = spec.datasets[0]
     scene = _scene(dataset.scene or spec.base.scene).with_conditions(dict(dataset.conditions))
     params = _parameters(spec.base.parameters)
@@ -92,13 +90,9 @@ class BenchCatalog:
 
     def __init__(self, parameters: str = "bench", scene: str = "nominal"):
         try:
-            import twin
-
             params = twin.load_parameters(parameters)
             base_scene = twin.load_scene(scene)
             self.scene_names = list(twin.list_scenes())
-            from twin.scenes import CONDITIONS
-
             self.condition_names = [c for c in CONDITIONS if c in CONDITION_UNITS or c in CONDITION_CHOICES]
         except InputError:
             raise
@@ -117,15 +111,11 @@ class BenchCatalog:
 
 @lru_cache(maxsize=8)
 def _scene(name: str):
-    import twin
-
     return twin.load_scene(name)
 
 
 @lru_cache(maxsize=2)
 def _parameters(name: str):
-    import twin
-
     return twin.load_parameters(name)
 
 
@@ -137,8 +127,6 @@ def simulate_run(request: RunRequest) -> dict:
     (:mod:`campaigns.sandbox`); without isolation a run that returns over its
     budget is recorded as ``timeout`` (:func:`campaigns.runs.execute`).
     """
-    import twin
-
     scene = _scene(request.scene).with_conditions(request.conditions)
     params = _parameters(request.parameters).with_values(request.parameter_values)
     options = {k: v for k, v in request.solver.items() if v is not None}
@@ -161,8 +149,6 @@ def simulate_run(request: RunRequest) -> dict:
 def _warm_up(request: RunRequest) -> None:
     """Load (or compile) the compiled loop with a 10 ms run of the request's configuration, before the
     run's clock starts (:func:`campaigns.runs.warm_up`)."""
-    import twin
-
     options = {k: v for k, v in request.solver.items() if v is not None}
     twin.simulate(_scene(request.scene), _parameters(request.parameters), throw=False, duration=0.01,
                   outputs=list(request.outputs) or None, **options)
@@ -177,8 +163,6 @@ simulate_run.trace_samples = 10_001
 
 def _signals() -> tuple[str, ...]:
     """Every signal and feature the twin can return (what a replay keeps, :mod:`campaigns.replay`)."""
-    from twin.engine.layout import OUTPUT_NAMES
-
     return OUTPUT_NAMES
 
 

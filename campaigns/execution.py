@@ -46,8 +46,10 @@ from distributed.comm.core import CommClosedError
 from distributed.scheduler import KilledWorker
 from tqdm.auto import tqdm
 
+from campaigns import bench as bench_adapter
 from campaigns.budget import check_disk, estimate
 from campaigns.catalog import SCENE_PREFIX, Catalog
+from campaigns.fidelity_audit import audit_campaign
 from campaigns.provenance import provenance
 from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
 from campaigns.sampling import sample
@@ -209,8 +211,7 @@ def run_campaign(
     announce = announce or (lambda stage, message: None)
     bench = run_function is None
     if bench:
-        from campaigns.bench import dataset_conditions, warm_up
-        from campaigns.bench import simulate_run as run_function
+        run_function = bench_adapter.simulate_run
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
     with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
         store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
@@ -224,7 +225,7 @@ def run_campaign(
         per_run = None
         if pending and bench:  # once here, before the workers start, so they load the compiled code instead of compiling it
             announce("compile", f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
-            per_run = warm_up(spec)
+            per_run = bench_adapter.warm_up(spec)
         if pending:
             slots = 1 if scheduler else workers
             announce("cluster start",
@@ -236,12 +237,10 @@ def run_campaign(
                     _execute(client, spec, samples, pending, run_function, store, bar)
         attrs = {"run_function": run_function_name(run_function)}
         if bench:
-            conditions, base = dataset_conditions(spec)
+            conditions, base = bench_adapter.dataset_conditions(spec)
             attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
         results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
                                            "workers": scheduler or workers}, attrs)
-        from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
-
         if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
             runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
             announce("fidelity audit", f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"

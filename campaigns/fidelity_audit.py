@@ -20,13 +20,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from campaigns.solver_accuracy import compare_features
-from campaigns.spec import CampaignSpec, Dataset, FidelityAudit, Observability, Traces, load_spec
+from campaigns.comparison import compare_features
+from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
 from campaigns.storage import atomic_write
-from twin.errors import InputError
 
-#: The default spec of ``twin fidelity audit``: the thesis study's uncertainty table, seed, features and solver.
-THESIS_SPEC = Path(__file__).parent / "specs" / "thesis_backlash.toml"
 MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the bench must detect (Table 9.3)
 KS_LEVEL = 0.05
 
@@ -44,7 +41,7 @@ def full_fidelity_variant(spec: CampaignSpec, runs: int) -> CampaignSpec:
 
 
 def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str]) -> xr.Dataset:
-    """Per data set and feature: the :func:`campaigns.solver_accuracy.compare_features` figures of the
+    """Per data set and feature: the :func:`campaigns.comparison.compare_features` figures of the
     auto runs against their full-fidelity twins, the verdict, and the wall-time speedup."""
     runs = full.sizes["run"]
     paired = auto.isel(run=slice(0, runs))
@@ -107,40 +104,3 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
 def _write_attrs(path: Path, results: xr.Dataset, attrs: dict[str, str]) -> None:
     results.attrs.update(attrs)
     atomic_write(path, lambda tmp: results.to_netcdf(tmp, engine="netcdf4"))
-
-
-def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str | Path | None = None,
-                workers: int = 2) -> xr.Dataset:
-    """``twin fidelity audit``: ``runs`` sampled runs of one scene, auto against full fidelity.
-
-    The uncertainty table, seed, features and solver come from ``spec_path`` (default: the
-    thesis study, ``campaigns/specs/thesis_backlash.toml``); the scene is the only data set.
-    """
-    from campaigns.execution import run_campaign
-    from twin.scenes import load_scene
-
-    problems = [] if isinstance(runs, int) and runs >= 2 else [f"runs: {runs!r} must be an integer >= 2"]
-    try:
-        load_scene(scene)
-    except InputError as exc:
-        problems += exc.problems
-    if problems:
-        raise InputError("fidelity audit", problems)
-    spec = load_spec(spec_path or THESIS_SPEC)
-    name = Path(scene).stem  # a scene file's data set is named after the file, as the CLI's output directory
-    spec = spec.model_copy(update={
-        "name": f"fidelity_audit_{name}",
-        "datasets": [Dataset(name=name, scene=scene)],
-        "runs_per_dataset": runs,
-        "traces": Traces(),
-        "observability": Observability(),
-        "fidelity_audit": FidelityAudit(runs=runs),
-        "solver": spec.solver.model_copy(update={"fidelity": "auto"}),
-    })
-    results = run_campaign(spec, out_dir, workers=workers, progress=False)
-    with xr.open_dataset(Path(results).parent / "fidelity_audit" / "fidelity_audit.nc") as handle:
-        audit = handle.load()
-    with xr.open_dataset(results) as handle:
-        audit.attrs["fidelity_auto"] = handle.attrs.get(f"fidelity_{name}", "")
-        audit.attrs["summary"] = "\n".join(f"{k}: {v}" for k, v in handle.attrs.items() if k.startswith("fidelity_audit"))
-    return audit

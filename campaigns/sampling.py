@@ -16,13 +16,12 @@ stored next to the results); analysis is a separate module.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Sequence
+from typing import Sequence
 
 import numpy as np
 from scipy import special
 
-if TYPE_CHECKING:  # sandbox processes import this module for noise_generator only: keep it light
-    from campaigns.spec import CampaignSpec, Distribution
+from campaigns.distributions import Distribution
 
 #: Index of each child of a run's seed sequence.
 PARAMETER_STREAM, NOISE_STREAM = 0, 1
@@ -81,8 +80,13 @@ def sample_run(distributions: Sequence[Distribution], root_seed: int, dataset_in
     return np.array([draw(d, rng) for d in distributions], dtype=float)
 
 
-def sample(spec: CampaignSpec) -> np.ndarray:
+def sample(spec) -> np.ndarray:
     """All sampled values of a campaign.
+
+    Parameters
+    ----------
+    spec : campaigns.spec.CampaignSpec
+        The validated spec (its resolved distributions, data sets, runs and root seed).
 
     Returns
     -------

@@ -12,10 +12,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
-from scipy.stats import ks_2samp
 
+from campaigns.comparison import compare_features
 from campaigns.execution import run_campaign
 from campaigns.spec import CampaignSpec, Observability, Solver, Traces, load_spec
 
@@ -34,30 +33,6 @@ def variant(spec: CampaignSpec, integrator: str, dt: float, datasets: tuple[str,
         "traces": Traces(),
         "observability": Observability(),
     })
-
-
-def compare_features(candidate: xr.Dataset, reference: xr.Dataset, feature: str = "backlash_feature") -> xr.Dataset:
-    """Per data set: mean and sigma shifts, KS distance and p-value, and 1.96 sigma / sqrt(N)."""
-    rows = []
-    for name in candidate.dataset.values:
-        both = (candidate.status.sel(dataset=name) == "ok") & (reference.status.sel(dataset=name) == "ok")
-        a = candidate[feature].sel(dataset=name).where(both, drop=True).values
-        b = reference[feature].sel(dataset=name).where(both, drop=True).values
-        ks = ks_2samp(a, b)
-        rows.append({
-            "n": a.size,
-            "mean_shift": float(np.mean(a) - np.mean(b)),
-            "sigma_shift": float(np.std(a, ddof=1) - np.std(b, ddof=1)),
-            "max_paired_difference": float(np.max(np.abs(a - b))),
-            "ks_distance": float(ks.statistic),
-            "ks_pvalue": float(ks.pvalue),
-            "sampling_error": float(1.96 * np.std(b, ddof=1) / np.sqrt(b.size)),
-        })
-    data = {key: ("dataset", [r[key] for r in rows]) for key in rows[0]}
-    ds = xr.Dataset(data, coords={"dataset": candidate.dataset.values})
-    for key in ("mean_shift", "sigma_shift", "max_paired_difference", "sampling_error"):
-        ds[key].attrs["units"] = "m"
-    return ds
 
 
 def campaign_accuracy(out_dir: str | Path, spec_path: str | Path = "campaigns/specs/demo.toml",

@@ -18,15 +18,17 @@ import hashlib
 import json
 import math
 import tomllib
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Annotated, Literal
 
 import pydantic
 from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
+from campaigns.bench import BenchCatalog
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, SCENE_PREFIX, Catalog
+from campaigns.distributions import Distribution, DistributionKind
 from twin.errors import InputError
+from twin.fidelity.levels import requested_levels
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
 #: Datasheets quote tolerance bands that practically every unit meets; ±3 sigma
@@ -43,8 +45,6 @@ HALF_RANGE_SIGMAS = 3.0
 #: bench's ~1 s per run makes 140 000 runs about 20 h on two workers. A larger study is several
 #: campaigns with different ``root_seed`` values.
 MAX_RUNS_PER_DATASET = 20_000
-
-DistributionKind = Literal["gaussian", "truncated_gaussian", "uniform", "constant", "lognormal"]
 
 #: Spec unit -> (SI unit, scale, offset): ``si = value * scale + offset``.
 #: Offsets apply to absolute values only, never to half ranges or sigmas.
@@ -74,47 +74,6 @@ class SpecError(InputError):
 
     def __init__(self, problems: list[str]):
         super().__init__("campaign spec", problems)
-
-
-@dataclass(frozen=True)
-class Distribution:
-    """One resolved uncertainty: absolute parameters in the target's SI unit.
-
-    Attributes
-    ----------
-    target : str
-        Parameter name or ``scene.<condition>``.
-    kind : str
-        One of :data:`DistributionKind`.
-    unit : str
-        SI unit of the sampled value (the parameter set's unit).
-    nominal : float
-        Nominal value of the target.
-    mean, sigma : float
-        Gaussian / truncated-Gaussian location and scale; for ``lognormal``
-        ``mean`` is the median and ``sigma`` the standard deviation of the log.
-    low, high : float
-        Uniform bounds, truncation bounds; NaN when unused.
-    value : float
-        The ``constant`` value; NaN otherwise.
-    source : str
-        Where the row comes from (e.g. the Table 9.5 row).
-    """
-
-    target: str
-    kind: str
-    unit: str
-    nominal: float
-    mean: float = math.nan
-    sigma: float = math.nan
-    low: float = math.nan
-    high: float = math.nan
-    value: float = math.nan
-    source: str = ""
-
-    def as_dict(self) -> dict:
-        """JSON-ready dictionary (NaN fields omitted)."""
-        return {k: v for k, v in asdict(self).items() if not (isinstance(v, float) and math.isnan(v))}
 
 
 class _Strict(BaseModel):
@@ -152,8 +111,6 @@ class Solver(_Strict):
     @field_validator("fidelity")
     @classmethod
     def _known_fidelity(cls, fidelity):
-        from twin.fidelity.levels import requested_levels
-
         problems = requested_levels(fidelity)[1]
         if problems:
             raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
@@ -666,8 +623,6 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
         execution = data.get("execution")
         data["execution"] = {**(execution if isinstance(execution, dict) else {}), "timeout": timeout}
     if catalog is None:
-        from campaigns.bench import BenchCatalog
-
         base = data.get("base", {}) if isinstance(data.get("base"), dict) else {}
         try:
             catalog = BenchCatalog(base.get("parameters", "bench"), base.get("scene", "nominal"))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.solver_accuracy import compare_features
+from campaigns.comparison import compare_features
 from app.studies.charts import campaign_accuracy_chart
 
 

@@ -11,7 +11,7 @@ import xarray as xr
 from scipy.stats import linregress
 
 from campaigns import fidelity_audit
-from campaigns.fidelity_audit import THESIS_SPEC
+from campaigns.scene_audit import THESIS_SPEC
 from twin import cli
 
 
