@@ -1,4 +1,8 @@
-"""``twin`` command line: a thin layer over the library (the library never imports this module)."""
+"""``twin`` command line: a thin layer over the library (the library never imports this module).
+
+Each subcommand imports the campaign runner, the reports or the studies inside its handler
+(lazy: start-up cost; `twin scenes` and `twin --help` must not load dask, scipy or matplotlib).
+"""
 
 from __future__ import annotations
 

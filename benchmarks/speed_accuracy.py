@@ -15,7 +15,7 @@ import time
 from machine import header
 
 import twin
-import twin.engine.simulate
+import twin.simulation
 from twin.fidelity import full_plant
 from app.studies.control_baseline import compare
 
@@ -40,8 +40,8 @@ def main() -> None:
     if args.quick:
         args.reference_duration = 0.2
     header("speed against accuracy at the default configuration", args.quick)
-    print(f"# {os.cpu_count()} cores; default: {twin.engine.simulate.DEFAULT_INTEGRATOR} "
-          f"dt={twin.engine.simulate.DEFAULT_DT:g} s")
+    print(f"# {os.cpu_count()} cores; default: {twin.simulation.DEFAULT_INTEGRATOR} "
+          f"dt={twin.simulation.DEFAULT_DT:g} s")
     walls = []
     for name in ("nominal", "ds2"):
         full_duration = twin.load_scene(name).duration

@@ -16,14 +16,14 @@ import numpy as np
 import twin
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, lookup_nominal
 from campaigns.runs import RunRequest
-from twin.engine.features import FEATURES
-from twin.engine.layout import OUTPUT_NAMES
+from twin.features import FEATURES
+from twin.layout import OUTPUT_NAMES
 from twin.errors import InputError
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
-#: declarations of :mod:`twin.engine.features` (a light module: no numba compilation on import).
+#: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
 BENCH_FEATURES: dict[str, tuple[str, str]] = {name: (f.unit, f.long_name) for name, f in FEATURES.items()}
 
 

@@ -23,6 +23,7 @@ def condition_units() -> dict[str, str]:
     it out, so a bench spec naming it is rejected with the list of the conditions the scenes accept.
     The twin is imported on first use, not with this module: the synthetic model's run processes never load it.
     """
+    # lazy: start-up cost (the synthetic model's run processes never load the twin and its compiled code)
     from twin.scenes import CONDITIONS
 
     return {**{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric}, "external_force": "N"}
@@ -32,6 +33,7 @@ def condition_units() -> dict[str, str]:
 def condition_choices() -> dict[str, tuple[str, ...]]:
     """Scene conditions a data set may set to one of a few named choices (``zero_procedure``, ``cylinder``,
     ``preload_configuration``) and their choices, from the same table (imported on first use)."""
+    # lazy: start-up cost, as above
     from twin.scenes import CONDITIONS
 
     return {name: condition.choices for name, condition in CONDITIONS.items() if condition.choices}

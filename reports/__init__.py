@@ -57,6 +57,7 @@ def build_report(
         If an input file is missing, unreadable or inconsistent, the output
         directory cannot be written, or the PDF cannot be compiled.
     """
+    # lazy: start-up cost (matplotlib, typst and Jinja2 load only when a report is built)
     from reports.content import build
     from reports.html import render_html
     from reports.inputs import load_inputs

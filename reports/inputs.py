@@ -84,6 +84,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
     if analysis_path is None and (results_path.parent / ANALYSIS_NAME).is_file():
         analysis_path = results_path.parent / ANALYSIS_NAME
     if analysis_path is None:
+        # lazy: start-up cost (scipy and SALib load only when the analysis must be computed here)
         from campaigns.analysis import analysis_dataset
 
         analysis = analysis_dataset(results)

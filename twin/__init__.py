@@ -7,7 +7,7 @@ Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -
 # source (sensors.compiled_cache; no stale machine code).
 import sensors  # noqa: F401
 
-from twin.engine.simulate import simulate  # noqa: E402
+from twin.simulation import simulate  # noqa: E402
 from twin.errors import InputError, OptionError, ParameterError, SceneError, SimulationFailed  # noqa: E402
 from twin.parameters import ParameterSet, available_parameter_sets, load_parameters  # noqa: E402
 from twin.scenes import Scene, list_scenes, load_scene  # noqa: E402

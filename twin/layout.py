@@ -6,8 +6,8 @@ compiled right-hand side reads ``x[S.NUT1_POSITION]`` at no cost.
 
 from enum import IntEnum
 
-from twin.engine.features import FEATURES as FEATURE_TABLE
-from twin.engine.features import N_ACCUMULATORS
+from twin.features import FEATURES as FEATURE_TABLE
+from twin.features import N_ACCUMULATORS
 
 
 class S(IntEnum):
@@ -263,7 +263,7 @@ class Signal(IntEnum):
 
 N_SIGNALS = len(Signal)
 
-# Scalar features of a run (twin.engine.features), computed by the loop alongside the signals.
+# Scalar features of a run (twin.features), computed by the loop alongside the signals.
 FEATURES = tuple(FEATURE_TABLE)
 # Everything a scene or a campaign may ask a run to produce.
 OUTPUT_NAMES = tuple(signal.name.lower() for signal in Signal) + FEATURES
@@ -325,7 +325,7 @@ class M(IntEnum):
     EXTERNAL = 14
     LOCAL_ERROR = 15        # largest step-doubling local-error estimate so far, in tolerance units
     LOCAL_ERROR_STREAK = 16  # consecutive acquisition instants with the estimate above tolerance
-    # feature accumulators (layout twin.engine.features.A), from true and from measured signals
+    # feature accumulators (layout twin.features.A), from true and from measured signals
     FEATURES_TRUE = 17
     FEATURES_MEASURED = 17 + N_ACCUMULATORS
 

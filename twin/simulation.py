@@ -10,10 +10,10 @@ from typing import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from twin.engine.features import FEATURES, N_ACCUMULATORS, finish
+from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS
-from twin.engine.layout import (
+from twin.layout import (
     BOUND_REASONS,
     N_MEMORY,
     N_SIGNALS,
@@ -78,7 +78,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         entry (``"auto"`` unless given). The choice and its reasons are in
         ``attrs["fidelity"]`` and ``attrs["fidelity_reasons"]``.
     outputs : sequence of str, optional
-        Signals and features the caller needs (:data:`twin.engine.layout.OUTPUT_NAMES`);
+        Signals and features the caller needs (:data:`twin.layout.OUTPUT_NAMES`);
         ``None`` takes the scene's ``outputs`` (all, if it names none). Signals a
         reduced level does not compute are left out of the result.
     rng : numpy.random.Generator, int or None
@@ -100,7 +100,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     -------
     xarray.Dataset
         True and measured signals on ``time`` [s] with ``units`` attributes, the
-        scalar features of :data:`twin.engine.features.FEATURES` (``backlash_feature``,
+        scalar features of :data:`twin.features.FEATURES` (``backlash_feature``,
         Eq. 9.12, and ``backlash_hysteresis`` on the measured encoder signals; ``*_true``
         on true signals), and run metadata in ``attrs``, among them the scene's
         ``zero_procedure`` and ``cylinder`` and every condition in ``scene_conditions`` (JSON).
@@ -188,7 +188,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             data_vars[base + suffix] = ((), value if ok else np.nan, {
                 "units": feature.unit, "long_name": feature.long_name, "description": feature.description})
     data_vars["final_state"] = ("state", x[model.active], {
-        "long_name": "integrated states at t_reached (SI units, layout twin.engine.layout.S)"})
+        "long_name": "integrated states at t_reached (SI units, layout twin.layout.S)"})
     return xr.Dataset(
         data_vars,
         coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"}),

@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 
 import twin
 from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
-from twin.engine.layout import N_INPUTS, S, U
+from twin.layout import N_INPUTS, S, U
 from twin.engine.model import build_model
 from twin.engine.plant import rhs
 from twin.engine.reference import absolute_tolerance

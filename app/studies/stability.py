@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 import twin
-from twin.engine.layout import N_INPUTS, U
+from twin.layout import N_INPUTS, U
 from twin.engine.linearize import highest_frequency, jacobian
 from twin.engine.model import build_model
 from twin.fidelity import full_plant, resolve_fidelity

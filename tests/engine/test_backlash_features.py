@@ -1,4 +1,4 @@
-"""The backlash features (twin.engine.features): Eq. 9.12 and the zero-independent hysteresis width.
+"""The backlash features (twin.features): Eq. 9.12 and the zero-independent hysteresis width.
 
 Physics and behaviour: known answers of the accumulator, the hysteresis of a free nut against its
 backlash, the chain's friction deflection at zero backlash, invariance under the encoder zero (by
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import twin
-from twin.engine.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
-from twin.engine.layout import K
+from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
+from twin.layout import K
 from twin.engine.model import build_model, contact_position_for_force
 from twin.fidelity import resolve_fidelity
 

@@ -17,7 +17,7 @@ ROOT = Path(twin.__file__).resolve().parent.parent
 PROBE = """
 import numpy as np
 import twin
-from twin.engine.layout import K, N_CONSTANTS, N_STATES, S
+from twin.layout import K, N_CONSTANTS, N_STATES, S
 from twin.engine.plant import transmitted_torque
 x = np.zeros(N_STATES); c = np.zeros(N_CONSTANTS)
 x[S.REDUCER_ANGLE] = 1e-3

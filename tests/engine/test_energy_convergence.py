@@ -8,7 +8,7 @@ from twin.engine.energy import mechanical_energy
 from bench_helpers import plant_fidelity
 from twin.fidelity import resolve_fidelity
 from twin.engine.integrators import INTEGRATORS, ORDER, step, work_array
-from twin.engine.layout import N_INPUTS, S
+from twin.layout import N_INPUTS, S
 from twin.engine.model import build_model
 
 LOSSLESS = {

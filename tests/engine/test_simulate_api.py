@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import twin
-from twin.engine.layout import K
+from twin.layout import K
 from twin.engine.model import build_model
 from twin.errors import OptionError, SimulationFailed
 from twin.fidelity import resolve_fidelity

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import twin
-from twin.engine.layout import N_STATES, S
+from twin.layout import N_STATES, S
 from twin.fidelity import SUBSYSTEMS, load_rules, resolve_fidelity
 
 

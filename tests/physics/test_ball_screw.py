@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.engine.layout import CONTACT_CONSTANT_ANGLE, CONTACT_LINEAR, CONTACT_VARIABLE_ANGLE
+from twin.layout import CONTACT_CONSTANT_ANGLE, CONTACT_LINEAR, CONTACT_VARIABLE_ANGLE
 from twin.physics.ball_screw import (
     contact_geometry,
     effective_loaded_balls,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import twin
-from twin.engine.layout import S
+from twin.layout import S
 from twin.engine.model import build_model, contact_position_for_force
 from twin.errors import OptionError, SceneError
 from twin.fidelity import resolve_fidelity

@@ -29,9 +29,15 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
+
+from twin.parameters import load_parameters
+from twin.physics.drivetrain import screw_inertia, torsional_stiffness
+
+if TYPE_CHECKING:
+    import control
 
 ZERO_RATIO = 5.0
 CURRENT_CROSSOVER_HZ = 1000.0
@@ -64,24 +70,9 @@ def _reflected_inertias(p: dict[str, float]) -> tuple[float, float]:
     return j_motor_side, j_screw_side
 
 
-def screw_inertia(p: dict[str, float]) -> float:
-    """Screw-shaft polar inertia, solid cylinder of the pitch diameter (J_s of Eq. 9.7) [kg m^2]."""
-    r = p["ball_screw.pitch_radius"]
-    mass = p["ball_screw.screw_density"] * math.pi * r**2 * p["ball_screw.screw_length"]
-    return 0.5 * mass * r**2
-
-
-def torsional_stiffness(p: dict[str, float]) -> float:
-    """Series stiffness of reducer, two couplings and torque meter (Sec. 9.3) [N m/rad]."""
-    compliance = (
-        1.0 / p["reducer.torsional_stiffness"]
-        + 2.0 / p["drivetrain.coupling_stiffness"]
-        + 1.0 / p["drivetrain.torque_meter_stiffness"]
-    )
-    return 1.0 / compliance
-
-
 def _figures(name, kp, ki, ts, open_loop, closed_loop) -> LoopDesign:
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     with warnings.catch_warnings():
         # python-control warns when it falls back from the ill-conditioned
         # polynomial method to its frequency-response method: that fallback is wanted.
@@ -107,6 +98,8 @@ def _figures(name, kp, ki, ts, open_loop, closed_loop) -> LoopDesign:
 
 def design_current_loop(p: dict[str, float]) -> tuple[LoopDesign, control.TransferFunction]:
     """Analog PI of the current loop; returns the design and its closed loop i/i_ref."""
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     s = control.tf("s")
     inductance = p["motor.inductance"]
     resistance = p["motor.winding_resistance_20C"]
@@ -122,6 +115,8 @@ def design_current_loop(p: dict[str, float]) -> tuple[LoopDesign, control.Transf
 
 def _two_mass_speed_plant(p: dict[str, float]) -> control.TransferFunction:
     """Motor torque -> motor speed of the two-mass torsional chain (Eqs. 9.3, 9.7)."""
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     s = control.tf("s")
     ratio = p["reducer.ratio"]
     j1, j2 = _reflected_inertias(p)
@@ -134,6 +129,8 @@ def _two_mass_speed_plant(p: dict[str, float]) -> control.TransferFunction:
 
 def design_speed_loop(p: dict[str, float], current_closed) -> tuple[LoopDesign, control.TransferFunction]:
     """Digital PI of the drive speed loop on resolver feedback."""
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     ts = p["drive.speed_loop_sample_time"]
     j1, j2 = _reflected_inertias(p)
     j_motor = (j1 + j2) / p["reducer.ratio"] ** 2
@@ -160,6 +157,8 @@ def design_position_loop(p: dict[str, float], speed_closed) -> LoopDesign:
 
     ``speed_closed`` is the continuous equivalent of the closed speed loop.
     """
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     ts = p["controller.position_loop_sample_time"]
     gain = p["ball_screw.lead"] / (2 * math.pi * p["reducer.ratio"])
     wc = 2 * math.pi * POSITION_CROSSOVER_HZ
@@ -195,8 +194,6 @@ def design_loops(p: dict[str, float]) -> dict[str, LoopDesign]:
 
 
 def main() -> None:
-    from twin.parameters import load_parameters
-
     designs = design_loops(load_parameters("bench").values())
     print(f"{'loop':10s} {'Kp':>12s} {'Ki':>12s} {'Ts [s]':>10s} {'fc [Hz]':>9s} {'BW [Hz]':>9s} {'GM [dB]':>8s} {'PM [deg]':>8s}")
     for d in designs.values():

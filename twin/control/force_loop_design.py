@@ -23,7 +23,6 @@ model.
 
 import math
 
-import control
 import numpy as np
 from scipy.optimize import brentq
 
@@ -203,6 +202,8 @@ def linearised_plant(params, force=4000.0, position=None):
     tuple
         ``(control.StateSpace, operating point dict)``.
     """
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     plant = NutFixedPlant(params)
     op = operating_point(params, force, position)
     z0, u0, x_nut = op["state"], op["command"], op["x_nut"]
@@ -267,6 +268,8 @@ def design_force_loop(params, sample_time=1e-3, *, crossover_hz=10.0, integral_r
         set-point deviation [N] to load-cell force deviation [N]) and
         ``operating_point`` (see :func:`operating_point`).
     """
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
     plant_c, op = linearised_plant(params, force)
     plant_d = control.c2d(plant_c, sample_time, method="zoh")
     w_c = 2.0 * math.pi * crossover_hz

@@ -62,7 +62,7 @@ from sensors.encoder import (
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
-from twin.engine.layout import K, S
+from twin.layout import K, S
 from twin.engine.plant import sensed_current
 
 LINEAR_ENCODER = 0

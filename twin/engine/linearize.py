@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.engine.layout import N_INPUTS
+from twin.layout import N_INPUTS
 from twin.engine.plant import rhs
 
 

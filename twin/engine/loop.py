@@ -13,9 +13,9 @@ import numpy as np
 from sensors.acquisition import convert
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
-from twin.engine.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
+from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.engine.integrators import WORK_VECTORS, step
-from twin.engine.layout import (
+from twin.layout import (
     N_INPUTS,
     N_MEASURED,
     PNEUMATICS_FULL,
@@ -134,7 +134,7 @@ def controller_init(memory, u, instrument_state, rows, levels, x, c, force_table
 def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise, position_table, force_table,
                        stiffness_poly, sample_time):
     """Acquisition instant of the cRIO: read every channel, run the position and force loops,
-    and accumulate the backlash features (:mod:`twin.engine.features`) on true and on measured signals."""
+    and accumulate the backlash features (:mod:`twin.features`) on true and on measured signals."""
     torque, _, _, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
     n = int(memory[M.SAMPLES])
     sled = ins.linear_encoder_position(instrument_state, rows, levels, x, c)
@@ -239,7 +239,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     rows, levels, lookback, noise : arrays
         Instruments of the run (:class:`twin.engine.instrumentation.Instruments`).
     memory : 1-D array
-        Loop memory (layout :class:`twin.engine.layout.M`), holds the feature accumulators at the end.
+        Loop memory (layout :class:`twin.layout.M`), holds the feature accumulators at the end.
     output : 2-D array
         ``(n_steps // output_every + 1, N_SIGNALS)`` buffer, filled row by row.
     tolerance : 1-D array

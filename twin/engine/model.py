@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy.optimize import brentq
 
-from twin.control.design import screw_inertia, torsional_stiffness
 from twin.control.force_loop_design import operating_point
-from twin.engine.layout import (
+from twin.layout import (
     CONTACT_LEVELS,
     CONTACT_LINEAR,
     N_CONSTANTS,
@@ -21,7 +21,6 @@ from twin.engine.layout import (
     K,
     S,
 )
-from twin.fidelity import Fidelity
 from twin.parameters import ParameterSet
 from twin.physics import hertz
 from twin.physics import pneumatics as pn
@@ -32,6 +31,7 @@ from twin.physics.ball_screw import (
     nut_axial_force,
     stiffness_at,
 )
+from twin.physics.drivetrain import screw_inertia, screw_mass, torsional_stiffness
 from twin.physics.preload import series_stiffness
 from twin.errors import SceneError
 from twin.scenes import Scene
@@ -71,7 +71,20 @@ class Model:
         return x
 
 
-def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curvature: str = "thesis") -> Model:
+class Levels(Protocol):
+    """What building the model needs of a resolved fidelity (:class:`twin.fidelity.Fidelity` provides it).
+
+    The engine states its need here rather than importing the fidelity package, which sits above the
+    engine: its rules evaluate the model's own contact physics (``docs/architecture.md``).
+    """
+
+    peak_contact_load: float
+    active_states: np.ndarray
+
+    def level(self, subsystem: str) -> str: ...
+
+
+def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvature: str = "thesis") -> Model:
     """Derive the model constants (layout :class:`K`) and the initial equilibrium state.
 
     Parameters
@@ -80,7 +93,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curva
         Test procedure (conditions and demand profiles).
     params : ParameterSet
         Component parameters.
-    fidelity : Fidelity
+    fidelity : Levels
         Level of every subsystem (:func:`twin.fidelity.resolve_fidelity`).
     curvature : {"thesis", "iso"}
         Groove curvature formulas: Eqs. 3.20/3.27 (thesis) or Eqs. 3.21/3.28 (ISO 3408-4).
@@ -126,8 +139,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curva
     c[K.SCREW_FRICTION_RATE] = p["ball_screw.bearing_friction_stribeck_rate"]
     c[K.SCREW_FRICTION_VISCOUS] = p["ball_screw.bearing_viscous_friction"]
     # screw axial: rear bearing in series with the shaft (Table B.9)
-    pitch_radius = p["ball_screw.pitch_radius"]
-    c[K.SCREW_MASS] = p["ball_screw.screw_density"] * math.pi * pitch_radius**2 * p["ball_screw.screw_length"]
+    c[K.SCREW_MASS] = screw_mass(p)
     c[K.BEARING_STIFFNESS] = p["ball_screw.rear_bearing_axial_stiffness"]
     c[K.SHAFT_EA] = p["ball_screw.elastic_modulus"] * math.pi * p["ball_screw.screw_root_diameter"] ** 2 / 4.0
     c[K.SHAFT_LENGTH_0] = p["ball_screw.bearing_to_nut_distance"]

@@ -6,7 +6,7 @@ a held input (zero-order hold between drive samples).
 
 import numba
 
-from twin.engine.layout import PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
+from twin.layout import PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
 from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import nut_axial_force
 from twin.physics.coupling import elasto_backlash
@@ -158,11 +158,11 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     t : float
         Time [s].
     x : 1-D array
-        State (layout :class:`twin.engine.layout.S`).
+        State (layout :class:`twin.layout.S`).
     c : 1-D array
-        Model constants (layout :class:`twin.engine.layout.K`).
+        Model constants (layout :class:`twin.layout.K`).
     u : 1-D array
-        Inputs held by the digital loops (layout :class:`twin.engine.layout.U`).
+        Inputs held by the digital loops (layout :class:`twin.layout.U`).
     force_table, stiffness_poly : arrays
         Compiled external-force profile and the contact stiffness table.
     dxdt : 1-D array

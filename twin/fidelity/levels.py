@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from twin.engine.layout import S
+from twin.layout import S
 
 PNEUMATIC_STATES = (S.SPOOL_POSITION, S.SPOOL_SPEED, S.CHAMBER1_PRESSURE, S.CHAMBER2_PRESSURE, S.PISTON_POSITION,
                     S.PISTON_SPEED)

@@ -19,7 +19,8 @@ from typing import Mapping
 
 import numpy as np
 
-from twin.engine.layout import N_STATES, OUTPUT_NAMES, CONTACT_LEVELS, K, N_CONSTANTS
+from twin.layout import N_STATES, OUTPUT_NAMES, CONTACT_LEVELS, K, N_CONSTANTS
+from twin.engine.model import contact_constants, contact_position_for_force
 from twin.errors import OptionError
 from twin.fidelity.levels import SUBSYSTEMS, requested_levels
 from twin.parameters import ParameterSet
@@ -60,7 +61,7 @@ class Fidelity:
 
     @property
     def active_states(self) -> np.ndarray:
-        """Indices (layout :class:`twin.engine.layout.S`) of the integrated states."""
+        """Indices (layout :class:`twin.layout.S`) of the integrated states."""
         removed = set(self.removed_states)
         return np.array([j for j in range(N_STATES) if j not in removed], dtype=np.int64)
 
@@ -142,8 +143,6 @@ class SceneNeeds:
     @cached_property
     def contact(self) -> tuple[np.ndarray, np.ndarray]:
         """Contact constants and stiffness fit of the full model (for the deflection conditions)."""
-        from twin.engine.model import contact_constants
-
         c = np.zeros(N_CONSTANTS)
         return c, contact_constants(c, self.params.values(), self.curvature)
 
@@ -190,8 +189,6 @@ def _nut_roll_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool
 
 
 def _angle_deflection_error(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
-    from twin.engine.model import contact_position_for_force
-
     c, poly = needs.contact
     deflections = []
     for model in ("variable_angle", "constant_angle"):

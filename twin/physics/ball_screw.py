@@ -112,7 +112,7 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
     contact_model : int
         0: Hertz at the constant angle ``alpha_0``; 1: Hertz with the variable angle of
         Eq. 9.4; 2: linear normal stiffness ``linear_stiffness`` at ``alpha_0`` (the
-        elasto-backlash law of Sec. 5; codes in :mod:`twin.engine.layout`).
+        elasto-backlash law of Sec. 5; codes in :mod:`twin.layout`).
     linear_stiffness : float
         Normal stiffness per sphere of the linear law [N/m].
 

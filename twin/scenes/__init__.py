@@ -19,7 +19,7 @@ from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
-from twin.engine.layout import OUTPUT_NAMES
+from twin.layout import OUTPUT_NAMES
 from twin.errors import SceneError
 from twin.scenes.profiles import compile_profile
 
@@ -122,7 +122,7 @@ class Scene:
         ``zero_procedure`` (:data:`ZERO_PROCEDURES`, default "preloaded") and
         ``cylinder`` (:data:`CYLINDER_STATES`, default "attached").
     outputs : tuple of str
-        Signals and features the test must produce (:data:`twin.engine.layout.OUTPUT_NAMES`);
+        Signals and features the test must produce (:data:`twin.layout.OUTPUT_NAMES`);
         empty means all of them. The automatic fidelity (:mod:`twin.fidelity`) models
         only what these need.
     """
