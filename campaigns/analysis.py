@@ -25,6 +25,7 @@ import xarray as xr
 from scipy import stats
 
 from campaigns import sensitivity
+from campaigns.files import atomic_write
 
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
@@ -689,8 +690,5 @@ def analyze(results_path: str | Path, out_path: str | Path | None = None, **opti
     out_path = Path(out_path) if out_path is not None else results_path.with_name("analysis.nc")
     with xr.open_dataset(results_path, engine="netcdf4") as results:
         analysis = analysis_dataset(results.load(), **options)
-    # lazy: start-up cost (storage loads the spec and the twin; a report reading analysis results must not)
-    from campaigns.storage import atomic_write
-
     atomic_write(out_path, lambda tmp: analysis.to_netcdf(tmp, engine="netcdf4"))
     return out_path

@@ -46,6 +46,7 @@ import numpy as np
 import xarray as xr
 
 from campaigns import provenance as prov
+from campaigns.files import CampaignError, atomic_write
 from campaigns.catalog import CONDITION_UNITS
 from campaigns.provenance import package_versions
 from campaigns.runs import STATUS_MEANINGS
@@ -63,39 +64,8 @@ __all__ = ["CampaignError", "ChunkStore", "OutputLock", "atomic_write", "build_r
            "package_versions"]
 
 
-class CampaignError(RuntimeError):
-    """The campaign cannot proceed (e.g. an output directory holding another spec's results)."""
-
-
 class CorruptChunk(CampaignError):
     """A chunk file cannot be read back intact."""
-
-
-def atomic_write(path: Path, write) -> None:
-    """Call ``write(tmp_path)`` then move the file onto ``path`` atomically.
-
-    Raises
-    ------
-    CampaignError
-        If the file system refuses (read-only, full, missing directory), naming ``path``.
-    """
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as exc:
-        raise CampaignError(f"cannot write {path}: {exc.strerror or exc}") from exc
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        with open(tmp, "rb") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise CampaignError(f"cannot write {path}: {exc.strerror or exc}") from exc
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def check_output(out: str | Path, inputs=(), *, force: bool = False) -> Path:
