@@ -14,6 +14,7 @@ from pathlib import Path
 import twin
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
+from twin.scenes import SCENE_PREFIX, split_targets
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
@@ -25,7 +26,7 @@ def _parse_assignment(text: str) -> tuple[str, float | str]:
     try:
         return name.strip(), float(value)
     except ValueError:
-        if name.strip().startswith("scene.") and value.strip():
+        if name.strip().startswith(SCENE_PREFIX) and value.strip():
             return name.strip(), value.strip()
         raise argparse.ArgumentTypeError(f"--set {name}: value {value!r} is not a number") from None
 
@@ -50,8 +51,7 @@ def _parse_outputs(text: str) -> list[str]:
 def _scene_and_params(args) -> tuple[twin.Scene, twin.ParameterSet]:
     """Apply ``--set`` overrides: ``scene.<condition>=v`` to the scene, anything else to the parameters."""
     overrides = dict(args.set or [])
-    conditions = {k.removeprefix("scene."): v for k, v in overrides.items() if k.startswith("scene.")}
-    parameters = {k: v for k, v in overrides.items() if not k.startswith("scene.")}
+    conditions, parameters = split_targets(overrides)
     problems: list[str] = []
     scene = params = None
     try:

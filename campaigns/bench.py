@@ -14,7 +14,7 @@ from functools import lru_cache
 import numpy as np
 
 import twin
-from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, lookup_nominal
+from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
@@ -93,13 +93,14 @@ class BenchCatalog:
             params = twin.load_parameters(parameters)
             base_scene = twin.load_scene(scene)
             self.scene_names = list(twin.list_scenes())
-            self.condition_names = [c for c in CONDITIONS if c in CONDITION_UNITS or c in CONDITION_CHOICES]
+            self.condition_names = list(CONDITIONS)
         except InputError:
             raise
         except Exception as exc:  # twin missing or broken: report it as a spec problem
             raise InputError("bench twin", [f"cannot load parameters {parameters!r} / scene {scene!r}: {type(exc).__name__}: {exc}"]) from exc
         self._parameters = {n: (params[n].value, params[n].unit) for n in params.names}
-        self._conditions = scene_conditions(base_scene)
+        self.condition_units = condition_units()
+        self._conditions = {k: (v, self.condition_units[k]) for k, v in scene_conditions(base_scene).items()}
 
     @property
     def parameter_names(self) -> list[str]:

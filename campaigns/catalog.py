@@ -13,30 +13,27 @@ from functools import cache
 from typing import Mapping, Protocol, Sequence
 
 
+def _scenes():
+    """The twin's scene module, the one table of scene conditions (``twin.scenes.CONDITIONS``) and the one
+    parser of ``scene.`` targets (lazy: start-up cost; the synthetic model's run processes never load the twin)."""
+    import twin.scenes
+
+    return twin.scenes
+
+
 @cache
 def condition_units() -> dict[str, str]:
-    """Scene conditions a data set may override with a number (``scene.with_conditions`` keys) and their SI units.
-
-    The numeric conditions of the bench's scene table (``twin.scenes.CONDITIONS``, the one source), plus
-    ``external_force``, a condition of the synthetic test model only (campaigns.testing): the bench's
-    scenes apply an external force as a force demand profile, and ``BenchCatalog.condition_names`` leaves
-    it out, so a bench spec naming it is rejected with the list of the conditions the scenes accept.
-    The twin is imported on first use, not with this module: the synthetic model's run processes never load it.
-    """
-    # lazy: start-up cost (the synthetic model's run processes never load the twin and its compiled code)
-    from twin.scenes import CONDITIONS
-
-    return {**{name: condition.unit for name, condition in CONDITIONS.items() if condition.numeric}, "external_force": "N"}
+    """The bench scenes' numeric conditions (``scene.with_conditions`` keys) and their SI units, from the scene
+    table ``twin.scenes.CONDITIONS``. A model with other conditions declares their units in its catalog
+    (:attr:`StaticCatalog.condition_units`)."""
+    return {name: condition.unit for name, condition in _scenes().CONDITIONS.items() if condition.numeric}
 
 
 @cache
 def condition_choices() -> dict[str, tuple[str, ...]]:
-    """Scene conditions a data set may set to one of a few named choices (``zero_procedure``, ``cylinder``,
-    ``preload_configuration``) and their choices, from the same table (imported on first use)."""
-    # lazy: start-up cost, as above
-    from twin.scenes import CONDITIONS
-
-    return {name: condition.choices for name, condition in CONDITIONS.items() if condition.choices}
+    """The bench scenes' conditions that take one of a few named choices (``zero_procedure``, ``cylinder``,
+    ``preload_configuration``) and their choices, from the same table."""
+    return {name: condition.choices for name, condition in _scenes().CONDITIONS.items() if condition.choices}
 
 
 def __getattr__(name: str):
@@ -47,9 +44,6 @@ def __getattr__(name: str):
     if name == "CONDITION_CHOICES":
         return condition_choices()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-#: Prefix of uncertainty targets that are scene conditions rather than parameters.
-SCENE_PREFIX = "scene."
 
 
 class Catalog(Protocol):
@@ -63,6 +57,8 @@ class Catalog(Protocol):
         Scenes a data set may start from.
     condition_names : sequence of str
         Conditions ``scene.with_conditions`` accepts.
+    condition_units : mapping of str to str
+        SI unit of each numeric condition.
     feature_units : mapping of str to (unit, long_name), or None
         Features the run function computes; ``None`` accepts any name.
     """
@@ -70,6 +66,7 @@ class Catalog(Protocol):
     parameter_names: Sequence[str]
     scene_names: Sequence[str]
     condition_names: Sequence[str]
+    condition_units: Mapping[str, str]
     feature_units: Mapping[str, tuple[str, str]] | None
 
     def nominal(self, target: str) -> tuple[float, str]:
@@ -84,17 +81,21 @@ class StaticCatalog:
     ----------
     parameters : mapping of str to (value, unit)
         Parameter nominal values and units.
-    conditions : mapping of str to float
-        Nominal scene conditions (SI units of :func:`condition_units`); their
-        names are the accepted conditions.
+    conditions : mapping of str to (value, unit)
+        Nominal scene conditions and their SI units; their names are the
+        accepted conditions.
     scene_names : sequence of str
     feature_units : mapping of str to (unit, long_name), or None
     """
 
     parameters: Mapping[str, tuple[float, str]]
-    conditions: Mapping[str, float]
+    conditions: Mapping[str, tuple[float, str]]
     scene_names: Sequence[str]
     feature_units: Mapping[str, tuple[str, str]] | None = field(default=None)
+
+    @property
+    def condition_units(self) -> dict[str, str]:
+        return {name: unit for name, (_, unit) in self.conditions.items()}
 
     @property
     def parameter_names(self) -> list[str]:
@@ -109,14 +110,18 @@ class StaticCatalog:
 
 
 def lookup_nominal(
-    target: str, parameters: Mapping[str, tuple[float, str]], conditions: Mapping[str, float]
+    target: str, parameters: Mapping[str, tuple[float, str]], conditions: Mapping[str, tuple[float, str]]
 ) -> tuple[float, str]:
-    """Shared target lookup of the catalogs; the KeyError message names what is known."""
-    if target.startswith(SCENE_PREFIX):
-        key = target.removeprefix(SCENE_PREFIX)
+    """Shared target lookup of the catalogs (value and unit); the KeyError message names what is known."""
+    scenes = _scenes()
+    condition = scenes.split_targets({target: None})[0]
+    if condition:
+        (key,) = condition
         if key not in conditions:
-            raise KeyError(f"unknown scene condition {target!r}; known: {', '.join(SCENE_PREFIX + c for c in conditions)}")
-        return float(conditions[key]), condition_units()[key]
+            known = ", ".join(scenes.SCENE_PREFIX + c for c in conditions)
+            raise KeyError(f"unknown scene condition {target!r}; known: {known}")
+        value, unit = conditions[key]
+        return float(value), unit
     if target not in parameters:
         group = target.split(".")[0]
         siblings = [n for n in parameters if n.startswith(group + ".")]

@@ -48,7 +48,7 @@ from tqdm.auto import tqdm
 
 from campaigns import bench as bench_adapter
 from campaigns.budget import check_disk, estimate
-from campaigns.catalog import SCENE_PREFIX, Catalog
+from campaigns.catalog import Catalog
 from campaigns.fidelity_audit import audit_campaign
 from campaigns.provenance import provenance
 from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
@@ -56,6 +56,7 @@ from campaigns.sampling import sample
 from campaigns.sandbox import run_isolated
 from campaigns.spec import CampaignSpec, load_spec
 from campaigns.storage import ChunkStore, OutputLock
+from twin.scenes import split_targets
 
 #: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write. Measured
 #: 9 ms (1 worker) to 13 ms (2 workers sharing 2 cores with the driver) with one-run chunks of
@@ -109,14 +110,10 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
     :mod:`campaigns.replay` passes those stored in ``results.nc``).
     """
     dataset = spec.datasets[dataset_index]
-    conditions = dict(dataset.conditions)
-    parameter_values = {}
     targets = [d.target for d in spec.distributions()] if targets is None else targets
-    for target, value in zip(targets, samples[dataset_index, run_index]):
-        if target.startswith(SCENE_PREFIX):
-            conditions[target.removeprefix(SCENE_PREFIX)] = float(value)
-        else:
-            parameter_values[target] = float(value)
+    sampled, parameter_values = split_targets(
+        {target: float(value) for target, value in zip(targets, samples[dataset_index, run_index])})
+    conditions = {**dataset.conditions, **sampled}
     traced = run_index < spec.traces.runs_per_dataset
     return RunRequest(
         dataset=dataset.name,

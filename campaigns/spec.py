@@ -25,10 +25,12 @@ import pydantic
 from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from campaigns.bench import BenchCatalog
-from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, SCENE_PREFIX, Catalog
+from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog
 from campaigns.distributions import Distribution, DistributionKind
 from twin.errors import InputError
 from twin.fidelity.levels import requested_levels
+from twin.scenes import split_targets
+from twin.tomlfiles import read_inheriting
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
 #: Datasheets quote tolerance bands that practically every unit meets; ±3 sigma
@@ -156,8 +158,9 @@ class Traces(_Strict):
 
 def _known_condition(name: str, info: ValidationInfo) -> str:
     catalog = _catalog(info)
-    settable = {**CONDITION_UNITS, **CONDITION_CHOICES}
-    known = [c for c in (catalog.condition_names if catalog is not None else settable) if c in settable]
+    if catalog is None:  # structural validation only (e.g. a stored spec replayed): the model is not known
+        return name
+    known = list(catalog.condition_names)
     if name not in known:
         raise ValueError(f"unknown condition {name}; the model's scenes accept: {', '.join(known)}")
     return name
@@ -384,6 +387,7 @@ class CampaignSpec(_Strict):
     observability: Observability = Observability()
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
+    _condition_units: dict[str, str] = PrivateAttr(default_factory=dict)
 
     @field_validator("features")
     @classmethod
@@ -402,6 +406,8 @@ class CampaignSpec(_Strict):
         catalog = _catalog(info)
         if catalog is not None and catalog.feature_units is not None:
             self._feature_units = {f: tuple(catalog.feature_units[f]) for f in self.features}
+        if catalog is not None:
+            self._condition_units = dict(catalog.condition_units)
         problems = cross_field_problems(self.model_dump())
         if problems:
             raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
@@ -410,6 +416,11 @@ class CampaignSpec(_Strict):
     def feature_meta(self, feature: str) -> tuple[str, str]:
         """Unit and long name of a feature, as the catalog declared them (``("1", name)`` if it did not)."""
         return self._feature_units.get(feature, ("1", feature))
+
+    def condition_units(self) -> dict[str, str]:
+        """SI unit of each numeric condition, as the catalog declared them (the bench scenes' table if the
+        spec was validated without a catalog)."""
+        return self._condition_units or dict(CONDITION_UNITS)
 
     def distributions(self) -> list[Distribution]:
         """The resolved uncertainty table, in spec order (the sampling order)."""
@@ -465,7 +476,7 @@ def cross_field_problems(data: dict) -> list[str]:
     duplicates = sorted({t for t in targets if targets.count(t) > 1})
     if duplicates:
         problems.append(f"uncertainties: target(s) listed twice: {', '.join(duplicates)}")
-    sampled = {t.removeprefix(SCENE_PREFIX) for t in targets if t.startswith(SCENE_PREFIX)}
+    sampled = set(split_targets(dict.fromkeys(targets))[0])
     for k, dataset in enumerate(data.get("datasets") if isinstance(data.get("datasets"), list) else []):
         conditions = dataset.get("conditions") if isinstance(dataset, dict) else None
         clash = sorted(sampled & set(conditions)) if isinstance(conditions, dict) else []
@@ -562,10 +573,9 @@ def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
     return spec
 
 
-def _read(path: Path, seen: tuple[Path, ...]) -> dict:
-    """Parse a spec file, applying ``extends`` (tables merged key by key, other fields replaced)."""
+def _read_spec_file(path: Path) -> dict:
     try:
-        data = tomllib.loads(path.read_bytes().decode("utf-8"))
+        return tomllib.loads(path.read_bytes().decode("utf-8"))
     except UnicodeDecodeError as exc:
         raise SpecError([f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start}); "
                          "save the spec as UTF-8"]) from None
@@ -573,19 +583,22 @@ def _read(path: Path, seen: tuple[Path, ...]) -> dict:
         raise SpecError([f"{path}: cannot read the spec: {exc.strerror or exc}"]) from None
     except tomllib.TOMLDecodeError as exc:
         raise SpecError([f"{path}: {exc}"]) from None
-    parent = data.pop("extends", None)
-    if parent is None:
-        return data
+
+
+def _locate_parent(path: Path, parent, seen: tuple[Path, ...]) -> Path:
+    """``extends = "other.toml"``: another spec file, relative to this one."""
     if not isinstance(parent, str) or not parent:
         raise SpecError([f"{path}: extends: must be the path of another spec file (a string), got {parent!r}"])
     parent_path = (path.parent / parent).resolve()
     if parent_path in seen:
         raise SpecError([f"{path}: extends: cycle through {parent_path}"])
-    merged = _read(parent_path, seen + (parent_path,))
-    for key, value in data.items():
-        both_tables = isinstance(value, dict) and isinstance(merged.get(key), dict)
-        merged[key] = {**merged[key], **value} if both_tables else value
-    return merged
+    return parent_path
+
+
+def read_spec(path: Path) -> dict:
+    """Parse a spec file, applying ``extends`` (tables merged key by key, other fields replaced:
+    :mod:`twin.tomlfiles`, the scenes' inheritance too)."""
+    return read_inheriting(Path(path), "extends", _read_spec_file, _locate_parent)
 
 
 def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | None = None,
@@ -616,7 +629,7 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
     SpecError
         If the file cannot be read or parsed, or listing every validation problem.
     """
-    data = _read(Path(path), ())
+    data = read_spec(Path(path))
     if runs is not None:
         data["runs_per_dataset"] = runs
     if timeout is not None:

@@ -47,7 +47,6 @@ import xarray as xr
 
 from campaigns import provenance as prov
 from campaigns.files import CampaignError, atomic_write
-from campaigns.catalog import CONDITION_UNITS
 from campaigns.provenance import package_versions
 from campaigns.runs import STATUS_MEANINGS
 from campaigns.spec import HALF_RANGE_SIGMAS, CampaignSpec
@@ -417,7 +416,7 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
     data_vars["t_reached"] = (dims, t_reached, {"units": "s", "long_name": "simulated time reached"})
     data_vars["wall_time"] = (dims, wall_time, {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})
-    for key, unit in CONDITION_UNITS.items():
+    for key, unit in spec.condition_units().items():
         values = [ds.conditions.get(key, math.nan) for ds in spec.datasets]
         if any(not math.isnan(v) for v in values):
             long_name = f"data-set condition {key} (NaN: the scene's own value)"

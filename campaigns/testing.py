@@ -36,7 +36,8 @@ SYNTHETIC_CATALOG = StaticCatalog(
         "synthetic.stiffness": (2.0e8, "N/m"),
         "synthetic.inert": (3.0, "1"),
     },
-    conditions={"backlash": 0.0, "preload": 0.0, "external_force": 0.0, "room_temperature": 298.15, "supply_pressure": 6e5},
+    conditions={"backlash": (0.0, "m"), "preload": (0.0, "N"), "external_force": (0.0, "N"),
+                "room_temperature": (298.15, "K"), "supply_pressure": (6e5, "Pa")},
     scene_names=("nominal", "ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7"),
     feature_units={
         "backlash_feature": ("m", "synthetic measured backlash feature"),

@@ -1,18 +1,36 @@
 """BenchTwin: digital twin of the ball-screw test bench of Bertolino (2020), chapter 9.
 
 Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -> features.
+
+The public names (``twin.simulate``, ``twin.load_parameters``, ...) are imported on first use
+(lazy: start-up cost; ``import twin`` or ``import twin.scenes`` must not load xarray and the compiled
+engine). Importing ``sensors`` first keys numba's on-disk cache on the source before any function of
+either package is compiled (:mod:`sensors.compiled_cache`; no stale machine code).
 """
 
-# First, before any numba function is decorated: importing sensors keys the compiled-code cache on the
-# source (sensors.compiled_cache; no stale machine code).
-import sensors  # noqa: F401
+import importlib
 
-from twin.simulation import simulate  # noqa: E402
-from twin.errors import InputError, OptionError, ParameterError, SceneError, SimulationFailed  # noqa: E402
-from twin.parameters import ParameterSet, available_parameter_sets, load_parameters  # noqa: E402
-from twin.scenes import Scene, list_scenes, load_scene  # noqa: E402
+import sensors  # noqa: F401  (keys the compiled-code cache; see the docstring)
 
-__all__ = [
-    "simulate", "load_parameters", "load_scene", "list_scenes", "available_parameter_sets",
-    "Scene", "ParameterSet", "InputError", "OptionError", "ParameterError", "SceneError", "SimulationFailed",
-]
+_EXPORTS = {
+    "simulate": "twin.simulation",
+    "InputError": "twin.errors",
+    "OptionError": "twin.errors",
+    "ParameterError": "twin.errors",
+    "SceneError": "twin.errors",
+    "SimulationFailed": "twin.errors",
+    "ParameterSet": "twin.parameters",
+    "available_parameter_sets": "twin.parameters",
+    "load_parameters": "twin.parameters",
+    "Scene": "twin.scenes",
+    "list_scenes": "twin.scenes",
+    "load_scene": "twin.scenes",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'twin' has no attribute {name!r}")
+    return getattr(importlib.import_module(_EXPORTS[name]), name)

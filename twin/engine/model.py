@@ -71,6 +71,70 @@ class Model:
         return x
 
 
+#: The model constants that are a parameter's value as it stands (layout :class:`twin.layout.K` -> parameter
+#: name): the plain part of the parameter -> model mapping, as data. The constants derived by a formula, a
+#: fidelity level or a scene condition are computed in :func:`build_model`.
+PARAMETER_CONSTANTS: dict[K, str] = {
+    # motor.toml
+    K.R20: "motor.winding_resistance_20C",
+    K.R_TEMP_COEF: "motor.resistance_temperature_coefficient",
+    K.INDUCTANCE: "motor.inductance",
+    K.TORQUE_CONSTANT: "motor.torque_constant",
+    K.SPEED_CONSTANT: "motor.speed_constant",
+    K.MOTOR_VISCOUS: "motor.viscous_damping",
+    K.MR_FRICTION_STATIC: "motor.friction_static_torque",
+    K.MR_FRICTION_DYNAMIC: "motor.friction_dynamic_torque",
+    K.MR_FRICTION_RATE: "motor.friction_stribeck_rate",
+    K.THERMAL_RESISTANCE: "motor.thermal_resistance",
+    K.THERMAL_TAU: "motor.thermal_time_constant",
+    K.HEAT_TRANSFER: "motor.heat_transfer_coefficient",
+    K.MOTOR_AREA: "motor.surface_area",
+    K.EMISSIVITY: "motor.emissivity",
+    K.MAX_CURRENT: "motor.max_current",
+    # drive.toml
+    K.DC_BUS: "drive.dc_bus_voltage",
+    K.HALL_TAU: "drive.hall_time_constant",
+    K.CURRENT_AW_TIME: "drive.current_antiwindup_time",
+    K.SPEED_FULL_SCALE: "drive.speed_command_full_scale",
+    # controller.toml
+    K.CURRENT_KP: "controller.current_kp",
+    K.CURRENT_KI: "controller.current_ki",
+    K.SPEED_KP: "controller.speed_kp",
+    K.SPEED_KI: "controller.speed_ki",
+    K.POSITION_KP: "controller.position_kp",
+    K.POSITION_KI: "controller.position_ki",
+    # reducer.toml
+    K.RATIO: "reducer.ratio",
+    K.EFFICIENCY: "reducer.efficiency",
+    K.REDUCER_BACKLASH: "reducer.backlash",
+    # drivetrain.toml
+    K.TORSION_DAMPING: "drivetrain.damping",
+    # ball_screw.toml
+    K.SCREW_DAMPING: "ball_screw.screw_rotational_damping",
+    K.SCREW_FRICTION_STATIC: "ball_screw.bearing_friction_static_torque",
+    K.SCREW_FRICTION_DYNAMIC: "ball_screw.bearing_friction_dynamic_torque",
+    K.SCREW_FRICTION_RATE: "ball_screw.bearing_friction_stribeck_rate",
+    K.SCREW_FRICTION_VISCOUS: "ball_screw.bearing_viscous_friction",
+    K.BEARING_STIFFNESS: "ball_screw.rear_bearing_axial_stiffness",
+    K.SHAFT_LENGTH_0: "ball_screw.bearing_to_nut_distance",
+    K.SCREW_AXIAL_DAMPING: "ball_screw.screw_axial_damping",
+    # sled.toml
+    K.MASS_NUT1: "sled.master_mass",
+    K.MASS_NUT2: "sled.slave_mass",
+    K.J_NUT: "sled.nut_rotational_inertia",
+    K.GUIDE_ROLL_STIFFNESS: "sled.guide_roll_stiffness",
+    K.GUIDE_ROLL_DAMPING: "sled.guide_roll_damping",
+    K.GUIDE_FRICTION_STATIC: "sled.guide_friction_static",
+    K.GUIDE_FRICTION_DYNAMIC: "sled.guide_friction_dynamic",
+    K.GUIDE_FRICTION_RATE: "sled.guide_friction_stribeck_rate",
+    K.GUIDE_FRICTION_VISCOUS: "sled.guide_viscous_friction",
+    K.SLAVE_FRICTION_FRACTION: "sled.slave_friction_fraction",
+    K.STROKE_LIMIT: "sled.stroke_limit",
+    # sensors.toml
+    K.ENCODER_SCALE_ORIGIN: "sensors.linear_encoder_scale_origin",
+}
+
+
 class Levels(Protocol):
     """What building the model needs of a resolved fidelity (:class:`twin.fidelity.Fidelity` provides it).
 
@@ -100,50 +164,21 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     """
     p = params.values()
     c = np.zeros(N_CONSTANTS)
+    for constant, name in PARAMETER_CONSTANTS.items():
+        c[constant] = p[name]
     ratio = p["reducer.ratio"]
     # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3)
-    c[K.R20] = p["motor.winding_resistance_20C"]
-    c[K.R_TEMP_COEF] = p["motor.resistance_temperature_coefficient"]
-    c[K.INDUCTANCE] = p["motor.inductance"]
-    c[K.TORQUE_CONSTANT] = p["motor.torque_constant"]
-    c[K.SPEED_CONSTANT] = p["motor.speed_constant"]
-    c[K.RATIO] = ratio
-    c[K.EFFICIENCY] = p["reducer.efficiency"]
     c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
-    c[K.MOTOR_VISCOUS] = p["motor.viscous_damping"]
-    c[K.MR_FRICTION_STATIC] = p["motor.friction_static_torque"]
-    c[K.MR_FRICTION_DYNAMIC] = p["motor.friction_dynamic_torque"]
-    c[K.MR_FRICTION_RATE] = p["motor.friction_stribeck_rate"]
-    c[K.DC_BUS] = p["drive.dc_bus_voltage"]
-    c[K.HALL_TAU] = p["drive.hall_time_constant"]
-    c[K.CURRENT_KP] = p["controller.current_kp"]
-    c[K.CURRENT_KI] = p["controller.current_ki"]
-    c[K.CURRENT_AW_TIME] = p["drive.current_antiwindup_time"]
     c[K.CURRENT_LOOP_FULL] = 1.0 if fidelity.level("current_loop") == "full" else 0.0
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
     c[K.THERMAL_DYNAMIC] = 1.0 if fidelity.level("motor_thermal") == "dynamic" else 0.0
-    c[K.THERMAL_RESISTANCE] = p["motor.thermal_resistance"]
-    c[K.THERMAL_TAU] = p["motor.thermal_time_constant"]
-    c[K.HEAT_TRANSFER] = p["motor.heat_transfer_coefficient"]
-    c[K.MOTOR_AREA] = p["motor.surface_area"]
-    c[K.EMISSIVITY] = p["motor.emissivity"]
     c[K.AMBIENT] = scene.condition("room_temperature")
     # torsional chain (Sec. 9.3 "Torque meter", Eq. 9.7)
     c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
-    c[K.TORSION_DAMPING] = p["drivetrain.damping"]
-    c[K.REDUCER_BACKLASH] = p["reducer.backlash"]
     c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
-    c[K.SCREW_DAMPING] = p["ball_screw.screw_rotational_damping"]
-    c[K.SCREW_FRICTION_STATIC] = p["ball_screw.bearing_friction_static_torque"]
-    c[K.SCREW_FRICTION_DYNAMIC] = p["ball_screw.bearing_friction_dynamic_torque"]
-    c[K.SCREW_FRICTION_RATE] = p["ball_screw.bearing_friction_stribeck_rate"]
-    c[K.SCREW_FRICTION_VISCOUS] = p["ball_screw.bearing_viscous_friction"]
     # screw axial: rear bearing in series with the shaft (Table B.9)
     c[K.SCREW_MASS] = screw_mass(p)
-    c[K.BEARING_STIFFNESS] = p["ball_screw.rear_bearing_axial_stiffness"]
     c[K.SHAFT_EA] = p["ball_screw.elastic_modulus"] * math.pi * p["ball_screw.screw_root_diameter"] ** 2 / 4.0
-    c[K.SHAFT_LENGTH_0] = p["ball_screw.bearing_to_nut_distance"]
-    c[K.SCREW_AXIAL_DAMPING] = p["ball_screw.screw_axial_damping"]
     # ball-screw contact (Eqs. 9.4-9.6, 5.5, Sec. 7.3)
     stiffness_poly = contact_constants(c, p, curvature)
     c[K.CONTACT_MODEL] = CONTACT_LEVELS[fidelity.level("contact")]
@@ -151,16 +186,6 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
         c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
     c[K.BACKLASH] = scene.condition("backlash")
     # nuts, guides (Eq. 9.8, Eq. 7.63)
-    c[K.MASS_NUT1] = p["sled.master_mass"]
-    c[K.MASS_NUT2] = p["sled.slave_mass"]
-    c[K.J_NUT] = p["sled.nut_rotational_inertia"]
-    c[K.GUIDE_ROLL_STIFFNESS] = p["sled.guide_roll_stiffness"]
-    c[K.GUIDE_ROLL_DAMPING] = p["sled.guide_roll_damping"]
-    c[K.GUIDE_FRICTION_STATIC] = p["sled.guide_friction_static"]
-    c[K.GUIDE_FRICTION_DYNAMIC] = p["sled.guide_friction_dynamic"]
-    c[K.GUIDE_FRICTION_RATE] = p["sled.guide_friction_stribeck_rate"]
-    c[K.GUIDE_FRICTION_VISCOUS] = p["sled.guide_viscous_friction"]
-    c[K.SLAVE_FRICTION_FRACTION] = p["sled.slave_friction_fraction"]
     c[K.NUT_ROTATION] = 1.0 if fidelity.level("nut_rotation") == "on" else 0.0
     # preload (Secs. 9.2-9.3)
     preload = scene.condition("preload")
@@ -170,17 +195,10 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
     c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
     # digital loops (Table B.3, controller.toml)
-    c[K.SPEED_KP] = p["controller.speed_kp"]
-    c[K.SPEED_KI] = p["controller.speed_ki"]
-    c[K.MAX_CURRENT] = p["motor.max_current"]
-    c[K.POSITION_KP] = p["controller.position_kp"]
-    c[K.POSITION_KI] = p["controller.position_ki"]
-    c[K.SPEED_FULL_SCALE] = p["drive.speed_command_full_scale"]
     converters = fidelity.level("output_converters") == "quantized"
     if converters:
         c[K.SPEED_COMMAND_BITS] = p["drive.analog_input_bits"] + 1.0  # 11 bits + sign (Table B.3)
     # divergence guard
-    c[K.STROKE_LIMIT] = p["sled.stroke_limit"]
     c[K.MAX_MOTOR_SPEED] = MAX_MOTOR_SPEED_FACTOR * MOTOR_MAX_PERMISSIBLE_SPEED
     c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
     c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
@@ -192,7 +210,6 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     x0 = initial_state(c, stiffness_poly, preload, scene.condition("zero_procedure"))
     # The encoders are zeroed on the initial state, whatever the procedure (docs/model.md).
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
-    c[K.ENCODER_SCALE_ORIGIN] = p["sensors.linear_encoder_scale_origin"]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
     if c[K.PNEUMATICS] == PNEUMATICS_FULL:
         x0[S.SPOOL_POSITION:] = pneumatic_constants(c, p, scene)

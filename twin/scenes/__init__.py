@@ -22,6 +22,7 @@ import numpy as np
 from twin.layout import OUTPUT_NAMES
 from twin.errors import SceneError
 from twin.scenes.profiles import compile_profile
+from twin.tomlfiles import read_inheriting
 
 LIBRARY = Path(__file__).parent / "library"
 
@@ -99,6 +100,21 @@ CONDITIONS: dict[str, Condition] = {
     "cylinder": Condition("", "state of the pneumatic cylinder", ", ".join(CYLINDER_STATES),
                           choices=tuple(CYLINDER_STATES), default="attached"),
 }
+#: Prefix that names a scene condition among parameter names (``scene.backlash`` beside ``motor.inertia``) in
+#: ``--set`` overrides and campaign uncertainty targets; :func:`split_targets` is the one parser of such names.
+SCENE_PREFIX = "scene."
+
+
+def split_targets(values: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Split ``{"scene.<condition>": v, "<group>.<parameter>": v, ...}`` into (conditions, parameter values).
+
+    Conditions lose the prefix (they are :data:`CONDITIONS` keys); every other name is a parameter name.
+    """
+    conditions = {name.removeprefix(SCENE_PREFIX): v for name, v in values.items() if name.startswith(SCENE_PREFIX)}
+    parameters = {name: v for name, v in values.items() if not name.startswith(SCENE_PREFIX)}
+    return conditions, parameters
+
+
 _TOP_FIELDS = {"base", "name", "description", "duration", "conditions", "position_demand", "force_demand", "outputs"}
 
 
@@ -242,24 +258,27 @@ def load_scene(name_or_path: str | Path | Scene) -> Scene:
         path = LIBRARY / f"{name_or_path}.toml"
         if not path.is_file():
             raise SceneError([f"scene: '{name_or_path}' is neither a file nor a built-in scene ({', '.join(list_scenes())})"])
-    return scene_from_dict(_read_with_base(path, seen=()), default_name=path.stem)
+    return scene_from_dict(_read_with_base(path), default_name=path.stem)
 
 
-def _read_with_base(path: Path, seen: tuple[Path, ...]) -> dict:
-    """Parse a scene file; a ``base = "other"`` field inherits that scene's fields
-    (conditions are merged key by key), so data sets do not copy the demand profiles."""
+def _read_scene_file(path: Path) -> dict:
     try:
-        data = tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise SceneError([f"{path.name}: not valid TOML ({exc})"]) from None
-    base = data.pop("base", None)
-    if base is None:
-        return data
+
+
+def _locate_base(path: Path, base, seen: tuple[Path, ...]) -> Path:
+    """A ``base = "other"`` field names a scene file beside this one, or a built-in scene."""
     base_path = path.parent / f"{base}.toml"
     if not base_path.is_file():
         base_path = LIBRARY / f"{base}.toml"
     if not base_path.is_file() or base_path.resolve() in seen:
         raise SceneError([f"{path.name}.base: '{base}' is not a scene file or built-in scene (or the chain is circular)"])
-    merged = _read_with_base(base_path, seen + (path.resolve(),))
-    conditions = {**merged.get("conditions", {}), **data.pop("conditions", {})}
-    return {**merged, **data, "conditions": conditions}
+    return base_path
+
+
+def _read_with_base(path: Path) -> dict:
+    """Parse a scene file; a ``base = "other"`` field inherits that scene's fields (conditions are merged key by
+    key, :mod:`twin.tomlfiles`), so data sets do not copy the demand profiles."""
+    return read_inheriting(path, "base", _read_scene_file, _locate_base)
