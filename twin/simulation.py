@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -29,7 +30,7 @@ from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
 from twin.errors import InputError, OptionError, SimulationFailed
-from twin.fidelity import resolve_fidelity
+from twin.fidelity import Fidelity, resolve_fidelity
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
@@ -110,6 +111,46 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     OptionError, SceneError, ParameterError
         On invalid input, before anything runs.
     """
+    run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
+    model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
+    generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
+        DEFAULT_NOISE_SEED if rng is None else rng)
+    n_steps = int(round(run.scene.duration / run.dt))
+    instruments = build_instruments(run.params.values(), run.scene.condition("room_temperature"),
+                                    instrument_levels(run.fidelity), generator, n_steps // run.position_every + 1,
+                                    run.dt, torque_meter_refresh=run.fidelity.level("torque_meter_refresh") == "modelled")
+    output = np.full((n_steps // run.output_every + 1, N_SIGNALS), np.nan)
+    memory = np.zeros(N_MEMORY)
+    x = model.initial_state.copy()
+    start = time.perf_counter()
+    status, t_reached, rows, reason, solver_stats = _solve(run, model, instruments, n_steps, x, output, memory,
+                                                           local_error_guard)
+    wall_time = time.perf_counter() - start
+    if status != STATUS_OK and throw:
+        raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
+    return _package(run, model, x, output[:rows], memory, status, reason, t_reached, solver_stats, wall_time, rng)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """A validated request: the loaded scene and parameters, the resolved fidelity and the step counts."""
+
+    scene: Scene
+    params: ParameterSet
+    fidelity: Fidelity
+    integrator: str
+    reference: bool
+    dt: float
+    rtol: float
+    curvature: str
+    speed_sample_time: float
+    speed_every: int
+    position_every: int
+    output_every: int
+
+
+def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol) -> _Run:
+    """Load the inputs, check every option and resolve the fidelity; every problem in one :class:`OptionError`."""
     scene = load_scene(scene)
     if not isinstance(params, ParameterSet):
         params = load_parameters("bench" if params is None else params)
@@ -142,41 +183,36 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
         raise OptionError(problems)
+    return _Run(scene, params, resolved, integrator, reference, dt, rtol, curvature, speed_ts, speed_every,
+                position_every, output_every)
 
-    model = build_model(scene, params, resolved, curvature=curvature)
-    generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
-        DEFAULT_NOISE_SEED if rng is None else rng)
-    n_steps = int(round(scene.duration / dt))
-    levels = instrument_levels(resolved)
-    instruments = build_instruments(params.values(), scene.condition("room_temperature"), levels, generator,
-                                    n_steps // position_every + 1, dt,
-                                    torque_meter_refresh=resolved.level("torque_meter_refresh") == "modelled")
-    output = np.full((n_steps // output_every + 1, N_SIGNALS), np.nan)
-    memory = np.zeros(N_MEMORY)
-    solver_stats = {}
-    start = time.perf_counter()
-    x = model.initial_state.copy()
-    if reference:
+
+def _solve(run: _Run, model, instruments, n_steps: int, x: np.ndarray, output: np.ndarray, memory: np.ndarray,
+           local_error_guard: bool) -> tuple[int, float, int, str, dict]:
+    """Integrate on the compiled loop, or on the adaptive reference path; ``x``, ``output`` and ``memory`` are
+    filled in place. Returns ``(status, t_reached, rows of output written, failure reason, solver statistics)``."""
+    if run.reference:
         status, bound, t_reached, rows, reason, solver_stats = run_reference(
-            model, instruments, n_steps, speed_ts, position_every, output_every, output, memory,
-            REFERENCE_METHODS[integrator], rtol, x)
-        reason = reason or BOUND_REASONS[bound]
-    else:
-        status, bound, steps_done, rows = run_loop(
-            x, model.constants, model.position_table, model.force_table, model.stiffness_poly, model.active,
-            model.pairs, n_steps, dt, speed_every, position_every, output_every, position_every,
-            INTEGRATORS[integrator], instruments.parameters, instruments.levels, instruments.lookback,
-            instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf))
-        t_reached = steps_done * dt
-        reason = BOUND_REASONS[bound]
-    wall_time = time.perf_counter() - start
-    if status != STATUS_OK and throw:
-        raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
+            model, instruments, n_steps, run.speed_sample_time, run.position_every, run.output_every, output, memory,
+            REFERENCE_METHODS[run.integrator], run.rtol, x)
+        return status, t_reached, rows, reason or BOUND_REASONS[bound], solver_stats
+    status, bound, steps_done, rows = run_loop(
+        x, model.constants, model.position_table, model.force_table, model.stiffness_poly, model.active,
+        model.pairs, n_steps, run.dt, run.speed_every, run.position_every, run.output_every, run.position_every,
+        INTEGRATORS[run.integrator], instruments.parameters, instruments.levels, instruments.lookback,
+        instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf))
+    return status, steps_done * run.dt, rows, BOUND_REASONS[bound], {}
 
-    time_axis = np.arange(rows) * output_every * dt
+
+def _package(run: _Run, model, x: np.ndarray, output: np.ndarray, memory: np.ndarray, status: int, reason: str,
+             t_reached: float, solver_stats: dict, wall_time: float, rng) -> xr.Dataset:
+    """The run as an xarray Dataset: signals on the output grid, the features (:mod:`twin.features`), the final
+    state and the attributes that say how it was computed."""
+    scene, params, resolved, dt = run.scene, run.params, run.fidelity, run.dt
+    time_axis = np.arange(output.shape[0]) * run.output_every * dt
     removed = set(resolved.removed_signals)
     data_vars = {
-        signal.name.lower(): ("time", output[:rows, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
+        signal.name.lower(): ("time", output[:, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
         for signal in Signal
         if signal.name.lower() not in removed
     }
@@ -204,10 +240,10 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
             "scene_conditions": json.dumps(dict(scene.conditions)),
             "parameter_set": params.name,
             "screw_lead": params.value("ball_screw.lead"),
-            "integrator": integrator,
+            "integrator": run.integrator,
             "dt": dt,
-            **({"rtol": rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if reference else {}),
-            "curvature": curvature,
+            **({"rtol": run.rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if run.reference else {}),
+            "curvature": run.curvature,
             "fidelity": resolved.summary(),
             "fidelity_reasons": "\n".join(f"{k}: {v}" for k, v in resolved.reasons.items()),
             "integrated_states": int(model.active.size),
