@@ -19,7 +19,7 @@ _EXPORTS = {
     "load_spec": "campaigns.spec",
     "CampaignSpec": "campaigns.spec",
     "SpecError": "campaigns.spec",
-    "HALF_RANGE_SIGMAS": "campaigns.spec",
+    "HALF_RANGE_SIGMAS": "campaigns.units",
     "CampaignError": "campaigns.storage",
 }
 

@@ -27,17 +27,11 @@ from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Fiel
 from campaigns.bench import BenchCatalog
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog
 from campaigns.distributions import Distribution, DistributionKind
+from campaigns.ranges import resolve, shape_problems
 from twin.errors import InputError
 from twin.fidelity.levels import requested_levels
 from twin.scenes import split_targets
 from twin.tomlfiles import read_inheriting
-
-#: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
-#: Datasheets quote tolerance bands that practically every unit meets; ±3 sigma
-#: covers 99.73 % of a normal population, which is the usual convention for such
-#: limits (and the one that keeps the sampled values inside the band almost
-#: always). This is the only place the factor is defined.
-HALF_RANGE_SIGMAS = 3.0
 
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
 #: detection probability is at most 0.35 percentage points and that of a mean 0.7 % of the spread, far
@@ -47,29 +41,6 @@ HALF_RANGE_SIGMAS = 3.0
 #: bench's ~1 s per run makes 140 000 runs about 20 h on two workers. A larger study is several
 #: campaigns with different ``root_seed`` values.
 MAX_RUNS_PER_DATASET = 20_000
-
-#: Spec unit -> (SI unit, scale, offset): ``si = value * scale + offset``.
-#: Offsets apply to absolute values only, never to half ranges or sigmas.
-UNITS: dict[str, tuple[str, float, float]] = {
-    "m": ("m", 1.0, 0.0),
-    "mm": ("m", 1e-3, 0.0),
-    "um": ("m", 1e-6, 0.0),
-    "µm": ("m", 1e-6, 0.0),
-    "rad": ("rad", 1.0, 0.0),
-    "deg": ("rad", math.pi / 180.0, 0.0),
-    "arcmin": ("rad", math.pi / 10800.0, 0.0),
-    "K": ("K", 1.0, 0.0),
-    "degC": ("K", 1.0, 273.15),
-    "Pa": ("Pa", 1.0, 0.0),
-    "bar": ("Pa", 1e5, 0.0),
-    "N": ("N", 1.0, 0.0),
-    "kN": ("N", 1e3, 0.0),
-    "1": ("1", 1.0, 0.0),
-    "%": ("1", 1e-2, 0.0),
-    "1/K": ("1/K", 1.0, 0.0),
-    "%/K": ("1/K", 1e-2, 0.0),
-}
-
 
 class SpecError(InputError):
     """A campaign spec is invalid; ``problems`` lists every problem with its field path."""
@@ -286,87 +257,11 @@ class Uncertainty(_Strict):
         return self._distribution
 
     def _shape_problems(self) -> list[str]:
-        kind = self.distribution
-        given = {k for k in ("half_range", "low", "high", "sigma", "value") if getattr(self, k) is not None}
-        problems = []
-        if self.low is not None and self.high is not None and self.low > self.high:
-            problems.append(f"low ({self.low:g}) > high ({self.high:g})")
-        if ("low" in given) != ("high" in given):
-            problems.append("give both low and high")
-        if "half_range" in given and {"low", "high"} & given:
-            problems.append("give either half_range or low/high, not both")
-        if self.relative and self.unit not in (None, "%"):
-            problems.append(f"relative rows are in percent of nominal; unit must be '%' or omitted, got {self.unit!r}")
-        if not self.relative and self.unit is not None and self.unit not in UNITS:
-            problems.append(f"unknown unit {self.unit!r}; known: {', '.join(UNITS)}")
-        has_range = bool({"half_range", "low"} & given)
-        if kind == "constant":
-            if given - {"value"}:
-                problems.append("a constant takes only 'value' (or nothing: the nominal)")
-        elif "value" in given:
-            problems.append(f"'value' is only for constant distributions, not {kind}")
-        if kind == "uniform" and not has_range:
-            problems.append("a uniform distribution needs half_range or low/high")
-        if kind == "gaussian" and not (has_range or "sigma" in given):
-            problems.append("a gaussian needs half_range, low/high or sigma")
-        if kind == "truncated_gaussian" and not has_range:
-            problems.append("a truncated gaussian needs half_range or low/high (the truncation bounds)")
-        if kind == "lognormal" and not (self.relative and "half_range" in given):
-            problems.append("a lognormal needs relative = true and half_range (percent of the median)")
-        if "sigma" in given and kind not in ("gaussian", "truncated_gaussian"):
-            problems.append(f"'sigma' is only for gaussian distributions, not {kind}")
-        if "mean" in given and "sigma" not in given:
-            problems.append("'mean' goes with 'sigma'")
-        return problems
+        return shape_problems(self)
 
     def _resolved(self, nominal: float, unit: str) -> Distribution:
         """Convert the row to absolute SI parameters (raises ValueError on unit problems)."""
-        if self.relative:
-            if nominal == 0.0:
-                raise ValueError(f"relative range on {self.target} whose nominal value is 0")
-
-            def absolute(p: float) -> float:
-                return nominal * (1.0 + p / 100.0)
-
-            def delta(d: float) -> float:
-                return abs(nominal) * d / 100.0
-
-        else:
-            spec_unit = self.unit or unit
-            if spec_unit == unit:
-                scale, offset = 1.0, 0.0
-            else:
-                si_unit, scale, offset = UNITS[spec_unit]
-                if si_unit != unit:
-                    raise ValueError(f"unit {spec_unit!r} converts to {si_unit!r} but {self.target} is in {unit!r}")
-
-            def absolute(p: float) -> float:
-                return p * scale + offset
-
-            def delta(d: float) -> float:
-                return d * scale
-
-        low = high = math.nan
-        if self.half_range is not None:
-            low, high = nominal - delta(self.half_range), nominal + delta(self.half_range)
-        elif self.low is not None:
-            low, high = sorted((absolute(self.low), absolute(self.high)))
-        common = dict(target=self.target, kind=self.distribution, unit=unit, nominal=nominal, source=self.source)
-        if self.distribution == "constant":
-            return Distribution(**common, value=nominal if self.value is None else absolute(self.value))
-        if self.distribution == "uniform":
-            return Distribution(**common, low=low, high=high)
-        if self.distribution == "lognormal":
-            sigma_log = math.log1p(self.half_range / 100.0) / HALF_RANGE_SIGMAS
-            return Distribution(**common, mean=nominal, sigma=sigma_log)
-        if self.sigma is not None:
-            mean = nominal if self.mean is None else absolute(self.mean)
-            sigma = delta(self.sigma)
-        else:
-            mean, sigma = 0.5 * (low + high), 0.5 * (high - low) / HALF_RANGE_SIGMAS
-        if self.distribution == "truncated_gaussian":
-            return Distribution(**common, mean=mean, sigma=sigma, low=low, high=high)
-        return Distribution(**common, mean=mean, sigma=sigma)
+        return resolve(self, nominal, unit)
 
 
 class CampaignSpec(_Strict):

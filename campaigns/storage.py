@@ -35,7 +35,6 @@ import logging
 import math
 import os
 import socket
-import tempfile
 import time
 import zipfile
 import zlib
@@ -49,7 +48,8 @@ from campaigns import provenance as prov
 from campaigns.files import CampaignError, atomic_write
 from campaigns.provenance import package_versions
 from campaigns.runs import STATUS_MEANINGS
-from campaigns.spec import HALF_RANGE_SIGMAS, CampaignSpec
+from campaigns.spec import CampaignSpec
+from campaigns.units import HALF_RANGE_SIGMAS
 
 RESULTS_NAME = "results.nc"
 LOCK_NAME = ".lock"
