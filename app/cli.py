@@ -137,7 +137,6 @@ class Stages:
 
 def cmd_campaign_run(args) -> int:
     import campaigns
-
     from campaigns.budget import estimate
 
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
@@ -230,8 +229,8 @@ def cmd_fidelity_audit(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from reports import build_report
     from campaigns.storage import check_output
+    from reports import build_report
 
     for name in ("report.html", "report.pdf"):
         check_output(args.out / name, [args.results, args.analysis, args.accuracy], force=args.force)

@@ -30,10 +30,10 @@ from pathlib import Path
 
 import xarray as xr
 from distributed import LocalCluster
+from machine import header
 
 import campaigns
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
-from machine import header
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 import platform
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib import metadata
 
 PACKAGES = ("benchtwin", "numpy", "numba", "scipy", "xarray", "dask", "distributed")
@@ -36,6 +36,6 @@ def header(title: str, quick: bool = False) -> None:
             versions.append(f"{name} not installed")
     load = ", ".join(f"{v:.2f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "unknown"
     print(f"# {title}{' (quick mode: small sizes, figures indicative only)' if quick else ''}")
-    print(f"# {datetime.now(timezone.utc).isoformat(timespec='seconds')}; {cpu_model()}, {os.cpu_count()} cores, "
+    print(f"# {datetime.now(UTC).isoformat(timespec='seconds')}; {cpu_model()}, {os.cpu_count()} cores, "
           f"load average {load}; python {platform.python_version()}")
     print(f"# {'; '.join(versions)}", flush=True)

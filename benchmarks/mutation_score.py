@@ -186,7 +186,7 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
 
 
 def _changed_line(original: str, mutated: str) -> str:
-    for a, b in zip(original.splitlines(), mutated.splitlines()):
+    for a, b in zip(original.splitlines(), mutated.splitlines(), strict=False):
         if a != b:
             return f"{a.strip()}  ->  {b.strip()}"
     return "(no textual change)"

@@ -16,8 +16,8 @@ from machine import header
 
 import twin
 import twin.simulation
-from twin.fidelity import full_plant
 from app.studies.control_baseline import compare
+from twin.fidelity import full_plant
 
 
 def median_wall(scene, repeats=5, **options):

@@ -421,11 +421,11 @@ def observability_sweep(
     reference = int(np.flatnonzero(backlash == 0.0)[0])
     used = _used(results, feature)
     samples = [results[feature].sel(dataset=n).values[used.sel(dataset=n).values] for n in datasets]
-    n_used = {n: len(s) for n, s in zip(datasets, samples)}
+    n_used = {n: len(s) for n, s in zip(datasets, samples, strict=False)}
     nan2 = (math.nan, math.nan)
     if min(n_used.values()) < min_ok_runs:
         enough = [len(s) >= min_ok_runs and n_used[datasets[reference]] >= min_ok_runs for s in samples]
-        probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan for s, ok in zip(samples, enough)])
+        probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan for s, ok in zip(samples, enough, strict=False)])
         estimate, bracket, bounds, verdict = math.nan, nan2, nan2, "insufficient data"
     else:
         found = bootstrap_minimum_detectable(
@@ -659,7 +659,7 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     for feature in (str(f) for f in analysis["feature"].values):
         statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
         n_used = analysis["n_used"].sel(feature=feature)
-        short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values) if n < min_ok_runs]
+        short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values, strict=False) if n < min_ok_runs]
         if len(short) == len(n_used) > 1 and len(set(n_used.values)) == 1:
             short = [f"all {len(short)} data sets ({_runs(int(n_used[0]))} each)"]
         if short:

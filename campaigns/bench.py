@@ -16,9 +16,9 @@ import numpy as np
 import twin
 from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
+from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
-from twin.errors import InputError
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
 

@@ -8,9 +8,10 @@ synthetic model's.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cache
-from typing import Mapping, Protocol, Sequence
+from typing import Protocol
 
 
 def _scenes():

@@ -38,8 +38,8 @@ import math
 import statistics
 import time
 from collections import deque
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from distributed import Client, LocalCluster, as_completed
 from distributed.comm.core import CommClosedError
@@ -112,7 +112,7 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
     dataset = spec.datasets[dataset_index]
     targets = [d.target for d in spec.distributions()] if targets is None else targets
     sampled, parameter_values = split_targets(
-        {target: float(value) for target, value in zip(targets, samples[dataset_index, run_index])})
+        {target: float(value) for target, value in zip(targets, samples[dataset_index, run_index], strict=False)})
     conditions = {**dataset.conditions, **sampled}
     traced = run_index < spec.traces.runs_per_dataset
     return RunRequest(

@@ -93,7 +93,7 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
     values = sample_run(distributions, spec.root_seed, d, run)
     recorded = np.array([float(stored[t].values[d, run]) for t in targets])
     if not np.array_equal(values, recorded):
-        differ = [t for t, a, b in zip(targets, values, recorded) if a != b]
+        differ = [t for t, a, b in zip(targets, values, recorded, strict=False) if a != b]
         raise CampaignError(f"{results_path}: re-sampled values of {', '.join(differ)} differ from the stored ones "
                             "(the sampling code changed since the campaign ran); the run cannot be replayed")
     if run_function is None:

@@ -16,7 +16,7 @@ stored next to the results); analysis is a separate module.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from scipy import special

@@ -22,7 +22,17 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import pydantic
-from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    PlainValidator,
+    PrivateAttr,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from campaigns.bench import BenchCatalog
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog
@@ -219,7 +229,7 @@ class Uncertainty(_Strict):
     _distribution: Distribution | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
-    def _resolve(self, info: ValidationInfo) -> "Uncertainty":
+    def _resolve(self, info: ValidationInfo) -> Uncertainty:
         catalog = _catalog(info)
         problems = self.problems(catalog)
         if problems:
@@ -297,7 +307,7 @@ class CampaignSpec(_Strict):
         return features
 
     @model_validator(mode="after")
-    def _consistent(self, info: ValidationInfo) -> "CampaignSpec":
+    def _consistent(self, info: ValidationInfo) -> CampaignSpec:
         catalog = _catalog(info)
         if catalog is not None and catalog.feature_units is not None:
             self._feature_units = {f: tuple(catalog.feature_units[f]) for f in self.features}

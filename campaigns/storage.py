@@ -38,7 +38,7 @@ import socket
 import time
 import zipfile
 import zlib
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -97,7 +97,7 @@ class OutputLock:
         self.path = self.root / LOCK_NAME
         self._fd: int | None = None
 
-    def acquire(self) -> "OutputLock":
+    def acquire(self) -> OutputLock:
         try:
             self.root.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -112,7 +112,7 @@ class OutputLock:
                                 "wait for it to finish, or choose another output directory") from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"pid {os.getpid()} on {socket.gethostname()}, since "
-                      f"{datetime.now(timezone.utc).isoformat(timespec='seconds')}\n".encode(), 0)
+                      f"{datetime.now(UTC).isoformat(timespec='seconds')}\n".encode(), 0)
         self._fd = fd
         return self
 
@@ -122,7 +122,7 @@ class OutputLock:
             os.close(self._fd)
             self._fd = None
 
-    def __enter__(self) -> "OutputLock":
+    def __enter__(self) -> OutputLock:
         return self.acquire()
 
     def __exit__(self, *exc) -> None:
@@ -444,8 +444,8 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
         **_provenance_attrs(chunks),
-        "date_created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "date_created": datetime.now(UTC).isoformat(timespec="seconds"),
         "fidelity_requested": json.dumps(spec.solver.fidelity),
-        **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity) if used},
+        **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity, strict=False) if used},
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

@@ -11,7 +11,7 @@ loaded data --:mod:`reports.content`--> one :class:`reports.model.Report` -->
 
 from __future__ import annotations
 
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 from reports.errors import ReportError
@@ -63,7 +63,7 @@ def build_report(
     from reports.inputs import load_inputs
     from reports.pdf import render_pdf
 
-    generated_at = (generated_at or datetime.now(timezone.utc)).astimezone(timezone.utc)
+    generated_at = (generated_at or datetime.now(UTC)).astimezone(UTC)
     inputs = load_inputs(results_path, analysis_path, accuracy_path)
     out_dir, html = Path(out_dir), Path(out_dir) / "report.html"
     try:  # before the figures are drawn, so an unwritable destination fails at once

@@ -126,7 +126,7 @@ class Builder:
         pair = self.pair(feature)
         return [Panel(f"{f} ({kind})" if len(pair) > 1 else f, axis_label(f, unit), f"probability density [1/{unit}]",
                       tuple(Group(d, self.used(f, d) * factor, self.color[d]) for d in datasets))
-                for f, kind in zip(pair, ("measured", "true signals"))]
+                for f, kind in zip(pair, ("measured", "true signals"), strict=False)]
 
     def describe(self, dataset: str) -> str:
         """``ds3 (backlash 0 µm, preload 0 kN, external force 4 kN)``: every condition that tells the data sets apart."""

@@ -111,7 +111,7 @@ def _legend_outside(fig: Figure, axes, ncols: int = 4, **options) -> None:
     """One legend for the whole figure below the axes, each label once, never over data."""
     handles = {}
     for ax in axes:
-        for handle, label in zip(*ax.get_legend_handles_labels()):
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=False):
             handles.setdefault(label, handle)
     if handles:
         fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(len(handles), ncols),
@@ -181,7 +181,7 @@ def distributions(panels: list[Panel]) -> bytes:
     grid = np.array(fig.axes).reshape(rows, len(panels))
     for column, panel in enumerate(panels):
         cells = [[group] for group in panel.items] if stacked else [list(panel.items)]
-        for row, (ax, groups) in enumerate(zip(grid[:, column], cells)):
+        for row, (ax, groups) in enumerate(zip(grid[:, column], cells, strict=False)):
             drawn = [_density(ax, group) for group in groups]
             if not any(np.isfinite(group.values).any() for group in groups):
                 ax.text(0.5, 0.5, "no successful run", transform=ax.transAxes, ha="center", va="center", color="grey")
@@ -291,7 +291,7 @@ def scatter(panels: list[Panel]) -> bytes:
     ncols = 2 if len(panels) > 1 else 1
     nrows = math.ceil(len(panels) / ncols)
     fig = _new(nrows, ncols, 0.7 + 2.7 * nrows)
-    for ax, panel in zip(fig.axes, panels):
+    for ax, panel in zip(fig.axes, panels, strict=False):
         xlabel = panel.xlabel
         for item in panel.items:
             x, xlabel = _scaled(np.asarray(item.x, dtype=float), panel.xlabel)
@@ -319,7 +319,7 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
         ax.sharex(fig.axes[0])
         if sharey:
             ax.sharey(fig.axes[0])
-    for ax, panel in zip(fig.axes, panels):
+    for ax, panel in zip(fig.axes, panels, strict=False):
         for line in panel.items:
             ax.plot(line.x, line.y, line.style, color=line.color, lw=1.0, label=line.label)
         ax.set_title(panel.title, fontsize=8.5 if compact else None)
@@ -366,11 +366,11 @@ def work_precision(panels: list[Panel]) -> bytes:
     fig = _new(1, len(panels), 3.6)
     for ax in fig.axes[1:]:
         ax.sharey(fig.axes[0])
-    for ax, panel in zip(fig.axes, panels):
+    for ax, panel in zip(fig.axes, panels, strict=False):
         for line in panel.items:
             ax.loglog(line.x, line.y, "o" + line.style, color=line.color, ms=3.5, lw=1.1, label=line.label)
         ax.set(title=panel.title, xlabel=panel.xlabel, ylabel=panel.ylabel)
         ax.grid(True, which="both", alpha=0.25)
-    handles = {label: handle for ax in fig.axes for handle, label in zip(*ax.get_legend_handles_labels())}
+    handles = {label: handle for ax in fig.axes for handle, label in zip(*ax.get_legend_handles_labels(), strict=False)}
     fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(len(handles), 4), frameon=False)
     return _png(fig)

@@ -43,7 +43,7 @@ State array layout (float64, length ``AS_SIZE``), set by :func:`analog_init`:
 from __future__ import annotations
 
 import math
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numba
 import numpy as np

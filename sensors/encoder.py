@@ -69,7 +69,7 @@ State array (float64, length ``ENC_STATE_SIZE``), from :func:`encoder_init`:
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 import numba
 import numpy as np

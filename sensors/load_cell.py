@@ -27,7 +27,7 @@ The compiled functions are the generic channel's (:mod:`sensors.analog`):
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 

@@ -16,7 +16,7 @@ Parameter array (float64, length ``RES_SIZE``) from :func:`resolver_parameters`:
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 import numba
 import numpy as np

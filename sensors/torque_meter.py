@@ -21,7 +21,7 @@ Monte Carlo analysis (see ``docs/sensors.md``).
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 

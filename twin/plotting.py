@@ -71,7 +71,7 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
     panels = _panels(ds)
     rows = (len(panels) + 1) // 2
     fig, axes = plt.subplots(rows, 2, figsize=(12, 0.9 + 2.3 * rows), sharex=True, constrained_layout=True, squeeze=False)
-    for k, (ax, (title, ylabel, lines)) in enumerate(zip(axes.flat, panels)):
+    for k, (ax, (title, ylabel, lines)) in enumerate(zip(axes.flat, panels, strict=False)):
         for label, values, style in lines:
             ax.plot(t, values, label=label, **style)
         ax.set_title(f"({'abcdef'[k]}) {title}", fontsize=10)

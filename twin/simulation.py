@@ -5,15 +5,21 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
 
-from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS
+from twin.engine.loop import run_loop
+from twin.engine.model import CURVATURE_FORMULAS, build_model
+from twin.engine.reference import METHODS as REFERENCE_METHODS
+from twin.engine.reference import local_error_tolerance, run_reference
+from twin.errors import InputError, OptionError, SimulationFailed
+from twin.features import FEATURES, N_ACCUMULATORS, finish
+from twin.fidelity import Fidelity, resolve_fidelity
 from twin.layout import (
     BOUND_REASONS,
     N_MEMORY,
@@ -25,12 +31,6 @@ from twin.layout import (
     S,
     Signal,
 )
-from twin.engine.loop import run_loop
-from twin.engine.model import CURVATURE_FORMULAS, build_model
-from twin.engine.reference import METHODS as REFERENCE_METHODS
-from twin.engine.reference import local_error_tolerance, run_reference
-from twin.errors import InputError, OptionError, SimulationFailed
-from twin.fidelity import Fidelity, resolve_fidelity
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 

@@ -96,7 +96,7 @@ def campaign_accuracy_chart(comparison: xr.Dataset, path: str | Path | None = No
     fig, axes = plt.subplots(1, len(datasets), figsize=(5.5 * len(datasets), 4), squeeze=False,
                              constrained_layout=True)
     width = 0.8 / len(candidates)
-    for ax, name in zip(axes[0], datasets):
+    for ax, name in zip(axes[0], datasets, strict=False):
         data = comparison.sel(dataset=name)
         for i, candidate in enumerate(candidates):
             values = [abs(float(data[v].sel(candidate=candidate))) * 1e6

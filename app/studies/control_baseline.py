@@ -19,11 +19,11 @@ from scipy.integrate import solve_ivp
 
 import twin
 from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
-from twin.layout import N_INPUTS, S, U
 from twin.engine.model import build_model
 from twin.engine.plant import rhs
 from twin.engine.reference import absolute_tolerance
 from twin.fidelity import full_plant, resolve_fidelity
+from twin.layout import N_INPUTS, S, U
 
 # The plant alone: full detail, no load system, no sensors in the way.
 OPEN_LOOP_FIDELITY = full_plant("absent")

@@ -18,10 +18,10 @@ import numpy as np
 import xarray as xr
 
 import twin
-from twin.layout import N_INPUTS, U
 from twin.engine.linearize import highest_frequency, jacobian
 from twin.engine.model import build_model
 from twin.fidelity import full_plant, resolve_fidelity
+from twin.layout import N_INPUTS, U
 from twin.scenes import scene_from_dict
 
 # The full plant (every stiff mode present) with an ideal force source and ideal instruments.

@@ -27,7 +27,7 @@ def build(b: Builder):
     for panel in dict.fromkeys(panels_of):
         lines = []
         for k, method in enumerate(methods):
-            runs = np.flatnonzero([p == panel and str(m) == method for p, m in zip(panels_of, study["method"].values)])
+            runs = np.flatnonzero([p == panel and str(m) == method for p, m in zip(panels_of, study["method"].values, strict=False)])
             good = runs[ok[runs] & (error[runs] > 0)]  # a log axis cannot show an exact zero
             if len(good):
                 good = good[np.argsort(study["wall_time"].values[good])]

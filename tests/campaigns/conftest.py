@@ -5,9 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from campaign_helpers import SYNTHETIC_SPEC, load
 
 import campaigns
-from campaign_helpers import SYNTHETIC_SPEC, load
 from campaigns.testing import synthetic_run
 
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from campaign_helpers import SYNTHETIC_SPEC, load
 from scipy import stats
 
 import campaigns
@@ -23,7 +24,6 @@ from campaigns.execution import build_request
 from campaigns.runs import execute
 from campaigns.sampling import sample
 from campaigns.testing import synthetic_run
-from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def _prcc_by_precision_matrix(X, y):
@@ -75,7 +75,7 @@ def test_ranking_of_known_monotone_dependences_is_recovered():
     for d, (effects, inert) in cases.items():
         records = [execute(synthetic_run, build_request(spec, samples, d, i)) for i in range(300)]
         y = np.array([r["features"]["backlash_feature"] for r in records])
-        partial = dict(zip(names, prcc(samples[d], y)))
+        partial = dict(zip(names, prcc(samples[d], y), strict=False))
         marginal = {n: stats.spearmanr(samples[d][:, j], y)[0] for j, n in enumerate(names)}
         assert sorted(effects + inert, key=lambda n: -abs(partial[n]))[: len(effects)] == effects
         assert max(abs(partial[n]) for n in inert) < 0.2

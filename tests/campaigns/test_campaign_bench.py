@@ -33,7 +33,7 @@ def test_two_real_bench_runs(tmp_path):
     )
     results = campaigns.run_campaign(campaigns.load_spec(path), tmp_path / "out", workers=2, progress=False)
     with xr.open_dataset(results) as ds:
-        reasons = dict(zip(ds["dataset"].values, ds["failure_reason"].values[:, 0]))
+        reasons = dict(zip(ds["dataset"].values, ds["failure_reason"].values[:, 0], strict=False))
         assert (ds["status"] == "ok").all(), f"runs not ok: {reasons}"
         true = ds["backlash_feature_true"].sel(run=0)
         measured = ds["backlash_feature"].sel(run=0)

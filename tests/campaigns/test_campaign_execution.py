@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import xarray as xr
+from campaign_helpers import data_variables, load, write_spec
 
 import campaigns
 from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
@@ -13,7 +14,6 @@ from campaigns.runs import execute, kill_grace
 from campaigns.sampling import sample
 from campaigns.sandbox import Sandbox
 from campaigns.testing import SyntheticModel
-from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 FAULTS = {("ds2", 3): "raise", ("ds4", 1): "nan", ("ds6", 2): "hang", ("ds5", 0): "diverge"}
 

@@ -14,13 +14,13 @@ import tomllib
 
 import numpy as np
 import pytest
+from campaign_helpers import SYNTHETIC_SPEC
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import campaigns
 from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError, validate_spec
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
-from campaign_helpers import SYNTHETIC_SPEC
 
 CI = settings(max_examples=25, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 BASE = tomllib.loads(SYNTHETIC_SPEC.read_text())

@@ -19,8 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 import campaigns
+from app.cli import main
 from campaigns import budget, execution
 from campaigns.replay import replay_run
 from campaigns.runs import execute, kill_grace, run_function_name
@@ -29,8 +31,6 @@ from campaigns.sandbox import Sandbox
 from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError
 from campaigns.storage import CampaignError, OutputLock, atomic_write, load_chunk
 from campaigns.testing import SyntheticModel, synthetic_run
-from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
-from app.cli import main
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

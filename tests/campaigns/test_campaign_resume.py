@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 import campaigns
 from campaigns.testing import SyntheticModel, synthetic_run
-from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 # Every run of data sets ds6 and ds5 hangs (far past the 600 s budget): the driver can finish ds2 and ds4
 # but never the campaign, so it is always killed mid-way, however fast or slow the machine is.

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from campaign_helpers import SYNTHETIC_SPEC, load
 from scipy import stats
 
 from campaigns.execution import build_request
 from campaigns.sampling import draw, noise_generator, run_seed_sequence, sample, sample_run
 from campaigns.spec import Distribution
-from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def test_each_run_replays_alone():

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from campaign_helpers import SYNTHETIC_SPEC, load
 from SALib.analyze import rbd_fast
 from scipy import stats
 
@@ -20,7 +21,6 @@ from campaigns.runs import execute
 from campaigns.sampling import sample
 from campaigns.sensitivity import _easi_order, _first_order_of_signals, first_order
 from campaigns.testing import NOISE_SIGMA, TEMPERATURE_SLOPE, synthetic_run
-from campaign_helpers import SYNTHETIC_SPEC, load
 
 
 def ishigami(X, a=7.0, b=0.1):

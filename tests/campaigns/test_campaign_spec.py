@@ -6,11 +6,11 @@ import math
 from pathlib import Path
 
 import pytest
+from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
 from campaigns.spec import HALF_RANGE_SIGMAS, SpecError
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
-from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import xarray as xr
-
 from campaign_helpers import SYNTHETIC_SPEC, load
 
 

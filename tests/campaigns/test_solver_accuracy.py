@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.comparison import compare_features
 from app.studies.charts import campaign_accuracy_chart
+from campaigns.comparison import compare_features
 
 
 def _results(values):

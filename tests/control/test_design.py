@@ -33,8 +33,9 @@ def test_margins_and_cascade_separation(designs):
 
 def test_speed_loop_below_torsional_mode(bench, designs):
     """The 58 Hz speed crossover stays well below the ~350 Hz torsional mode of couplings + torque meter."""
-    from twin.control.design import _reflected_inertias, torsional_stiffness
     import math
+
+    from twin.control.design import _reflected_inertias, torsional_stiffness
 
     j1, j2 = _reflected_inertias(bench.values())
     mode_hz = math.sqrt(torsional_stiffness(bench.values()) * (1 / j1 + 1 / j2)) / (2 * math.pi)

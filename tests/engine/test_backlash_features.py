@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import twin
-from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
-from twin.layout import K
 from twin.engine.model import build_model, contact_position_for_force
+from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
 from twin.fidelity import resolve_fidelity
+from twin.layout import K
 
 UM = 1e-6
 SIGNALS = ["nut1_position", "screw_equivalent_position", "linear_encoder_position", "screw_angle_measured"]
@@ -23,7 +23,7 @@ FEATURES = ["backlash_feature", "backlash_feature_true", "backlash_hysteresis", 
 
 def _accumulated(sled, screw, threshold):
     acc = np.zeros(N_ACCUMULATORS)
-    for k, (x, s) in enumerate(zip(sled, screw)):
+    for k, (x, s) in enumerate(zip(sled, screw, strict=False)):
         accumulate(acc, x, s, k == 0, threshold)
     return finish(acc, len(sled))
 

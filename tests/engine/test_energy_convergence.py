@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
+from bench_helpers import plant_fidelity
 from scipy.stats import linregress
 
 from twin.engine.energy import mechanical_energy
-from bench_helpers import plant_fidelity
-from twin.fidelity import resolve_fidelity
 from twin.engine.integrators import INTEGRATORS, ORDER, step, work_array
-from twin.layout import N_INPUTS, S
 from twin.engine.model import build_model
+from twin.fidelity import resolve_fidelity
+from twin.layout import N_INPUTS, S
 
 LOSSLESS = {
     "motor.viscous_damping": 0.0, "motor.friction_static_torque": 0.0, "motor.friction_dynamic_torque": 0.0,

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import twin
-from twin.layout import K
 from twin.engine.model import build_model
 from twin.errors import OptionError, SimulationFailed
 from twin.fidelity import resolve_fidelity
+from twin.layout import K
 from twin.physics.ball_screw import helix_angle, stiffness_at
 from twin.physics.groove import groove_radius
 from twin.physics.hertz import FORMULA_ISO, FORMULA_THESIS, ball_groove_stiffness, equivalent_modulus

@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
+from bench_helpers import plant_fidelity
 
 import twin
-from bench_helpers import plant_fidelity
 from twin.engine.model import build_model, contact_position_for_force
 from twin.fidelity import resolve_fidelity
 

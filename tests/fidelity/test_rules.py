@@ -1,11 +1,10 @@
 """Automatic fidelity selection: rules as data, each decision explained, bad input refused."""
 
-import numpy as np
 import pytest
 
 import twin
-from twin.layout import N_STATES, S
 from twin.fidelity import SUBSYSTEMS, load_rules, resolve_fidelity
+from twin.layout import N_STATES, S
 
 
 def test_every_subsystem_decided_and_explained(bench):

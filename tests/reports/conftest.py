@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
@@ -14,7 +14,7 @@ from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
 SPEC = Path(__file__).parent / "data" / "campaign.toml"
 #: Runs that fail, one per failure kind the runner records without waiting for a timeout.
 FAULTS = {("ds2", 3): "raise", ("ds4", 5): "nan", ("ds6", 7): "diverge"}
-GENERATED_AT = datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
+GENERATED_AT = datetime(2026, 1, 2, 3, 4, 5, tzinfo=UTC)
 
 
 @pytest.fixture(scope="session")

@@ -48,16 +48,16 @@ def layout_problems(fig) -> list[str]:
             low, high = sorted(axis.get_view_interval())
             span = (high - low) * 1e-9
             # the locator may place ticks beyond the view limits; only those within are drawn
-            texts = [t for loc, t in zip(axis.get_majorticklocs(), axis.get_majorticklabels())
+            texts = [t for loc, t in zip(axis.get_majorticklocs(), axis.get_majorticklabels(), strict=False)
                      if low - span <= loc <= high + span and t.get_visible() and t.get_text()]
             offset = axis.get_offset_text()
             if offset.get_visible() and offset.get_text():
                 texts.append(offset)
             boxes = [t.get_window_extent(renderer).shrunk(0.97, 0.97) for t in texts]
-            for i, (text, box) in enumerate(zip(texts, boxes)):
+            for i, (text, box) in enumerate(zip(texts, boxes, strict=False)):
                 if outside(box):
                     problems.append(f"axes {k}: {name} tick label {text.get_text()!r} leaves the figure")
-                for other, other_box in zip(texts[i + 1:], boxes[i + 1:]):
+                for other, other_box in zip(texts[i + 1:], boxes[i + 1:], strict=False):
                     if box.overlaps(other_box):
                         problems.append(f"axes {k}: {name} tick labels {text.get_text()!r} and {other.get_text()!r} overlap")
         for text in (ax.title, ax.xaxis.label, ax.yaxis.label):
@@ -96,7 +96,7 @@ def _build(inputs):
     blocks = [b for s in report.sections for b in (*report.executive, *s.blocks) if type(b).__name__ == "Figure"]
     blocks = sorted({b.number: b for b in blocks}.values(), key=lambda b: b.number)
     assert len(blocks) == len(drawn)
-    return report, list(zip(blocks, drawn)), builder.Builder(inputs)
+    return report, list(zip(blocks, drawn, strict=False)), builder.Builder(inputs)
 
 
 def _with_long_names(inputs):

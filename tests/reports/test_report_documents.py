@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import matplotlib.image
@@ -74,7 +74,7 @@ def test_pdf_title_page_contents_sections_and_figures(report):
 
 
 def test_same_input_gives_the_same_html_apart_from_the_timestamp(campaign, report, generated_at, tmp_path):
-    later = datetime(2027, 6, 7, 8, 9, 10, tzinfo=timezone.utc)
+    later = datetime(2027, 6, 7, 8, 9, 10, tzinfo=UTC)
     other = reports.build_report(campaign, out_dir=tmp_path, generated_at=later)
     first, second = report["html"].read_text(encoding="utf-8"), other["html"].read_text(encoding="utf-8")
     assert first != second

@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 
 import twin
-from twin.layout import S
 from twin.engine.model import build_model, contact_position_for_force
 from twin.errors import OptionError, SceneError
 from twin.fidelity import resolve_fidelity
+from twin.layout import S
 from twin.scenes import CONDITIONS
-
 
 
 @pytest.mark.parametrize("name", [f"ds{k}" for k in range(1, 8)] + ["nominal"])

@@ -4,12 +4,18 @@ import math
 
 import numba
 import numpy as np
-
 from bench_helpers import bench_sensors
+
 from sensors.acquisition import draw_uniform_noise
 from sensors.analog import AN_NOISE_HALF_WIDTH, AS_SIZE, analog_init, analog_read, analog_step
-from sensors.encoder import ENC_STATE_SIZE, encoder_init, encoder_reading, encoder_speed, encoder_step
-from sensors.encoder import linear_encoder_parameters
+from sensors.encoder import (
+    ENC_STATE_SIZE,
+    encoder_init,
+    encoder_reading,
+    encoder_speed,
+    encoder_step,
+    linear_encoder_parameters,
+)
 from sensors.hall import hall_current_step
 from sensors.resolver import resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters

@@ -5,8 +5,8 @@ import math
 import numba
 import numpy as np
 import pytest
-
 from bench_helpers import bench_sensors
+
 from sensors.encoder import (
     ENC_EDGE,
     ENC_PERIOD,

@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from bench_helpers import bench_sensors
+
 from sensors.encoder import (
     ENC_RESOLUTION,
     ENC_STATE_SIZE,

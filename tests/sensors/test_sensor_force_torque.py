@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from bench_helpers import bench_sensors
+
 from sensors.acquisition import convert
 from sensors.analog import (
     AN_DAQ_BITS,

@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from bench_helpers import bench_sensors
+
 from sensors.resolver import RES_OFFSET, RES_RESOLUTION, resolver_angle, resolver_parameters
 
 ARCMIN = math.pi / 10800

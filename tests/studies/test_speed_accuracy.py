@@ -4,13 +4,13 @@ the reference path and the work-precision data round trip (the stability limits:
 import numpy as np
 import pytest
 import xarray as xr
+from bench_helpers import plant_fidelity
 from scipy.stats import linregress
 
 import twin
-from bench_helpers import plant_fidelity
-from twin.engine.integrators import ORDER
 from app.studies.accuracy import replot
 from app.studies.work_precision import errors, run_study
+from twin.engine.integrators import ORDER
 
 SMOOTH = {"reducer.backlash": 0.0}  # no contact transitions: the torsional joint never opens
 

@@ -6,10 +6,10 @@ import pytest
 import xarray as xr
 
 import twin
-from twin.engine.linearize import highest_frequency, jacobian
 from app.studies import accuracy
 from app.studies.control_baseline import compare
 from app.studies.stability import THEORY, loaded_scene, loaded_state, stability_map
+from twin.engine.linearize import highest_frequency, jacobian
 
 
 @pytest.fixture(scope="module")

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import quad
 
-from twin.layout import K, S
 from twin.engine.model import contact_force
 from twin.engine.plant import nut_relative_position
+from twin.layout import K, S
 from twin.physics.coupling import elasto_backlash_energy
 
 

@@ -29,8 +29,8 @@ current monitor          Hall-sensor current         acquisition
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 import numba
 import numpy as np
@@ -62,8 +62,8 @@ from sensors.encoder import (
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
-from twin.layout import K, S
 from twin.engine.plant import sensed_current
+from twin.layout import K, S
 
 LINEAR_ENCODER = 0
 TORQUE_METER_ENCODER = 1

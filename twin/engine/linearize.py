@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.layout import N_INPUTS
 from twin.engine.plant import rhs
+from twin.layout import N_INPUTS
 
 
 def jacobian(model, y: np.ndarray, t: float = 0.0, u: np.ndarray | None = None) -> np.ndarray:

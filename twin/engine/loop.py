@@ -13,8 +13,16 @@ import numpy as np
 from sensors.acquisition import convert
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
-from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.engine.integrators import WORK_VECTORS, step
+from twin.engine.plant import (
+    external_force,
+    internal_forces,
+    nut_relative_position,
+    preload_between_nuts,
+    sensed_current,
+    transmitted_torque,
+)
+from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.layout import (
     N_INPUTS,
     N_MEASURED,
@@ -27,14 +35,6 @@ from twin.layout import (
     S,
     Signal,
     U,
-)
-from twin.engine.plant import (
-    external_force,
-    internal_forces,
-    nut_relative_position,
-    preload_between_nuts,
-    sensed_current,
-    transmitted_torque,
 )
 from twin.physics.ball_screw import contact_geometry
 from twin.physics.pneumatics import hysteresis_play

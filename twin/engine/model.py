@@ -10,6 +10,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from twin.control.force_loop_design import operating_point
+from twin.errors import SceneError
 from twin.layout import (
     CONTACT_LEVELS,
     CONTACT_LINEAR,
@@ -33,7 +34,6 @@ from twin.physics.ball_screw import (
 )
 from twin.physics.drivetrain import screw_inertia, screw_mass, torsional_stiffness
 from twin.physics.preload import series_stiffness
-from twin.errors import SceneError
 from twin.scenes import Scene
 
 CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}

@@ -20,9 +20,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW
-from twin.layout import N_INPUTS, STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOUNDS, STATUS_SOLVER_FAILED, S
 from twin.engine.loop import acquisition_sample, controller_init, guard, instruments_advance, record, speed_sample
 from twin.engine.plant import rhs
+from twin.layout import N_INPUTS, STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOUNDS, STATUS_SOLVER_FAILED, S
 
 METHODS = {"scipy_radau": "Radau", "scipy_lsoda": "LSODA", "scipy_bdf": "BDF", "scipy_rk45": "RK45"}
 

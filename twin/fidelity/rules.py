@@ -12,17 +12,17 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import Mapping
 
 import numpy as np
 
-from twin.layout import N_STATES, OUTPUT_NAMES, CONTACT_LEVELS, K, N_CONSTANTS
 from twin.engine.model import contact_constants, contact_position_for_force
 from twin.errors import OptionError
 from twin.fidelity.levels import SUBSYSTEMS, requested_levels
+from twin.layout import CONTACT_LEVELS, N_CONSTANTS, N_STATES, OUTPUT_NAMES, K
 from twin.parameters import ParameterSet
 from twin.scenes import Scene
 from twin.scenes.profiles import profile_values

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Iterator, Mapping
 
 from twin.errors import ParameterError
 
@@ -100,7 +100,7 @@ class ParameterSet(Mapping[str, Parameter]):
         """Plain ``{name: value}`` dictionary (SI units)."""
         return {n: p.value for n, p in self._parameters.items()}
 
-    def with_values(self, overrides: Mapping[str, float]) -> "ParameterSet":
+    def with_values(self, overrides: Mapping[str, float]) -> ParameterSet:
         """Return a copy with some values replaced; every override is validated.
 
         Raises

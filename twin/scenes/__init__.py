@@ -13,14 +13,15 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, Mapping, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from twin.layout import OUTPUT_NAMES
 from twin.errors import SceneError
+from twin.layout import OUTPUT_NAMES
 from twin.scenes.profiles import compile_profile
 from twin.tomlfiles import read_inheriting
 
@@ -161,11 +162,11 @@ class Scene:
     def condition(self, name: str):
         return self.conditions[name]
 
-    def with_conditions(self, overrides: Mapping[str, Any]) -> "Scene":
+    def with_conditions(self, overrides: Mapping[str, Any]) -> Scene:
         """Copy with some conditions replaced (validated; all problems reported at once)."""
         return replace(self, conditions={**self.conditions, **overrides})
 
-    def with_duration(self, duration: float) -> "Scene":
+    def with_duration(self, duration: float) -> Scene:
         return replace(self, duration=duration)
 
     def position_table(self) -> np.ndarray:
