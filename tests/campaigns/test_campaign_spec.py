@@ -9,8 +9,9 @@ import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
-from campaigns.spec import HALF_RANGE_SIGMAS, SpecError
+from campaigns.spec import SpecError
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.units import HALF_RANGE_SIGMAS
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

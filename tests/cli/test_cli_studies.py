@@ -10,9 +10,9 @@ import pytest
 import xarray as xr
 from scipy.stats import linregress
 
+from app import cli
 from campaigns import fidelity_audit
 from campaigns.scene_audit import THESIS_SPEC
-from twin import cli
 
 
 def run(*args):
