@@ -15,7 +15,8 @@ import pytest
 import campaigns
 from campaigns.analysis import analysis_dataset
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
-from reports import builder, content, figures
+from reports import content, figures
+from reports.builder import Builder
 from reports.inputs import load_inputs
 
 DATA = Path(__file__).parent / "data"
@@ -96,7 +97,7 @@ def _build(inputs):
     blocks = [b for s in report.sections for b in (*report.executive, *s.blocks) if type(b).__name__ == "Figure"]
     blocks = sorted({b.number: b for b in blocks}.values(), key=lambda b: b.number)
     assert len(blocks) == len(drawn)
-    return report, list(zip(blocks, drawn, strict=False)), builder.Builder(inputs)
+    return report, list(zip(blocks, drawn, strict=False)), Builder(inputs)
 
 
 def _with_long_names(inputs):
@@ -202,7 +203,7 @@ def test_labels_from_the_stored_effective_scenes(demo_like):
                   "external_force_peak": {"value": 4000.0 if d == "ds3" else 0.0, "unit": "N"}} for d in builder.datasets}
     results = builder.results.assign_attrs(dataset_conditions=json.dumps(stored))
     inputs = dataclasses.replace(builder.inputs, results=results)
-    relabelled = builder.Builder(inputs)
+    relabelled = Builder(inputs)
     assert relabelled.describe("ds3") == "ds3 (backlash 0 µm, external force 4 kN, zero procedure hard stop)"
     assert relabelled.describe("ds2") == "ds2 (backlash 80 µm, external force 0 kN, zero procedure index pulse)"
     assert relabelled.conditions.common_text() == "room temperature 298 K"
