@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 import xarray as xr
+from campaign_helpers import data_variables
 
 import campaigns
-from campaign_helpers import data_variables
 
 THESIS_SPEC = Path(campaigns.__file__).parent / "specs" / "thesis_backlash.toml"
 RUNS = 2
