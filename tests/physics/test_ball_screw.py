@@ -26,8 +26,8 @@ Z = 22.0
 def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0, linear_stiffness=None):
     """Axial nut force at the contact level: variable or constant angle Hertz, or linear if a stiffness is given."""
     model = CONTACT_LINEAR if linear_stiffness is not None else (CONTACT_VARIABLE_ANGLE if variable else CONTACT_CONSTANT_ANGLE)
-    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, A0 * math.cos(ALPHA0), A0 * math.sin(ALPHA0), K_CONST,
-                           math.sin(ALPHA0), 0.2, damping, Z, model, linear_stiffness or 0.0)
+    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z,
+                           model, linear_stiffness or 0.0)
 
 
 def test_helix_angle_matches_table_7_5():

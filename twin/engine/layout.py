@@ -213,8 +213,6 @@ class K(IntEnum):
     CURRENT_LOOP_TAU = 119    # s, time constant of the ideal current loop (1 / (2 pi bandwidth))
     NUT_ROTATION = 120        # 1.0 = nut roll on the guides integrated, 0.0 = rigid guides
     LINEAR_CONTACT_STIFFNESS = 121  # N/m per sphere along the normal, the "linear" contact level
-    CONTACT_RADIAL_0 = 122    # A0 cos(alpha_0) [m]: constant projections of the groove-centre distance (Eq. 9.4),
-    CONTACT_AXIAL_0 = 123     # A0 sin(alpha_0) [m]  computed once per run instead of per contact evaluation
 
 N_CONSTANTS = len(K)
 

@@ -36,7 +36,7 @@ from twin.engine.plant import (
     sensed_current,
     transmitted_torque,
 )
-from twin.physics.ball_screw import contact_approach
+from twin.physics.ball_screw import contact_geometry
 from twin.physics.pneumatics import hysteresis_play
 from twin.scenes.profiles import profile_value
 
@@ -60,8 +60,7 @@ def guard(x, c):
     for nut in (0, 1):
         gap = abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
         if gap > 0.0:
-            approach, _ = contact_approach(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0],
-                                           c[K.CONTACT_AXIAL_0])
+            approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
             if approach > c[K.MAX_NORMAL_APPROACH]:
                 return 6
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:

@@ -201,8 +201,6 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.COS_HELIX] = math.cos(alpha_e)
     c[K.CENTRE_DISTANCE] = groove_centre_distance(ball_radius, p["ball_screw.conformity"])
     c[K.CONTACT_ANGLE_0] = alpha_0
-    c[K.CONTACT_RADIAL_0] = c[K.CENTRE_DISTANCE] * math.cos(alpha_0)
-    c[K.CONTACT_AXIAL_0] = c[K.CENTRE_DISTANCE] * math.sin(alpha_0)
     sin_min = math.sin(alpha_0)
     sin_grid = np.linspace(sin_min, SIN_ALPHA_MAX, STIFFNESS_FIT_POINTS)
     groove_radius = 2.0 * p["ball_screw.conformity"] * ball_radius
@@ -307,7 +305,7 @@ def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
 def contact_force(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
     """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N]."""
     return nut_axial_force(relative_position, 0.0, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE],
-                           c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+                           c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
                            0.0, c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])[0]
 
 

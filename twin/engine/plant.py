@@ -55,9 +55,8 @@ def nut_contact(x, c, stiffness_poly, nut):
     ``K.CONTACT_MODEL``."""
     force, normal, _ = nut_axial_force(
         nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
-        c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], stiffness_poly, c[K.SIN_ALPHA_MIN],
-        c[K.SIN_ALPHA_SPAN], c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]),
-        c[K.LINEAR_CONTACT_STIFFNESS])
+        c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+        c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
     return force, normal
 
 

@@ -62,17 +62,9 @@ def contact_geometry(axial_interference, centre_distance, contact_angle_0):
     -------
     (delta_n, sin_alpha)
     """
-    return contact_approach(axial_interference, centre_distance, centre_distance * math.cos(contact_angle_0),
-                            centre_distance * math.sin(contact_angle_0))
-
-
-@numba.njit(cache=True)
-def contact_approach(axial_interference, centre_distance, radial_0, axial_0):
-    """:func:`contact_geometry` with the projections of ``A0`` at the design angle given:
-    ``radial_0 = A0 cos(alpha_0)``, ``axial_0 = A0 sin(alpha_0)`` (constants of a run, so the
-    compiled loop does not evaluate two trigonometric functions per contact and per call)."""
-    axial = axial_0 + axial_interference
-    distance = math.sqrt(radial_0 * radial_0 + axial * axial)
+    radial = centre_distance * math.cos(contact_angle_0)
+    axial = centre_distance * math.sin(contact_angle_0) + axial_interference
+    distance = math.sqrt(radial * radial + axial * axial)
     return distance - centre_distance, axial / distance
 
 
@@ -95,8 +87,8 @@ def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
 
 @numba.njit(cache=True)
 def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance,
-                    contact_radial_0, contact_axial_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span,
-                    damping_b_h, loaded_balls, contact_model, linear_stiffness):
+                    contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h,
+                    loaded_balls, contact_model, linear_stiffness):
     """Axial force of the screw on one nut (Eqs. 9.4-9.6, 7.28, 7.29, 7.54, 5.5).
 
     Parameters
@@ -107,14 +99,12 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         Total axial play ``b`` of the nut [m].
     cos_helix : float
         ``cos(alpha_e)``.
-    centre_distance : float
-        ``A0`` [m].
-    contact_radial_0, contact_axial_0 : float
-        ``A0 cos(alpha_0)`` and ``A0 sin(alpha_0)`` [m] (:func:`contact_approach`).
+    centre_distance, contact_angle_0 : float
+        ``A0`` [m], ``alpha_0`` [rad].
     stiffness_coefficients : 1-D array
         Polynomial fit of the series Hertz stiffness ``K`` [N/m^1.5] (:func:`stiffness_at`).
     sin_alpha_min, sin_alpha_span : float
-        Range of ``sin(alpha)`` covered by the fit; it starts at the design angle, ``sin_alpha_min = sin(alpha_0)``.
+        Range of ``sin(alpha)`` covered by the fit.
     damping_b_h : float
         ``b_h`` of Eq. 7.54.
     loaded_balls : float
@@ -134,13 +124,13 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
     """
     gap = abs(relative_position) - 0.5 * backlash
     if gap <= 0.0:
-        return 0.0, 0.0, sin_alpha_min
+        return 0.0, 0.0, math.sin(contact_angle_0)
     side = 1.0 if relative_position > 0.0 else -1.0
     delta_a = gap * cos_helix
     if contact_model == 1:
-        delta_n, sin_alpha = contact_approach(delta_a, centre_distance, contact_radial_0, contact_axial_0)
+        delta_n, sin_alpha = contact_geometry(delta_a, centre_distance, contact_angle_0)
     else:
-        sin_alpha = sin_alpha_min
+        sin_alpha = math.sin(contact_angle_0)
         delta_n = delta_a * sin_alpha
     stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
     elastic = linear_stiffness * delta_n if contact_model == 2 else elastic_force(stiffness, delta_n)

@@ -4,10 +4,6 @@ import math
 
 import numba
 
-#: ``tanh(r)`` is exactly +-1 in double precision for ``|r| >= 22`` (C99/glibc ``tanh`` returns +-1 there):
-#: beyond it the regularised sign is taken without the call, with bit-identical results.
-TANH_UNIT = 22.0
-
 
 @numba.njit(cache=True)
 def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
@@ -38,6 +34,4 @@ def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
         Friction force/torque, opposing ``v`` (positive for ``v > 0``).
     """
     coulomb = dynamic + (static - dynamic) * math.exp(-stribeck_rate * abs(v))
-    ratio = v / v_threshold
-    sign = math.copysign(1.0, ratio) if abs(ratio) >= TANH_UNIT else math.tanh(ratio)
-    return coulomb * sign + viscous * v
+    return coulomb * math.tanh(v / v_threshold) + viscous * v
