@@ -100,7 +100,7 @@ def main() -> None:
     from twin.studies.control_baseline import DURATION, compare
 
     rows = compare()
-    compiled = next(r for r in rows if r["method"].startswith("rk4"))
+    compiled = next(r for r in rows if r["method"].startswith("compiled rk4"))
     print(f"python-control on the open-loop plant ({DURATION:g} s current step; wall time, the same problem solved by "
           "each; error = max |nut position error|):")
     for row in rows:

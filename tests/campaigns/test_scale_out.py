@@ -28,8 +28,9 @@ START_TIMEOUT = 120.0  # s: a scheduler and two workers import dask and the twin
 
 def _dask(*args: str, log: Path) -> subprocess.Popen:
     """A ``dask`` command-line process of this interpreter's environment, its output in ``log``."""
-    return subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=log.open("w"), stderr=subprocess.STDOUT,
-                            env=dict(os.environ), start_new_session=True)
+    with log.open("w") as handle:  # the child keeps its own descriptor
+        return subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=handle, stderr=subprocess.STDOUT,
+                                env=dict(os.environ), start_new_session=True)
 
 
 def _wait_for(condition, what: str, logs: list[Path]) -> None:
