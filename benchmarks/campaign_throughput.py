@@ -5,6 +5,13 @@ Usage::
     python benchmarks/campaign_throughput.py --synthetic --runs 200 --delay 0.005
     python benchmarks/campaign_throughput.py --runs 10          # the real bench (demo spec)
     python benchmarks/campaign_throughput.py --quick            # synthetic model, 10 runs per data set
+    python benchmarks/campaign_throughput.py --thesis 60        # the thesis study end to end, 7 x 60 runs
+
+``--thesis N`` times the thesis spec (campaigns/specs/thesis_backlash.toml, N runs per data set) end to
+end on a fresh local cluster of 2 workers, stage by stage (compilation check, cluster start, runs with
+storage, the fidelity audit, the analysis), and prints runs/s over the whole and the estimate for the
+full 7 x 1000 study (the runs stage scaled to 7000 runs, the other stages as measured: the audit re-runs
+the same 10 runs per data set whatever N).
 
 For each worker count a local cluster is started first and warmed up (worker
 and sandbox start-up are not campaign throughput); the campaign then runs on it
@@ -109,6 +116,43 @@ def measure(args, workers: int, tmp: Path) -> dict:
     }
 
 
+THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 16)
+
+
+def thesis_end_to_end(runs: int, workers: int, tmp: Path) -> None:
+    """Run the thesis spec with ``runs`` runs per data set, end to end, and print the stages and the rates."""
+    spec = campaigns.load_spec(SPECS / "thesis_backlash.toml", runs=runs)
+    marks: list[tuple[str, float]] = []
+    start = time.perf_counter()
+    results = campaigns.run_campaign(spec, tmp / "thesis", workers=workers, progress=False,
+                                     announce=lambda stage, message: marks.append((stage, time.perf_counter())))
+    marks.append(("analysis", time.perf_counter()))
+    campaigns.analyze(results)
+    end = time.perf_counter()
+    marks.append(("end", end))
+    stages = {stage: marks[k + 1][1] - at for k, (stage, at) in enumerate(marks[:-1])}
+    stages = {"start-up before the first stage": marks[0][1] - start, **stages}
+    n = runs * len(spec.datasets)
+    with xr.open_dataset(results) as ds:
+        ok = int((ds["status"] == "ok").sum())
+        compute = float(ds["wall_time"].sum())
+        audit = ds.attrs.get("fidelity_audit", "not run")
+    total = end - start
+    print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, "
+          f"end to end {total:.1f} s:")
+    for stage, seconds in stages.items():
+        print(f"  {stage:32s} {seconds:8.1f} s  {100 * seconds / total:5.1f} %")
+    print(f"  mean run {1e3 * compute / n:.0f} ms wall inside the workers; fidelity audit: {audit}")
+    rate = n / total
+    verdict = "met" if rate >= THESIS_TARGET else "not met"
+    print(f"end to end: {rate:.2f} runs/s; target >= {THESIS_TARGET:g} runs/s: {verdict}")
+    runs_stage = stages.get("runs", float("nan"))
+    full = 7 * 1000
+    estimate = total - runs_stage + runs_stage * full / n
+    print(f"estimate for 7 x 1000: {estimate / 60:.1f} min ({full / estimate:.2f} runs/s; the runs stage scaled, "
+          "the other stages as measured)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=200, help="runs per data set (default 200)")
@@ -116,8 +160,14 @@ def main() -> None:
     parser.add_argument("--delay", type=float, default=0.005, help="synthetic compute time per run [s] (default 0.005)")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts to compare (default 1 2)")
     parser.add_argument("--quick", action="store_true", help="synthetic model, 10 runs per data set (seconds)")
+    parser.add_argument("--thesis", type=int, metavar="N",
+                        help="time the thesis spec end to end with N runs per data set")
     args = parser.parse_args()
     header("campaign throughput", args.quick)
+    if args.thesis:
+        with tempfile.TemporaryDirectory() as tmp:
+            thesis_end_to_end(args.thesis, max(args.workers), Path(tmp))
+        return
     if args.quick:
         args.synthetic, args.runs = True, 10
     model = f"synthetic (delay {args.delay:g} s)" if args.synthetic else "bench twin (demo spec)"
