@@ -209,7 +209,7 @@ def run_campaign(
     announce = announce or (lambda stage, message: None)
     bench = run_function is None
     if bench:
-        from campaigns.bench import dataset_conditions, warm_up
+        from campaigns.bench import dataset_conditions, margin_variables, warm_up
         from campaigns.bench import simulate_run as run_function
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
     with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
@@ -235,11 +235,13 @@ def run_campaign(
                 with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
                     _execute(client, spec, samples, pending, run_function, store, bar)
         attrs = {"run_function": run_function_name(run_function)}
+        margins = {}
         if bench:
             conditions, base = dataset_conditions(spec)
             attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
+            margins = margin_variables(spec, lambda d, i: build_request(spec, samples, d, i))
         results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                           "workers": scheduler or workers}, attrs)
+                                           "workers": scheduler or workers}, attrs, margins)
         from campaigns.fidelity_audit import audit_campaign  # imports this module's run_campaign through solver_accuracy
 
         if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":

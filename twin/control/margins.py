@@ -50,10 +50,15 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.signal import tf2ss
 from threadpoolctl import ThreadpoolController
 
-from twin.control.design import current_closed_loop, screw_kinematics_gain, two_mass_speed_plant, winding_admittance
+from twin.control.design import (
+    current_closed_loop,
+    hall_sensor,
+    screw_kinematics_gain,
+    two_mass_speed_plant,
+    winding_admittance,
+)
 from twin.control.force_loop_design import linearised_matrices
 
 __all__ = ["LOOPS", "METRICS", "LoopMargins", "frequency_grid", "loop_margins", "loop_responses", "loop_systems",
@@ -70,7 +75,7 @@ METRICS = {
 }
 #: Points of the frequency grid per decade: |S|max between two points is under-read by < 0.1 % for
 #: the loops' resonance widths (checked against python-control in the tests).
-POINTS_PER_DECADE = 200
+POINTS_PER_DECADE = 100
 #: Lowest frequency of the grid [Hz], far below every crossover (the force loop's ~10 Hz is the lowest
 #: besides the position loop's 6 Hz).
 LOWEST_HZ = 0.05
@@ -105,6 +110,8 @@ def frequency_grid(sample_time: float) -> np.ndarray:
 
 def _ss(num, den):
     """Controllable-form state space of a proper transfer function (polynomials in s)."""
+    from scipy.signal import tf2ss  # lazy: scipy.signal costs ~1 s of start-up; only margin computations need it
+
     a, b, c, d = tf2ss(num, den)
     return a, b, c, d
 
@@ -213,7 +220,7 @@ def _force_plant(p, load_system, force):
 
 
 def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = None, force: float = 0.0, *,
-                   load_cell_refresh: bool = True) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+                   loops=LOOPS, load_cell_refresh: bool = True) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
     """Loop transfer functions ``L`` on :func:`frequency_grid`, as the twin runs the loops.
 
     Parameters
@@ -225,6 +232,8 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
         (:func:`twin.engine.model.load_system_parameters`); ``None``: no cylinder, no force loop.
     force : float
         Load-cell force the force loop holds (its working point) [N].
+    loops : sequence of str
+        The loops wanted (of :data:`LOOPS`; the speed loop is computed for the position loop anyway).
     load_cell_refresh : bool
         Include the load-cell conditioner's mean refresh delay in the force loop (False: the loop of
         :func:`loop_systems`, for cross-checks).
@@ -235,30 +244,31 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
         ``{loop: (sample_time [s], omega [rad/s], L(omega))}`` for the loops present.
     """
     out = {}
-    w = frequency_grid(0.0)
-    s = 1j * w
-    c_num, c_den = np.array([p["controller.current_kp"], p["controller.current_ki"]]), np.array([1.0, 0.0])
-    p_num, p_den = winding_admittance(p)
-    hall = 1.0 / (p["drive.hall_time_constant"] * s + 1.0)
-    out["current"] = (0.0, w, np.polyval(c_num, s) / np.polyval(c_den, s) * np.polyval(p_num, s)
-                      / np.polyval(p_den, s) * hall)
-
-    ts = p["drive.speed_loop_sample_time"]
-    w = frequency_grid(ts)
-    z = np.exp(1j * w * ts)
-    speed_plant = _speed_loop_discrete(p)
-    angle = _response(*speed_plant, np.zeros((1, 1)), z)
-    speed_pi = _pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z)
-    out["speed"] = (ts, w, speed_pi * (1.0 - 1.0 / z) / ts * angle)
+    if "current" in loops:
+        w = frequency_grid(0.0)
+        s = 1j * w
+        blocks = (winding_admittance(p), hall_sensor(p))
+        out["current"] = (0.0, w, (p["controller.current_kp"] + p["controller.current_ki"] / s)
+                          * np.prod([np.polyval(num, s) / np.polyval(den, s) for num, den in blocks], axis=0))
 
     t = p["controller.position_loop_sample_time"]
+    if "speed" in loops or "position" in loops:
+        ts = p["drive.speed_loop_sample_time"]
+        speed_plant = _speed_loop_discrete(p)
+    if "speed" in loops:
+        w = frequency_grid(ts)
+        z = np.exp(1j * w * ts)
+        angle = _response(*speed_plant, np.zeros((1, 1)), z)
+        out["speed"] = (ts, w, _pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z) * (1.0 - 1.0 / z) / ts
+                        * angle)
     w = frequency_grid(t)
     z = np.exp(1j * w * t)
-    a, b, c = _position_plant(p, speed_plant)
-    position = _response(a, b, c, np.zeros((1, 1)), z)
-    out["position"] = (t, w, _pi(p["controller.position_kp"], p["controller.position_ki"], t, z) * position)
+    if "position" in loops:
+        a, b, c = _position_plant(p, speed_plant)
+        position = _response(a, b, c, np.zeros((1, 1)), z)
+        out["position"] = (t, w, _pi(p["controller.position_kp"], p["controller.position_ki"], t, z) * position)
 
-    if load_system is not None:
+    if load_system is not None and "force" in loops:
         ad, bd, c = _force_plant(p, load_system, force)
         refresh_delay = 0.5 / p["sensors.load_cell_measuring_rate"] if load_cell_refresh else 0.0
         measured = _response(ad, bd, c, np.zeros((1, 1)), z) * np.exp(-1j * w * refresh_delay)
@@ -312,8 +322,8 @@ def _thread_pools() -> ThreadpoolController:
     return ThreadpoolController()
 
 
-def loop_margins(p: dict[str, float], load_system: dict[str, float] | None = None,
-                 force: float = 0.0) -> dict[str, LoopMargins]:
+def loop_margins(p: dict[str, float], load_system: dict[str, float] | None = None, force: float = 0.0, *,
+                 loops=LOOPS) -> dict[str, LoopMargins]:
     """Margins of every loop present (see :func:`loop_responses` for the arguments).
 
     BLAS/LAPACK run single-threaded here: on matrices this small the threads only synchronise, and on a
@@ -321,7 +331,7 @@ def loop_margins(p: dict[str, float], load_system: dict[str, float] | None = Non
     two OpenBLAS threads on the loaded 2-core machine, 20 us with one).
     """
     with _thread_pools().limit(limits=1):
-        responses = loop_responses(p, load_system, force, load_cell_refresh=True)
+        responses = loop_responses(p, load_system, force, loops=loops)
     return {loop: margins_from_response(loop, ts, w, response) for loop, (ts, w, response) in responses.items()}
 
 
@@ -334,9 +344,8 @@ def loop_systems(p: dict[str, float], load_system: dict[str, float] | None = Non
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
     out = {}
-    s = control.tf("s")
     out["current"] = (control.tf([p["controller.current_kp"], p["controller.current_ki"]], [1.0, 0.0])
-                      * control.tf(*winding_admittance(p)) / (p["drive.hall_time_constant"] * s + 1))
+                      * control.tf(*winding_admittance(p)) * control.tf(*hall_sensor(p)))
     ts = p["drive.speed_loop_sample_time"]
     speed_plant = _speed_loop_discrete(p)
     z = control.tf([1.0, 0.0], [1.0], ts)
