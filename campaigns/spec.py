@@ -26,6 +26,7 @@ import pydantic
 from pydantic import AfterValidator, BaseModel, PlainValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, SCENE_PREFIX, Catalog
+from campaigns.control_limits import ControlLimits
 from twin.errors import InputError
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
@@ -425,6 +426,7 @@ class CampaignSpec(_Strict):
     datasets: list[Dataset] = Field(min_length=1)
     uncertainties: list[Uncertainty] = []
     observability: Observability = Observability()
+    control_limits: ControlLimits = ControlLimits()
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
 
@@ -459,8 +461,15 @@ class CampaignSpec(_Strict):
         return [u.distribution_resolved for u in self.uncertainties]
 
     def canonical(self) -> dict:
-        """The spec with its resolved distributions, as plain JSON-ready data."""
-        return {"spec": self.model_dump(mode="json"), "resolved": [d.as_dict() for d in self.distributions()]}
+        """The spec with its resolved distributions, as plain JSON-ready data.
+
+        ``control_limits`` is left out when it holds the defaults, so specs written before the table
+        existed keep their hash (and their results directories).
+        """
+        spec = self.model_dump(mode="json")
+        if self.control_limits == ControlLimits():
+            del spec["control_limits"]
+        return {"spec": spec, "resolved": [d.as_dict() for d in self.distributions()]}
 
     def to_json(self) -> str:
         """Canonical JSON text (sorted keys): what the spec hash is computed on."""
