@@ -15,7 +15,7 @@ import re
 import numpy as np
 
 from campaigns.analysis import BACKLASH_REQUIREMENT
-from reports import figures
+from reports import control_robustness, figures
 from reports.conditions import dataset_conditions
 from reports.figures import MAX_TRACES, Group, Line, Panel
 from reports.inputs import Inputs
@@ -60,6 +60,7 @@ SECTION_TITLES = {
     "failures": "Failed runs",
     "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
+    "control_robustness": control_robustness.TITLE,
 }
 
 
@@ -196,6 +197,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
             ("failures", _failures),
             ("speed", _speed),
             ("fidelity", _fidelity),
+            ("control_robustness", control_robustness.blocks),
         )
     )
     status = b.results["status"].values
