@@ -114,8 +114,8 @@ def blocks(b):
                      _text(float(worst[d]), unit), f"{b.datasets[d]} run {run}", strongest))
     yield b.table(
         "Loop margins per data set: the range of the data sets' medians, the worst case over the campaign with its "
-        f"run, and the strongest Spearman correlation with {features[f_b]} over the data sets (95 % bootstrap interval, "
-        "runs used; ok runs with finite margin and feature). Quantiles of every data set are in analysis.nc "
+        f"run, and the strongest Spearman correlation with {features[f_b]} over the data sets (95 % bootstrap "
+        "interval, runs used; ok runs with finite margin and feature). Quantiles of every data set are in analysis.nc "
         "(margin_quantile).",
         ("Margin", "Median (data-set range)", "Worst", "Worst run", f"Spearman ρ with {features[f_b]}"), rows)
     violated = analysis["margin_limits_violated"].values

@@ -364,3 +364,29 @@ def loop_systems(p: dict[str, float], load_system: dict[str, float] | None = Non
     for loop in list(out):
         out[f"{loop}_closed"] = control.feedback(out[loop], 1)
     return out
+
+
+def nominal_table(parameters: str = "bench", *, force: float = 0.0, supply_pressure: float = 7.0e5,
+                  air_temperature: float = 298.15) -> list[LoopMargins]:
+    """Margins of every loop at a parameter set's nominal values (the table of ``docs/control_design.md``).
+
+    The force loop at ``force`` with the nominal scene's supply pressure and room temperature.
+    """
+    from twin.parameters import load_parameters
+
+    p = load_parameters(parameters).values()
+    load_system = {**p, "pneumatics.supply_pressure": supply_pressure, "pneumatics.air_temperature": air_temperature}
+    return list(loop_margins(p, load_system, force).values())
+
+
+def main() -> None:
+    print(f"{'loop':10s} {'Ts [s]':>10s} {'fc [Hz]':>9s} {'GM [dB]':>8s} {'PM [deg]':>8s} {'|S|max':>7s}")
+    for force in (0.0, 4000.0):
+        print(f"(force loop at {force:g} N)")
+        for m in nominal_table(force=force):
+            print(f"{m.loop:10s} {m.sample_time:10.3g} {m.crossover_frequency:9.2f} {m.gain_margin:8.2f} "
+                  f"{m.phase_margin:8.2f} {m.peak_sensitivity:7.3f}")
+
+
+if __name__ == "__main__":
+    main()
