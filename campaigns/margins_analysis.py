@@ -4,8 +4,8 @@ The bench adapter stores, per run, the gain margin, phase margin, crossover freq
 sensitivity ``|S|max`` of each control loop at the run's sampled parameters (variables with
 ``role = "margin"``, :func:`campaigns.bench.margin_variables`). Per data set this module computes
 
-* the distribution of each margin (quantiles, over every run whose margin is finite: the margins are
-  a property of the parameters, so failed runs count too);
+* the distribution of each margin (empirical quantiles, inverted CDF, over every run whose margin is not NaN:
+  the margins are a property of the parameters, so failed runs count too);
 * its worst case and the run that has it (smallest gain/phase margin and crossover, largest ``|S|max``);
 * its Spearman rank correlation with each feature (e.g. ``f_b``), with a percentile-bootstrap interval
   and ``n`` (runs that are ok with a finite feature and margin), by the analysis's own estimator;
@@ -139,7 +139,8 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             n_finite[d, m] = int(finite.sum())
             if not finite.any():
                 continue
-            quantiles[d, m] = np.quantile(values[d][finite], QUANTILES)
+            # empirical quantiles without interpolation: an infinite gain margin (no phase crossover) stays infinite
+            quantiles[d, m] = np.quantile(values[d][finite], QUANTILES, method="inverted_cdf")
             pick = np.argmin if WORST[metric] == "min" else np.argmax
             index = np.nonzero(finite)[0][pick(values[d][finite])]
             worst[d, m], worst_run[d, m] = values[d, index], runs[index]

@@ -107,9 +107,12 @@ def blocks(b):
             lower, upper = analysis["margin_spearman_ci"].sel(margin=name).values[k, f_b]
             n = int(analysis["margin_spearman_n"].sel(margin=name).values[k, f_b])
             strongest = f"{column[k]:+.2f} [{lower:+.2f}, {upper:+.2f}], n = {n} ({b.datasets[k]})"
+        elif np.isinf(worst).all():
+            strongest = "– (infinite: no phase crossover)"
         else:
             n = int(analysis["margin_spearman_n"].sel(margin=name).values[:, f_b].max())
-            strongest = f"– (constant margin, or n = {n} < {b.min_ok_runs})"
+            strongest = (f"– (at most {n} runs per data set; {b.min_ok_runs} needed)" if n < b.min_ok_runs
+                         else "– (the margin is constant)")
         rows.append((str(name), f"{_text(float(np.nanmin(median)), unit)} – {_text(float(np.nanmax(median)), unit)}",
                      _text(float(worst[d]), unit), f"{b.datasets[d]} run {run}", strongest))
     yield b.table(
