@@ -403,7 +403,7 @@ def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: 
                 ax.set_ylim(bottom, top)
                 ax.axhspan(*((bottom, limit) if side == "below" else (limit, top)), color="tab:red", alpha=0.08, lw=0)
             else:
-                ax.text(0.5, 0.5, note, transform=ax.transAxes, ha="center", va="center", fontsize=8)
+                ax.text(0.5, 0.75, note, transform=ax.transAxes, ha="center", va="center", fontsize=8)  # clear of the limit
             ax.axhline(limit, color="tab:red", ls="--", lw=1.0)
             ax.set_xticks(x, categories, rotation=90 if len(categories) > 4 else 0)
             ax.grid(False, axis="x")
