@@ -170,12 +170,18 @@ def _print_analysis(path: Path) -> None:
     import xarray as xr
 
     from campaigns.analysis import summary
+    from campaigns.margins_analysis import statements as margin_statements
 
     print(f"wrote {path}")
     with xr.open_dataset(path, engine="netcdf4") as analysis:
         statements, warnings = summary(analysis)
+        control = margin_statements(analysis)
     for line in statements:
         print(line)
+    if control:
+        print("control robustness (loop margins of every run against the design limits):")
+    for line in control:
+        print(f"  {line}")
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
 

@@ -7,7 +7,7 @@ do not, so the load average is printed with them):
    model build and result packaging included), median of ``--repeats`` runs after compilation;
 2. the solution paths on the same scene: the default, the other compiled integrators, the scipy
    reference path and python-control's ``input_output_response`` (on the open-loop plant, the part of
-   the model it can represent: ``twin.studies.control_baseline``), as CPU per simulated second, the
+   the model it can represent: ``app.studies.control_baseline``), as CPU per simulated second, the
    ratio to the default and the error of the Eq. 9.12 feature against a tight reference (RK4 at
    7.8125 us, converged to ~1e-4 um: docs/accuracy.md);
 3. the Eq. 9.12 feature error of the default on every thesis data set (ds1-ds7, at the thesis
@@ -25,7 +25,7 @@ import time
 from machine import header
 
 import twin
-from twin.engine.simulate import DEFAULT_DT, DEFAULT_INTEGRATOR
+from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR
 
 SINGLE_RUN_TARGET = 0.1        # s of CPU for the 10 s nominal scene (issue 16)
 FEATURE_TARGET = 0.1e-6        # m: the feature within 0.1 um of the tight reference on every data set
@@ -97,7 +97,7 @@ def main() -> None:
           f"{cost / scipy_duration:10.4f} {cost / scipy_duration / default_rate:10.2f} "
           f"{errors[FEATURES[0]] * 1e6:13.5f} {errors[FEATURES[1]] * 1e6:18.5f}")
     # lazy: python-control costs start-up time; only this baseline needs it
-    from twin.studies.control_baseline import DURATION, compare
+    from app.studies.control_baseline import DURATION, compare
 
     rows = compare()
     compiled = next(r for r in rows if r["method"].startswith("compiled rk4"))

@@ -26,6 +26,7 @@ from scipy import stats
 
 from campaigns import sensitivity
 from campaigns.files import atomic_write
+from campaigns.margins_analysis import control_robustness
 
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
@@ -642,7 +643,10 @@ def analysis_dataset(
         "requirement_units": "m",
         "requirement_source": REQUIREMENT_SOURCE,
     }
-    return analysis
+    robustness = control_robustness(results, correlate=bootstrap_correlation, verdict_rule=requirement_verdict,
+                                    features=features, n_boot=n_boot, confidence=confidence, seed=seed,
+                                    min_ok_runs=min_ok_runs)
+    return analysis.merge(robustness, combine_attrs="override")
 
 
 def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:

@@ -16,6 +16,8 @@ import numpy as np
 import twin
 from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
+from twin.control.margins import LOOPS, METRICS, loop_margins
+from twin.engine.model import load_system_parameters
 from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
@@ -44,12 +46,94 @@ def dataset_conditions(spec) -> tuple[dict, dict]:
         entries = {k: {"value": float(v) if isinstance(v, (int, float)) else str(v),
                        "unit": CONDITIONS[k][0] if k in CONDITIONS and isinstance(v, (int, float)) else ""}
                    for k, v in scene.conditions.items()}
-        times = np.linspace(0.0, scene.duration, 2001)
-        entries["external_force_peak"] = {"value": float(np.max(np.abs(profile_values(scene.force_table(), times)))), "unit": "N"}
+        entries["external_force_peak"] = {"value": force_demand_peak(scene), "unit": "N"}
         return entries
 
     datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_conditions(dict(d.conditions))) for d in spec.datasets}
     return datasets, described(_scene(spec.base.scene))
+
+
+def force_demand_peak(scene) -> float:
+    """The largest |force demand| of a scene [N], on 2001 instants over its duration."""
+
+
+    times = np.linspace(0.0, scene.duration, 2001)
+    return float(np.max(np.abs(profile_values(scene.force_table(), times))))
+
+
+#: Per-run loop margins stored in ``results.nc`` (role "margin"): ``{variable: (loop, metric)}``
+#: for every loop and figure of :mod:`twin.control.margins`.
+MARGIN_VARIABLES = {f"{loop}_loop_{metric}": (loop, metric) for loop in LOOPS for metric in METRICS}
+#: Variable holding why a run's margins are NaN (empty when all present loops were computed).
+MARGIN_NOTE = "loop_margins_note"
+
+
+def run_margins(request: RunRequest) -> tuple[dict[str, float], str]:
+    """Loop margins of one run's parameter set (:func:`twin.control.margins.loop_margins`).
+
+    The run's parameters and scene conditions as :func:`simulate_run` builds them; the force loop
+    only when the scene's cylinder is attached, linearised at the scene's peak force demand (the force
+    it holds) with the scene's supply pressure and air temperature. Never raises: a loop that cannot be
+    computed is NaN and the second return value says why (a property of the parameters, so a failed run
+    gets its margins too).
+
+    Returns
+    -------
+    (dict, str)
+        ``{variable of MARGIN_VARIABLES: value}`` and the note (empty when every present loop was computed).
+    """
+    values = dict.fromkeys(MARGIN_VARIABLES, math.nan)
+    notes = []
+    try:
+        scene = _scene(request.scene).with_conditions(request.conditions)
+        p = _parameters(request.parameters).with_values(request.parameter_values).values()
+    except Exception as exc:  # noqa: BLE001 - a bad parameter set is recorded, not raised
+        return values, f"parameters: {type(exc).__name__}: {exc}"
+    groups = [(("current", "speed", "position"), None, 0.0)]
+    if scene.condition("cylinder") == "detached":
+        notes.append("force loop: cylinder detached (no force loop)")
+    else:
+        try:
+            groups.append((("force",), load_system_parameters(p, scene), force_demand_peak(scene)))
+        except Exception as exc:  # noqa: BLE001
+            notes.append(f"force loop: {type(exc).__name__}: {exc}")
+    for loops, load_system, force in groups:
+        try:
+            margins = loop_margins(p, load_system, force, loops=loops)
+        except Exception as exc:  # noqa: BLE001 - recorded per loop group
+            notes.append(f"{'/'.join(loops)} loop: {type(exc).__name__}: {exc}")
+            continue
+        for name, (loop, metric) in MARGIN_VARIABLES.items():
+            if loop in margins:
+                values[name] = float(getattr(margins[loop], metric))
+    return values, "; ".join(notes)
+
+
+def margin_variables(spec, request_of) -> dict:
+    """``results.nc`` variables ``(dataset, run)`` of the loop margins of every run.
+
+    ``request_of(d, i)`` is the run's :class:`campaigns.runs.RunRequest`
+    (:func:`campaigns.execution.build_request`). Variables carry CF ``units``, ``long_name`` and
+    ``role = "margin"`` (not features: the feature machinery skips them); :data:`MARGIN_NOTE` holds
+    why a margin is NaN.
+    """
+
+    shape = (len(spec.datasets), spec.runs_per_dataset)
+    arrays = {name: np.full(shape, math.nan) for name in MARGIN_VARIABLES}
+    notes = np.full(shape, "", dtype=object)
+    for d in range(shape[0]):
+        for i in range(shape[1]):
+            values, notes[d, i] = run_margins(request_of(d, i))
+            for name, value in values.items():
+                arrays[name][d, i] = value
+    dims = ("dataset", "run")
+    out = {}
+    for name, (loop, metric) in MARGIN_VARIABLES.items():
+        unit, long_name = METRICS[metric]
+        out[name] = (dims, arrays[name], {"units": unit, "long_name": f"{loop} loop {long_name} (twin.control.margins)",
+                                          "role": "margin", "loop": loop, "metric": metric})
+    out[MARGIN_NOTE] = (dims, notes, {"long_name": "why loop margins are NaN (empty: every present loop computed)"})
+    return out
 
 
 def warm_up(spec) -> float:

@@ -233,11 +233,13 @@ def run_campaign(
                 with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
                     _execute(client, spec, samples, pending, run_function, store, bar)
         attrs = {"run_function": run_function_name(run_function)}
+        margins = {}
         if bench:
             conditions, base = bench_adapter.dataset_conditions(spec)
             attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
+            margins = bench_adapter.margin_variables(spec, lambda d, i: build_request(spec, samples, d, i))
         results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                           "workers": scheduler or workers}, attrs)
+                                           "workers": scheduler or workers}, attrs, margins)
         if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
             runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
             announce("fidelity audit", f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"

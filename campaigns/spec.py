@@ -36,6 +36,7 @@ from pydantic import (
 
 from campaigns.bench import BenchCatalog
 from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog
+from campaigns.control_limits import ControlLimits
 from campaigns.distributions import Distribution, DistributionKind
 from campaigns.ranges import resolve, shape_problems
 from twin.errors import InputError
@@ -290,6 +291,7 @@ class CampaignSpec(_Strict):
     datasets: list[Dataset] = Field(min_length=1)
     uncertainties: list[Uncertainty] = []
     observability: Observability = Observability()
+    control_limits: ControlLimits = ControlLimits()
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
     _condition_units: dict[str, str] = PrivateAttr(default_factory=dict)
@@ -332,8 +334,15 @@ class CampaignSpec(_Strict):
         return [u.distribution_resolved for u in self.uncertainties]
 
     def canonical(self) -> dict:
-        """The spec with its resolved distributions, as plain JSON-ready data."""
-        return {"spec": self.model_dump(mode="json"), "resolved": [d.as_dict() for d in self.distributions()]}
+        """The spec with its resolved distributions, as plain JSON-ready data.
+
+        ``control_limits`` is left out when it holds the defaults, so specs written before the table
+        existed keep their hash (and their results directories).
+        """
+        spec = self.model_dump(mode="json")
+        if self.control_limits == ControlLimits():
+            del spec["control_limits"]
+        return {"spec": spec, "resolved": [d.as_dict() for d in self.distributions()]}
 
     def to_json(self) -> str:
         """Canonical JSON text (sorted keys): what the spec hash is computed on."""

@@ -266,15 +266,18 @@ class ChunkStore:
         self.done.update((d, int(r)) for r in runs)
         return path
 
-    def assemble(self, samples: np.ndarray, execution: dict | None = None, attrs: dict | None = None) -> Path:
+    def assemble(self, samples: np.ndarray, execution: dict | None = None, attrs: dict | None = None,
+                 variables: dict | None = None) -> Path:
         """Write ``results.nc`` from the chunk files and the samples; return its path.
 
         ``execution`` (runs executed by this invocation, its wall time [s], the workers or scheduler)
         is recorded in the attributes as ``execution_*``: a resumed campaign reports its last leg.
         ``attrs`` are further global attributes as they are (e.g. the run function, the driver's
-        ``dataset_conditions``).
+        ``dataset_conditions``). ``variables`` are further ``(dims, values, attrs)`` variables (the bench's
+        per-run loop margins, :func:`campaigns.bench.margin_variables`).
         """
         ds = build_results(self.spec, samples, [load_chunk(p, self.spec.features) for p in self.chunk_files()])
+        ds = ds.assign(variables or {})
         for key, value in (execution or {}).items():
             ds.attrs[key if key.startswith("execution") else f"execution_{key}"] = value
         ds.attrs.update(attrs or {})

@@ -13,6 +13,7 @@ from reports.builder import Builder
 from reports.inputs import Inputs
 from reports.model import Report, Section
 from reports.sections import (
+    control_robustness,
     correlations,
     distributions,
     executive,
@@ -35,6 +36,7 @@ SECTION_TITLES = {
     "failures": "Failed runs",
     "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
+    "control_robustness": control_robustness.TITLE,
 }
 
 
@@ -66,6 +68,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
             ("failures", failures.build),
             ("speed", speed.build),
             ("fidelity", fidelity.build),
+            ("control_robustness", control_robustness.build),
         )
     )
     status = b.results["status"].values

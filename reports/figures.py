@@ -374,3 +374,41 @@ def work_precision(panels: list[Panel]) -> bytes:
     handles = {label: handle for ax in fig.axes for handle, label in zip(*ax.get_legend_handles_labels(), strict=False)}
     fig.legend(handles.values(), handles.keys(), loc="outside lower center", ncols=min(len(handles), 4), frameon=False)
     return _png(fig)
+
+
+@_styled
+def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: list[str], col_titles: list[str]) -> bytes:
+    """Strips of values per category against a limit, on a grid of panels.
+
+    ``grid[row][col]`` is ``(values, limit, side, note)``: ``values`` of shape ``(categories, n)`` (NaN: none),
+    the limit drawn as a dashed red line with the ``side`` ("below" or "above") that is beyond it shaded,
+    and ``note`` written in a panel without a finite value. Each category's median is a black bar.
+    """
+    fig = _new(len(grid), len(grid[0]), 0.6 + 1.9 * len(grid))
+    x = np.arange(len(categories))
+    for row, panels in enumerate(grid):
+        for col, (values, limit, side, note) in enumerate(panels):
+            ax = fig.axes[row * len(panels) + col]
+            finite = np.isfinite(values)
+            jitter = np.linspace(-0.25, 0.25, values.shape[1]) if values.shape[1] > 1 else np.zeros(1)
+            for d in range(len(categories)):
+                ax.plot(x[d] + jitter[finite[d]], values[d][finite[d]], "o", ms=2.5, alpha=0.6, color=f"C{d % 10}",
+                        mec="none")
+                if finite[d].any():
+                    ax.plot([x[d] - 0.3, x[d] + 0.3], [np.median(values[d][finite[d]])] * 2, "-", color="k", lw=1.0)
+            if finite.any():
+                low, high = float(np.min(values[finite])), float(np.max(values[finite]))
+                span = max(high - low, abs(high - limit), 1e-9)
+                bottom, top = min(low, limit) - 0.15 * span, max(high, limit) + 0.15 * span
+                ax.set_ylim(bottom, top)
+                ax.axhspan(*((bottom, limit) if side == "below" else (limit, top)), color="tab:red", alpha=0.08, lw=0)
+            else:
+                ax.text(0.5, 0.75, note, transform=ax.transAxes, ha="center", va="center", fontsize=8)  # clear of the limit
+            ax.axhline(limit, color="tab:red", ls="--", lw=1.0)
+            ax.set_xticks(x, categories, rotation=90 if len(categories) > 4 else 0)
+            ax.grid(False, axis="x")
+            if row == 0:
+                ax.set_title(col_titles[col])
+            if col == 0:
+                ax.set_ylabel(row_labels[row])
+    return _png(fig)

@@ -51,9 +51,15 @@ def test_two_real_bench_runs(tmp_path):
         assert 0.25 * 80e-6 < float(true.sel(dataset="ds2")) < 80e-6
         assert 0.0 < float(true.sel(dataset="ds4")) < 5e-6
         assert ds["trace_nut1_position"].attrs["units"] == "m"
+        # every run's loop margins beside its features (twin.control.margins), never taken for features
+        margins = [v for v in ds.data_vars if ds[v].attrs.get("role") == "margin"]
+        assert len(margins) == 16 and all(ds[m].attrs["units"] and ds[m].attrs["long_name"] for m in margins)
+        assert np.isfinite(ds["speed_loop_phase_margin"]).all() and np.isfinite(ds["force_loop_gain_margin"]).all()
     analysis = campaigns.analyze(results)
     with xr.open_dataset(analysis) as a:
         assert list(a["sweep_point"].values) == ["ds4", "ds2"]
+        assert not set(margins) & {str(f) for f in a["feature"].values}
+        assert len(a["margin_limit_statement"]) == 12  # 4 loops x 3 limits, each with its verdict
     # the sandboxed campaign run, replayed alone in this process, gives the same bits and its full series
     from campaigns.replay import replay_run
 

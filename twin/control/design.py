@@ -29,15 +29,11 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from twin.parameters import load_parameters
 from twin.physics.drivetrain import screw_inertia, torsional_stiffness
-
-if TYPE_CHECKING:
-    import control
 
 ZERO_RATIO = 5.0
 CURRENT_CROSSOVER_HZ = 1000.0
@@ -70,6 +66,51 @@ def _reflected_inertias(p: dict[str, float]) -> tuple[float, float]:
     return j_motor_side, j_screw_side
 
 
+def winding_admittance(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Winding current per voltage ``1/(H_m s + R_m)`` of Eq. 9.1, back-EMF as a disturbance: ``(num, den)`` in s."""
+    return np.array([1.0]), np.array([p["motor.inductance"], p["motor.winding_resistance_20C"]])
+
+
+def hall_sensor(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """First-order Hall current sensor ``1/(tau_h s + 1)`` (Sec. 9.3, ``drive.hall_time_constant``): ``(num, den)``."""
+    return np.array([1.0]), np.array([p["drive.hall_time_constant"], 1.0])
+
+
+def current_closed_loop(p: dict[str, float], kp: float, ki: float) -> tuple[np.ndarray, np.ndarray]:
+    """Closed analog current loop ``i/i_ref = C P / (1 + C P H)``, ``C = kp + ki/s`` (Sec. 9.3): ``(num, den)``.
+
+    ``P`` is :func:`winding_admittance`, ``H`` :func:`hall_sensor`; polynomials in s, highest power first.
+    """
+    p_num, p_den = winding_admittance(p)
+    h_num, h_den = hall_sensor(p)
+    c_num, c_den = np.array([kp, ki]), np.array([1.0, 0.0])
+    forward_num, forward_den = np.polymul(c_num, p_num), np.polymul(c_den, p_den)
+    num = np.polymul(forward_num, h_den)
+    den = np.polyadd(np.polymul(forward_den, h_den), np.polymul(forward_num, h_num))
+    return num, den
+
+
+def two_mass_speed_plant(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Motor torque -> motor speed of the two-mass torsional chain (Eqs. 9.3, 9.7): ``(num, den)`` in s.
+
+    Output-side speed per output-side torque of two inertias ``j1``, ``j2`` joined by the series
+    stiffness ``k`` and damping ``c``, referred to the motor shaft by ``ratio^2`` and the reducer efficiency.
+    """
+    ratio = p["reducer.ratio"]
+    j1, j2 = _reflected_inertias(p)
+    k = torsional_stiffness(p)
+    c = p["drivetrain.damping"]
+    gain = ratio**2 * p["reducer.efficiency"]
+    num = gain * np.array([j2, c, k])
+    den = np.array([j1 * j2, c * (j1 + j2), k * (j1 + j2), 0.0])
+    return num, den
+
+
+def screw_kinematics_gain(p: dict[str, float]) -> float:
+    """Sled travel per motor angle ``p / (2 pi tau_mr)`` [m/rad] (rigid screw and reducer)."""
+    return p["ball_screw.lead"] / (2 * math.pi * p["reducer.ratio"])
+
+
 def _figures(name, kp, ki, ts, open_loop, closed_loop) -> LoopDesign:
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
@@ -96,38 +137,21 @@ def _figures(name, kp, ki, ts, open_loop, closed_loop) -> LoopDesign:
     )
 
 
-def design_current_loop(p: dict[str, float]) -> tuple[LoopDesign, control.TransferFunction]:
-    """Analog PI of the current loop; returns the design and its closed loop i/i_ref."""
+def design_current_loop(p: dict[str, float]):
+    """Analog PI of the current loop; returns the design and its closed loop i/i_ref (``control.TransferFunction``)."""
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
-    s = control.tf("s")
     inductance = p["motor.inductance"]
     resistance = p["motor.winding_resistance_20C"]
     kp = 2 * math.pi * CURRENT_CROSSOVER_HZ * inductance
     ki = kp * resistance / inductance
-    plant = 1 / (inductance * s + resistance)
-    hall = 1 / (p["drive.hall_time_constant"] * s + 1)
-    pi = kp + ki / s
-    open_loop = pi * plant * hall
-    closed = control.feedback(pi * plant, hall)
+    pi = control.tf([kp, ki], [1.0, 0.0])
+    open_loop = pi * control.tf(*winding_admittance(p)) * control.tf(*hall_sensor(p))
+    closed = control.tf(*current_closed_loop(p, kp, ki))
     return _figures("current", kp, ki, 0.0, open_loop, closed), closed
 
 
-def _two_mass_speed_plant(p: dict[str, float]) -> control.TransferFunction:
-    """Motor torque -> motor speed of the two-mass torsional chain (Eqs. 9.3, 9.7)."""
-    import control  # lazy: python-control costs start-up time; only designs/margins need it
-
-    s = control.tf("s")
-    ratio = p["reducer.ratio"]
-    j1, j2 = _reflected_inertias(p)
-    k = torsional_stiffness(p)
-    c = p["drivetrain.damping"]
-    # Output-side speed per output-side torque, then referred to the motor shaft.
-    output_side = (j2 * s**2 + c * s + k) / (s * (j1 * j2 * s**2 + c * (j1 + j2) * s + k * (j1 + j2)))
-    return output_side * ratio**2 * p["reducer.efficiency"]
-
-
-def design_speed_loop(p: dict[str, float], current_closed) -> tuple[LoopDesign, control.TransferFunction]:
+def design_speed_loop(p: dict[str, float], current_closed):
     """Digital PI of the drive speed loop on resolver feedback."""
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
@@ -137,7 +161,7 @@ def design_speed_loop(p: dict[str, float], current_closed) -> tuple[LoopDesign, 
     wc = 2 * math.pi * SPEED_CROSSOVER_HZ
     kp = wc * j_motor / p["motor.torque_constant"]
     ki = kp * wc / ZERO_RATIO
-    plant_c = current_closed * p["motor.torque_constant"] * _two_mass_speed_plant(p)
+    plant_c = current_closed * p["motor.torque_constant"] * control.tf(*two_mass_speed_plant(p))
     plant_d = control.c2d(control.minreal(plant_c, verbose=False), ts, method="zoh")
     z = control.tf([1, 0], [1], ts)
     pi = kp + ki * ts * z / (z - 1)
@@ -160,7 +184,7 @@ def design_position_loop(p: dict[str, float], speed_closed) -> LoopDesign:
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
     ts = p["controller.position_loop_sample_time"]
-    gain = p["ball_screw.lead"] / (2 * math.pi * p["reducer.ratio"])
+    gain = screw_kinematics_gain(p)
     wc = 2 * math.pi * POSITION_CROSSOVER_HZ
     kp = wc / gain
     ki = kp * wc / ZERO_RATIO

@@ -28,7 +28,7 @@ from scipy.optimize import brentq
 
 from twin.physics import pneumatics as pn
 
-__all__ = ["NutFixedPlant", "operating_point", "linearised_plant", "design_force_loop"]
+__all__ = ["NutFixedPlant", "operating_point", "linearised_matrices", "linearised_plant", "design_force_loop"]
 
 STATE_NAMES = ("x_spool", "v_spool", "p1", "p2", "x_piston", "v_piston")
 # Typical magnitudes of the states [-, 1/s, Pa, Pa, m, m/s]: the linear model is
@@ -180,13 +180,12 @@ def operating_point(params, force=4000.0, position=None):
             "x_nut": x_nut, "p1": p1, "p2": p2, "x_spool": x_spool}
 
 
-def linearised_plant(params, force=4000.0, position=None):
-    """Linear model from valve command [V] to load-cell force [N].
+def linearised_matrices(params, force=4000.0, position=None):
+    """State-space matrices from valve command [V] to load-cell force [N], without python-control.
 
     Central-difference Jacobian of the nonlinear plant (``STATE_NAMES`` order)
-    around :func:`operating_point`, returned in scaled states
-    ``z / _STATE_SCALE`` (a similarity transform: the transfer function is
-    unchanged).
+    around :func:`operating_point`, in scaled states ``z / _STATE_SCALE`` (a
+    similarity transform: the transfer function is unchanged).
 
     Parameters
     ----------
@@ -200,9 +199,8 @@ def linearised_plant(params, force=4000.0, position=None):
     Returns
     -------
     tuple
-        ``(control.StateSpace, operating point dict)``.
+        ``(a, b, c, operating point dict)``; ``a`` is 6 x 6, ``b`` 6 x 1, ``c`` 1 x 6 (no feed-through).
     """
-    import control  # lazy: python-control costs start-up time; only designs/margins need it
 
     plant = NutFixedPlant(params)
     op = operating_point(params, force, position)
@@ -224,9 +222,22 @@ def linearised_plant(params, force=4000.0, position=None):
     f_minus, _ = plant.derivatives(z0, u0 - _COMMAND_STEP, x_nut)
     b = ((f_plus - f_minus) / (2.0 * _COMMAND_STEP)).reshape(n, 1)
     scale = _STATE_SCALE
-    sys = control.ss(a * scale[np.newaxis, :] / scale[:, np.newaxis], b / scale[:, np.newaxis],
-                     c * scale[np.newaxis, :], 0.0)
-    return sys, op
+    return (a * scale[np.newaxis, :] / scale[:, np.newaxis], b / scale[:, np.newaxis], c * scale[np.newaxis, :],
+            op)
+
+
+def linearised_plant(params, force=4000.0, position=None):
+    """Linear model from valve command [V] to load-cell force [N] (:func:`linearised_matrices`).
+
+    Returns
+    -------
+    tuple
+        ``(control.StateSpace, operating point dict)``.
+    """
+    import control  # lazy: python-control costs start-up time; only designs/margins need it
+
+    a, b, c, op = linearised_matrices(params, force, position)
+    return control.ss(a, b, c, 0.0), op
 
 
 def design_force_loop(params, sample_time=1e-3, *, crossover_hz=10.0, integral_ratio=0.2,

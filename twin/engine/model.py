@@ -256,6 +256,23 @@ def secant_contact_stiffness(c: np.ndarray, stiffness_poly: np.ndarray, load: fl
     return normal_load / (normal_load / hertz_stiffness) ** (2.0 / 3.0)
 
 
+def load_system_parameters(p: dict[str, float], scene: Scene) -> dict[str, float]:
+    """The parameters with the load system's scene conditions: supply pressure and air (room) temperature.
+
+    Raises
+    ------
+    SceneError
+        If the supply pressure does not exceed the atmospheric pressure.
+    """
+    supply = scene.condition("supply_pressure")
+    if supply <= p["pneumatics.atmospheric_pressure"]:
+        raise SceneError([f"conditions.supply_pressure: {supply:g} Pa must exceed the exhaust (atmospheric) "
+                          f"pressure pneumatics.atmospheric_pressure = {p['pneumatics.atmospheric_pressure']:g} Pa"])
+    q = {**p, "pneumatics.supply_pressure": supply, "pneumatics.air_temperature": scene.condition("room_temperature")}
+    pn.validate_pneumatics(q)
+    return q
+
+
 def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.ndarray:
     """Fill the load-system constants (Eqs. 9.9-9.11) and return its initial state.
 
@@ -264,12 +281,7 @@ def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.
     spool position that holds zero force (the static working point of
     :func:`twin.control.force_loop_design.operating_point`).
     """
-    supply = scene.condition("supply_pressure")
-    if supply <= p["pneumatics.atmospheric_pressure"]:
-        raise SceneError([f"conditions.supply_pressure: {supply:g} Pa must exceed the exhaust (atmospheric) "
-                          f"pressure pneumatics.atmospheric_pressure = {p['pneumatics.atmospheric_pressure']:g} Pa"])
-    q = {**p, "pneumatics.supply_pressure": supply, "pneumatics.air_temperature": scene.condition("room_temperature")}
-    pn.validate_pneumatics(q)
+    q = load_system_parameters(p, scene)
     c[K.P_SUPPLY] = q["pneumatics.supply_pressure"]
     c[K.P_ATMOSPHERE] = q["pneumatics.atmospheric_pressure"]
     c[K.AIR_TEMPERATURE] = q["pneumatics.air_temperature"]
