@@ -138,7 +138,7 @@ async def submit_form(request: Request):
         record = await run_in_threadpool(submit, request, text, numbers.get("runs"), numbers.get("seed"), who)
     except SpecError as exc:
         return _page(request, "submit.html.j2", 422, errors=error_list(exc.problems),
-                     detail=f"{len(exc.problems)} problem(s); nothing was queued", **context)
+                     detail=f"{len(exc.problems)} problem(s)", **context)
     return RedirectResponse(f"/campaigns/{record['id']}", status_code=303)
 
 
