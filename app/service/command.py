@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import os
 from pathlib import Path
 
 ROLES = ("read", "submit", "admin")
@@ -42,7 +43,10 @@ def cmd_serve(args) -> int:
     if args.data is None:
         raise SystemExit("twin serve: error: --data DIR is required (the registry and the campaigns live there)")
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s")
-    app = create_app(Settings(data=args.data.resolve(), workers=args.workers, scheduler=args.scheduler))
+    data = args.data.resolve()
+    data.mkdir(parents=True, exist_ok=True)
+    os.chdir(data)  # a bare name in a submitted spec that is no built-in one then names nothing of the server's
+    app = create_app(Settings(data=data, workers=args.workers, scheduler=args.scheduler))
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         logging.getLogger("benchtwin.service").warning(
             "listening on %s: reachable from other machines; tokens travel in clear unless a TLS proxy is in front",

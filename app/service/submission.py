@@ -20,6 +20,7 @@ and scenes and parameter sets must be built-in names, not paths.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tomllib
 import uuid
@@ -34,6 +35,8 @@ from twin.parameters import available_parameter_sets
 BUILTIN_SPECS = Path(campaigns.__file__).parent / "specs"
 SUBMITTED_NAME = "submitted.toml"
 SPEC_NAME = "spec.toml"
+#: What a scene or parameter-set name may look like in a submitted spec (no path, no file name).
+_BARE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_-]*$")
 
 
 def builtin_specs() -> list[str]:
@@ -128,19 +131,24 @@ def _structural_problems(parsed: dict) -> list[str]:
 
 
 def _reach_problems(parsed: dict) -> list[str]:
-    """Fields that would make the server read files of its own choosing: paths instead of built-in names."""
+    """Fields that would make the server read files of the submitter's choosing: paths instead of names.
+
+    A bare word that is not a built-in name goes on to the library, which reports it as unknown with the
+    rest of the spec's problems (the server runs in its data directory, so a bare word names nothing else).
+    """
     problems = []
     extends = parsed.get("extends")
     if extends is not None and extends not in builtin_specs():
         problems.append(f"extends: the service extends built-in specs only ({', '.join(builtin_specs())}), "
                         f"got {extends!r}")
-    scenes = twin.list_scenes()
     base = parsed.get("base") if isinstance(parsed.get("base"), dict) else {}
-    named = [("base.scene", base.get("scene"), scenes),
+    named = [("base.scene", base.get("scene"), twin.list_scenes()),
              ("base.parameters", base.get("parameters"), available_parameter_sets())]
     datasets = parsed.get("datasets") if isinstance(parsed.get("datasets"), list) else []
-    named += [(f"datasets[{k}].scene", d.get("scene"), scenes) for k, d in enumerate(datasets) if isinstance(d, dict)]
+    named += [(f"datasets[{k}].scene", d.get("scene"), twin.list_scenes())
+              for k, d in enumerate(datasets) if isinstance(d, dict)]
     for path, value, known in named:
-        if isinstance(value, str) and value not in known:
-            problems.append(f"{path}: the service accepts built-in names only ({', '.join(known)}), got {value!r}")
+        if isinstance(value, str) and not _BARE_NAME.match(value):
+            problems.append(f"{path}: the service accepts built-in names only ({', '.join(known)}), not paths; "
+                            f"got {value!r}")
     return problems

@@ -45,6 +45,7 @@ class Server:
     def __init__(self, data: Path, log: Path, workers: int = 1):
         self.data, self.log_path, self.workers = data, log, workers
         self.process: subprocess.Popen | None = None
+        self.clients: dict[str | None, httpx.Client] = {}
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
 
@@ -58,8 +59,9 @@ class Server:
         while time.monotonic() < deadline:
             assert self.process.poll() is None, f"the server exited:\n{self.log()}"
             try:
-                if httpx.get(f"{self.url}/health", timeout=5).status_code == 200:
-                    return self
+                with httpx.Client(timeout=5) as probe:
+                    if probe.get(f"{self.url}/health").status_code == 200:
+                        return self
             except httpx.TransportError:
                 pass
             time.sleep(0.5)
@@ -85,6 +87,9 @@ class Server:
 
     def stop(self) -> None:
         """SIGTERM (graceful); whatever is left after the budget is killed."""
+        for api in self.clients.values():
+            api.close()
+        self.clients.clear()
         if self.process is None or self.process.poll() is not None:
             return
         leftovers = self.tree()
@@ -102,8 +107,11 @@ class Server:
 
 
 def client(server: Server, token: str | None) -> httpx.Client:
-    headers = {"Authorization": f"Bearer {token}"} if token else {}
-    return httpx.Client(base_url=server.url, headers=headers, timeout=120)
+    """The server's HTTP client for ``token`` (one per token, closed when the server stops)."""
+    if token not in server.clients:
+        headers = {"Authorization": f"Bearer {token}"} if token else {}
+        server.clients[token] = httpx.Client(base_url=server.url, headers=headers, timeout=120)
+    return server.clients[token]
 
 
 def wait_until(predicate, budget: float = CAMPAIGN_BUDGET, period: float = 0.5, what: str = "condition"):
