@@ -142,7 +142,8 @@ def test_a_small_thesis_campaign_runs_to_done_and_matches_the_cli(service, tmp_p
     for name in ("results.nc", "analysis.nc", "report.html", "report.pdf", "spec", "spec.json"):
         response = reader.get(f"/api/v1/campaigns/{campaign_id}/files/{name}")
         assert response.status_code == 200, name
-        files[name] = tmp_path / name
+        files[name] = tmp_path / "served" / name
+        files[name].parent.mkdir(exist_ok=True)
         files[name].write_bytes(response.content)
     assert files["spec"].read_text() == text
     assert files["report.pdf"].read_bytes().startswith(b"%PDF")
@@ -153,11 +154,12 @@ def test_a_small_thesis_campaign_runs_to_done_and_matches_the_cli(service, tmp_p
     assert record["summary"] == {"statements": statements, "warnings": warnings} and statements
 
     # the CLI on the same spec and runs (its extends resolved beside it, as the service does)
-    (tmp_path / "spec").mkdir()
-    (tmp_path / "spec" / "small_thesis.toml").write_text(text)
+    local_spec = tmp_path / "cli-spec" / "small_thesis.toml"
+    local_spec.parent.mkdir()
+    local_spec.write_text(text)
     parent = tomllib.loads(text)["extends"]
-    (tmp_path / "spec" / parent).write_text((BUILTIN_SPECS / parent).read_text())
-    cli = twin("campaign", "run", str(tmp_path / "spec" / "small_thesis.toml"), "--runs", "2", "--workers", "1",
+    (local_spec.parent / parent).write_text((BUILTIN_SPECS / parent).read_text())
+    cli = twin("campaign", "run", str(local_spec), "--runs", "2", "--workers", "1",
                "--out", str(tmp_path / "cli"))
     assert cli.returncode == 0, cli.stderr
     with xr.open_dataset(files["results.nc"]) as served, xr.open_dataset(tmp_path / "cli" / "results.nc") as local:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from service_helpers import CAMPAIGN_BUDGET, SPEC
+from service_helpers import CAMPAIGN_BUDGET, SPEC, wait_until
 
 playwright = pytest.importorskip("playwright.sync_api")
 CHROMIUM = Path("/usr/bin/chromium") if Path("/usr/bin/chromium").exists() else shutil.which("chromium")
@@ -22,6 +22,14 @@ def not_blank(png: Path) -> tuple[float, int]:
     pixels = matplotlib.image.imread(png)[..., :3]
     colours = len(np.unique((pixels * 255).astype(np.uint8).reshape(-1, 3), axis=0))
     return float(pixels.mean(axis=2).std()), colours
+
+
+def _evaluate(page, script: str):
+    """``script``'s value in the page, or ``None`` while the page is between two documents (it reloads when done)."""
+    try:
+        return page.evaluate(script)
+    except playwright.Error:
+        return None
 
 
 def test_submit_through_the_form_watch_the_bar_open_the_report(service, tmp_path):
@@ -50,8 +58,8 @@ def test_submit_through_the_form_watch_the_bar_open_the_report(service, tmp_path
         page.fill("input[name=runs]", "2")
         page.click(".overrides button[type=submit]")
         page.wait_for_url("**/campaigns/*")
-        page.wait_for_function("() => { const b = document.querySelector('#progress');"
-                               " return b && b.max > 0 && b.value === b.max; }", timeout=budget_ms, polling=1000)
+        full = "() => { const b = document.querySelector('#progress'); return !!b && b.max > 0 && b.value === b.max; }"
+        wait_until(lambda: _evaluate(page, full), what="a full progress bar")
         assert "(100.0 %)" in page.inner_text("[data-field=runs]")
         page.wait_for_selector("#report-link", timeout=budget_ms)  # the page reloads when the campaign is done
         assert page.inner_text("[data-field=state]") == "done"
