@@ -18,7 +18,7 @@ function show(root, c) {
   const bar = field("bar");
   if (bar) { bar.max = p.runs_total; bar.value = p.runs_done; }
   const runs = field("runs");
-  if (runs) runs.textContent = `${p.runs_done} / ${p.runs_total} runs (${p.percent} %)`;
+  if (runs) runs.textContent = `${p.runs_done} / ${p.runs_total} runs (${p.percent.toFixed(1)} %)`;
   const failures = field("failures");
   if (failures) failures.textContent = failuresText(p.failures);
 }
