@@ -24,6 +24,7 @@ import sys
 import tempfile
 import threading
 import time
+from importlib import metadata
 from pathlib import Path
 
 import httpx
@@ -33,6 +34,7 @@ from app.service.auth import create_token
 from app.service.registry import Registry
 
 SPEC = Path(__file__).resolve().parents[1] / "tests" / "service" / "small_thesis.toml"
+SERVICE_PACKAGES = ("fastapi", "starlette", "uvicorn", "httpx")
 START_BUDGET = 600.0
 RUNNING_BUDGET = 1800.0
 
@@ -82,6 +84,7 @@ def main() -> int:
     if args.quick:
         args.clients, args.seconds, args.runs = 5, 5.0, 4
     header(f"service load: {args.clients} clients polling status and list for {args.seconds:.0f} s", args.quick)
+    print("# " + "; ".join(f"{name} {metadata.version(name)}" for name in SERVICE_PACKAGES), flush=True)
 
     with tempfile.TemporaryDirectory(prefix="benchtwin-service-load-") as tmp:
         data = Path(tmp) / "data"

@@ -19,6 +19,8 @@ function show(root, c) {
   if (bar) { bar.max = p.runs_total; bar.value = p.runs_done; }
   const runs = field("runs");
   if (runs) runs.textContent = `${p.runs_done} / ${p.runs_total} runs (${p.percent.toFixed(1)} %)`;
+  const running = field("running");
+  if (running && c.timings.running_seconds !== null) running.textContent = c.timings.running_seconds.toFixed(1);
   const failures = field("failures");
   if (failures) failures.textContent = failuresText(p.failures);
 }
