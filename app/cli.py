@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import twin
+from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import SCENE_PREFIX, split_targets
@@ -137,24 +138,23 @@ class Stages:
 
 def cmd_campaign_run(args) -> int:
     import campaigns
+    from app.pipeline import run_campaign_pipeline
     from campaigns.budget import estimate
 
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
     announce = Stages()
-    results = campaigns.run_campaign(spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume,
-                                     allow_version_mix=args.allow_version_mix, announce=announce)
-    print(f"wrote {results}")
-    if args.analyze:
-        announce("analysis", "correlations with bootstrap intervals, separation, observability (about 10-60 s)")
-        _print_analysis(campaigns.analyze(results))
-    if args.report:
-        from reports import build_report
 
-        announce("report", "figures, HTML and PDF (about 30-90 s)")
-        for kind, path in build_report(results, out_dir=out).items():
-            print(f"wrote {kind} report: {path.resolve()}")
+    def wrote(kind: str, path: Path) -> None:
+        if kind == "analysis":
+            _print_analysis(path)
+        else:
+            print(f"wrote {kind} report: {path.resolve()}" if kind in ("html", "pdf") else f"wrote {path}")
+
+    run_campaign_pipeline(spec, out, analyze=args.analyze, report=args.report, workers=args.workers,
+                          scheduler=args.scheduler, resume=args.resume, allow_version_mix=args.allow_version_mix,
+                          announce=announce, wrote=wrote)
     announce("done", f"total {time.perf_counter() - announce.start:.0f} s")
     return 0
 
@@ -330,6 +330,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
     p.add_argument("--force", action="store_true", help="replace an existing report in --out")
     p.set_defaults(func=cmd_report)
+
+    add_serve_parser(sub)
     return parser
 
 

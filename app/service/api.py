@@ -1,0 +1,251 @@
+"""The JSON API, ``/api/v1`` (OpenAPI schema at ``/api/v1/openapi.json``), and ``/health``."""
+
+from __future__ import annotations
+
+import re
+from datetime import UTC, datetime
+from pathlib import Path
+
+from fastapi import APIRouter, HTTPException, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import FileResponse, JSONResponse
+from pydantic import BaseModel
+
+import campaigns
+from app.service.auth import COOKIE_NAME, identify, require
+from app.service.registry import FINAL_STATES
+from app.service.submission import SUBMITTED_NAME, input_dir, output_dir, prepare
+from campaigns.spec import SpecError
+
+router = APIRouter()
+
+#: The files of a campaign that may be downloaded: name -> (where, file name, media type). Nothing else is served.
+FILES = {
+    "results.nc": ("out", "results.nc", "application/x-netcdf"),
+    "analysis.nc": ("out", "analysis.nc", "application/x-netcdf"),
+    "report.html": ("out", "report.html", "text/html; charset=utf-8"),
+    "report.pdf": ("out", "report.pdf", "application/pdf"),
+    "spec": ("input", SUBMITTED_NAME, "text/plain; charset=utf-8"),
+    "spec.json": ("out", "spec.json", "application/json"),
+}
+#: The generated report is shown as it is: its own CSS and embedded figures, no scripts, no external loads.
+REPORT_POLICY = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'none'"
+_PATH = re.compile(r"^[A-Za-z_][\w.\[\]]*$")
+
+
+class PayloadTooLarge(Exception):
+    pass
+
+
+class SpecSubmission(BaseModel):
+    """A spec as JSON (the alternative to a raw TOML body)."""
+
+    spec: str
+    runs: int | None = None
+    seed: int | None = None
+
+
+def caller(request: Request, role: str = "read") -> dict:
+    """The token record of a request with at least ``role`` (401/403 otherwise)."""
+    registry = request.app.state.registry
+    record = identify(registry, request.headers.get("authorization"), request.cookies.get(COOKIE_NAME))
+    require(record, role)
+    return record
+
+
+async def read_limited(request: Request) -> bytes:
+    """The request body, refused (413) beyond the configured size before it is all read."""
+    limit = request.app.state.settings.max_spec_bytes
+    declared = request.headers.get("content-length")
+    if declared is not None and declared.isdigit() and int(declared) > limit:
+        raise PayloadTooLarge
+    body = bytearray()
+    async for part in request.stream():
+        body += part
+        if len(body) > limit:
+            raise PayloadTooLarge
+    return bytes(body)
+
+
+def too_large(request: Request) -> JSONResponse:
+    limit = request.app.state.settings.max_spec_bytes
+    return JSONResponse({"detail": f"the spec is larger than the limit of {limit} bytes"}, status_code=413)
+
+
+def error_list(problems: list[str]) -> list[dict]:
+    """``"path: message"`` problems as ``{"path", "message"}`` (``path`` empty when a problem names none)."""
+    errors = []
+    for problem in problems:
+        path, sep, message = problem.partition(": ")
+        named = sep and _PATH.match(path)
+        errors.append({"path": path, "message": message} if named else {"path": "", "message": problem})
+    return errors
+
+
+def submit(request: Request, text: str, runs: int | None, seed: int | None, who: dict) -> dict:
+    """Validate and queue a spec (blocking: call it in a worker thread); the campaign's record.
+
+    Raises :class:`SpecError`, and then nothing is queued.
+    """
+    registry = request.app.state.registry
+    submission = prepare(registry.data, text, runs=runs, seed=seed)
+    spec = submission.spec
+    registry.add_campaign(submission.campaign_id, spec.name, spec.spec_hash(),
+                          len(spec.datasets) * spec.runs_per_dataset, submission.overrides, who["name"])
+    request.app.state.executor.notify()
+    return registry.campaign(submission.campaign_id)
+
+
+def _iso(t: float | None) -> str | None:
+    return datetime.fromtimestamp(t, UTC).isoformat(timespec="seconds") if t else None
+
+
+def available_files(registry, campaign_id: str) -> list[str]:
+    campaign_dir = registry.campaign_dir(campaign_id)
+    return [name for name, (where, file, _) in FILES.items() if _file(campaign_dir, where, file).is_file()]
+
+
+def _file(campaign_dir: Path, where: str, file: str) -> Path:
+    return (output_dir(campaign_dir) if where == "out" else input_dir(campaign_dir)) / file
+
+
+def describe(registry, record: dict, now: float) -> dict:
+    """The public view of a campaign record."""
+    started, finished = record["started_at"], record["finished_at"]
+    total, done = record["runs_total"], record["runs_done"]
+    campaign_id = record["id"]
+    return {
+        "id": campaign_id,
+        "name": record["name"],
+        "state": record["state"],
+        "stage": record["stage"],
+        "stage_message": record["stage_message"],
+        "spec_hash": record["spec_hash"],
+        "overrides": record["overrides"],
+        "submitted_by": record["submitted_by"],
+        "progress": {"runs_done": done, "runs_total": total,
+                     "percent": round(100.0 * done / total, 1) if total else 0.0,
+                     "failures": record["failures"], "failure_examples": record["failure_examples"]},
+        "timings": {
+            "submitted_at": _iso(record["submitted_at"]),
+            "started_at": _iso(started),
+            "finished_at": _iso(finished),
+            "queued_seconds": round((started or now) - record["submitted_at"], 1),
+            "running_seconds": round((finished or now) - started, 1) if started else None,
+        },
+        "legs": record["legs"],
+        "cancel_requested": bool(record["cancel_requested"]),
+        "error": record["error"],
+        "summary": record["summary"] or {},
+        "files": {name: f"/api/v1/campaigns/{campaign_id}/files/{name}"
+                  for name in available_files(registry, campaign_id)},
+        "page": f"/campaigns/{campaign_id}",
+    }
+
+
+@router.get("/health", tags=["service"])
+def health(request: Request) -> dict:
+    """Liveness (no token): the service answers and its registry is readable."""
+    registry = request.app.state.registry
+    return {"status": "ok", "queued": len(registry.ids_in_state("queued")),
+            "running": len(registry.ids_in_state("running"))}
+
+
+@router.get("/api/v1/campaigns", tags=["campaigns"])
+def list_campaigns(request: Request, limit: int = Query(200, ge=1, le=1000)) -> dict:
+    """The latest campaigns, newest first (role ``read``)."""
+    caller(request)
+    registry, now = request.app.state.registry, datetime.now(UTC).timestamp()
+    return {"campaigns": [describe(registry, r, now) for r in registry.campaigns(limit)]}
+
+
+@router.post("/api/v1/campaigns", status_code=201, tags=["campaigns"],
+             openapi_extra={"requestBody": {"required": True, "content": {
+                 "application/toml": {"schema": {"type": "string"}},
+                 "application/json": {"schema": SpecSubmission.model_json_schema()}}}},
+             responses={413: {"description": "spec larger than the limit"},
+                        422: {"description": "every validation problem with its field path; nothing queued"}})
+async def create_campaign(request: Request, runs: int | None = Query(None, description="runs per data set (override)"),
+                          seed: int | None = Query(None, description="root seed (override)")):
+    """Submit a spec (role ``submit``): a TOML body, or JSON ``{"spec", "runs", "seed"}``."""
+    who = await run_in_threadpool(caller, request, "submit")
+    try:
+        body = await read_limited(request)
+    except PayloadTooLarge:
+        return too_large(request)
+    try:
+        if request.headers.get("content-type", "").startswith("application/json"):
+            payload = SpecSubmission.model_validate_json(body)
+            text, runs, seed = payload.spec, payload.runs if payload.runs is not None else runs, \
+                payload.seed if payload.seed is not None else seed
+        else:
+            text = body.decode("utf-8")
+    except (ValueError, UnicodeDecodeError) as exc:
+        return JSONResponse({"detail": "unreadable request body", "errors": [{"path": "", "message": str(exc)}]},
+                            status_code=422)
+    try:
+        record = await run_in_threadpool(submit, request, text, runs, seed, who)
+    except SpecError as exc:
+        return JSONResponse({"detail": f"invalid campaign spec ({len(exc.problems)} problem(s)); nothing was queued",
+                             "errors": error_list(exc.problems)}, status_code=422)
+    now = datetime.now(UTC).timestamp()
+    return JSONResponse(describe(request.app.state.registry, record, now), status_code=201,
+                        headers={"Location": f"/api/v1/campaigns/{record['id']}"})
+
+
+def _record(request: Request, campaign_id: str) -> dict:
+    record = request.app.state.registry.campaign(campaign_id)
+    if record is None:
+        raise HTTPException(404, f"no campaign {campaign_id!r}")
+    return record
+
+
+@router.get("/api/v1/campaigns/{campaign_id}", tags=["campaigns"])
+def get_campaign(request: Request, campaign_id: str) -> dict:
+    """State, progress, failures, timings, spec hash, verdict statements (role ``read``)."""
+    caller(request)
+    return describe(request.app.state.registry, _record(request, campaign_id), datetime.now(UTC).timestamp())
+
+
+def cancel_campaign_as(request: Request, campaign_id: str, who: dict) -> dict:
+    """Cancel as ``who`` (submitter of the campaign, or admin); the campaign's view afterwards."""
+    record = _record(request, campaign_id)
+    if who["role"] != "admin" and record["submitted_by"] != who["name"]:
+        raise HTTPException(403, f"campaign {campaign_id} was submitted by {record['submitted_by']!r}; "
+                                 "only its submitter or an admin may cancel it")
+    if record["state"] in FINAL_STATES:
+        raise HTTPException(409, f"campaign {campaign_id} is {record['state']} already")
+    request.app.state.executor.cancel(campaign_id)
+    return describe(request.app.state.registry, _record(request, campaign_id), datetime.now(UTC).timestamp())
+
+
+@router.post("/api/v1/campaigns/{campaign_id}/cancel", tags=["campaigns"])
+def cancel_campaign(request: Request, campaign_id: str) -> dict:
+    """Cancel a queued or running campaign (role ``submit`` for one's own, ``admin`` for any); 409 if finished."""
+    return cancel_campaign_as(request, campaign_id, caller(request, "submit"))
+
+
+@router.get("/api/v1/campaigns/{campaign_id}/files/{name}", tags=["campaigns"],
+            responses={404: {"description": "unknown campaign, a name not in the list, or not written yet"}})
+def get_file(request: Request, campaign_id: str, name: str):
+    """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``spec`` (as submitted),
+    ``spec.json`` (canonical) (role ``read``). Any other name is 404."""
+    caller(request)
+    if name not in FILES:
+        raise HTTPException(404, f"no file {name!r}; available names: {', '.join(FILES)}")
+    record = _record(request, campaign_id)
+    where, file, media = FILES[name]
+    path = _file(request.app.state.registry.campaign_dir(record["id"]), where, file)
+    if not path.is_file():
+        raise HTTPException(404, f"{name} of campaign {campaign_id} does not exist (yet)")
+    download = name if name != "spec" else f"{record['name']}.toml"
+    headers = {"Content-Security-Policy": REPORT_POLICY} if name == "report.html" else {}
+    inline = name in ("report.html", "report.pdf", "spec", "spec.json")
+    return FileResponse(path, media_type=media, filename=download, headers=headers,
+                        content_disposition_type="inline" if inline else "attachment")
+
+
+def builtin_spec_texts() -> dict[str, str]:
+    """The built-in specs by file name (the submit form's examples)."""
+    specs = Path(campaigns.__file__).parent / "specs"
+    return {p.name: p.read_text(encoding="utf-8") for p in sorted(specs.glob("*.toml"))}
