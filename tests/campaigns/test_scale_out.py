@@ -81,7 +81,7 @@ def test_thesis_campaign_on_a_loopback_cluster_matches_the_local_cluster(loopbac
     local = campaigns.run_campaign(campaigns.load_spec(THESIS_SPEC, runs=RUNS), tmp_path / "local", workers=2,
                                    progress=False)
     with xr.open_dataset(remote_out / "results.nc") as remote_ds, xr.open_dataset(local) as local_ds:
-        assert remote_ds.attrs["workers"] == loopback_cluster
+        assert remote_ds.attrs["execution_workers"] == loopback_cluster
         assert remote_ds.sizes["dataset"] == 7 and remote_ds.sizes["run"] == RUNS
         assert (local_ds["status"] == "ok").all()
         # the fidelity audit ran on the remote cluster too, with the same verdict
