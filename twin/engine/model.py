@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 from twin.control.design import screw_inertia, torsional_stiffness
 from twin.control.force_loop_design import operating_point
 from twin.engine.layout import (
+    BALL_GROOVE_FRICTION_LEVELS,
     CONTACT_LEVELS,
     CONTACT_LINEAR,
     N_CONSTANTS,
@@ -138,6 +139,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Fidelity, *, curva
     if c[K.CONTACT_MODEL] == CONTACT_LINEAR:
         c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
     c[K.BACKLASH] = scene.condition("backlash")
+    ball_groove_friction_constants(c, p, fidelity)
     # nuts, guides (Eq. 9.8, Eq. 7.63)
     c[K.MASS_NUT1] = p["sled.master_mass"]
     c[K.MASS_NUT2] = p["sled.slave_mass"]
@@ -215,6 +217,27 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
     return stiffness_poly
+
+
+def ball_groove_friction_constants(c: np.ndarray, p: dict[str, float], fidelity: Fidelity) -> None:
+    """Fill the constants of the ball-groove friction (Eqs. 5.16-5.24, reduced:
+    :mod:`twin.physics.ball_groove_friction`) and of the screw's torsion between the coupling and
+    the nuts (:func:`twin.engine.plant.screw_axial_stiffness`) at their fidelity levels."""
+    c[K.BALL_GROOVE_FRICTION] = BALL_GROOVE_FRICTION_LEVELS[fidelity.level("ball_groove_friction")]
+    for k, name in enumerate((K.FRICTION_G1, K.FRICTION_G2, K.FRICTION_G3, K.FRICTION_G4, K.FRICTION_G5,
+                              K.FRICTION_G6), start=1):
+        c[name] = p[f"ball_screw.sliding_friction_g{k}"]
+    c[K.ROLLING_K_GC] = p["ball_screw.rolling_friction_load_coefficient"]
+    c[K.ROLLING_K_RF] = p["ball_screw.rolling_friction_multiplier"]
+    c[K.ROLLING_F_V1] = p["ball_screw.rolling_friction_speed_coefficient"]
+    c[K.ROLLING_THRESHOLD] = p["ball_screw.rolling_friction_direction_threshold"]
+    c[K.BALL_RADIUS] = p["ball_screw.ball_radius"]
+    c[K.PITCH_RADIUS] = p["ball_screw.pitch_radius"]
+    c[K.SIN_HELIX] = math.sin(helix_angle(p["ball_screw.lead"], p["ball_screw.pitch_radius"]))
+    polar_moment = math.pi * p["ball_screw.screw_root_diameter"] ** 4 / 32.0
+    torsion = fidelity.level("screw_torsion") == "static"
+    torsional_rigidity = p["ball_screw.shear_modulus"] * polar_moment
+    c[K.SHAFT_TWIST_COMPLIANCE] = c[K.LEAD_ARM] ** 2 / torsional_rigidity if torsion else 0.0
 
 
 def secant_contact_stiffness(c: np.ndarray, stiffness_poly: np.ndarray, load: float) -> float:
