@@ -95,9 +95,12 @@ def screw_axial_stiffness(x, c):
     sled position, so the spring energy ``k(x_n1) x_s^2 / 2`` also pushes the sled with
     ``-dE/dx_n1 = k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2``: tiny, but it keeps the model conservative.
     """
-    per_length = 1.0 / c[K.SHAFT_EA] + c[K.SHAFT_TWIST_COMPLIANCE]
-    stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + (c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]) * per_length)
-    return stiffness, 0.5 * stiffness**2 * x[S.SCREW_AXIAL] ** 2 * per_length
+    # written so that a rigid shaft (zero twist compliance) gives the torsion-free model to the last bit
+    length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
+    twist = c[K.SHAFT_TWIST_COMPLIANCE]
+    stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + length / c[K.SHAFT_EA] + length * twist)
+    half_squared = 0.5 * stiffness**2 * x[S.SCREW_AXIAL] ** 2
+    return stiffness, half_squared / c[K.SHAFT_EA] + half_squared * twist
 
 
 EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)
