@@ -38,7 +38,8 @@ def test_rolling_coefficient_load_exponent_and_speed_term():
     k_gc, f_v1, r_b = 7.737e-7, 8.13e-9, 1.5875e-3
     ratio = rolling_coefficient(200.0, 0.0, k_gc, 1.0, f_v1, r_b) / rolling_coefficient(50.0, 0.0, k_gc, 1.0, f_v1, r_b)
     assert ratio == pytest.approx(4.0**ROLLING_LOAD_EXPONENT, rel=1e-12)
-    at_speed = rolling_coefficient(64.0, 100.0, k_gc, 1.0, f_v1, r_b) - rolling_coefficient(64.0, 0.0, k_gc, 1.0, f_v1, r_b)
+    at_rest = rolling_coefficient(64.0, 0.0, k_gc, 1.0, f_v1, r_b)
+    at_speed = rolling_coefficient(64.0, 100.0, k_gc, 1.0, f_v1, r_b) - at_rest
     assert at_speed == pytest.approx(f_v1 * 100.0**2, rel=1e-12)
     # k_rf scales the load term only (Fig. 5.8)
     assert rolling_coefficient(64.0, 0.0, k_gc, 2.0, 0.0, r_b) == pytest.approx(
@@ -103,7 +104,8 @@ def _loaded_master(model, force, screw_speed):
 
 
 COULOMB_ONLY = {"ball_screw.sliding_friction_g1": 0.0, "ball_screw.sliding_friction_g6": 0.0,
-                "ball_screw.rolling_friction_load_coefficient": 0.0, "ball_screw.rolling_friction_speed_coefficient": 0.0}
+                "ball_screw.rolling_friction_load_coefficient": 0.0,
+                "ball_screw.rolling_friction_speed_coefficient": 0.0}
 
 
 @pytest.mark.parametrize("force", [200.0, 1000.0, 4000.0])
