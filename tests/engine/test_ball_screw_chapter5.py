@@ -3,15 +3,20 @@ regimes of Fig. 5.13 at their closed-form transition load."""
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq, root
-
 from bench_helpers import plant_fidelity
+from scipy.optimize import brentq, root
 from test_energy_convergence import LOSSLESS
+
 from twin.engine.energy import mechanical_energy
 from twin.engine.integrators import INTEGRATORS, step, work_array
 from twin.engine.layout import N_INPUTS, K, S
 from twin.engine.model import build_model, contact_position_for_force
-from twin.engine.plant import ball_groove_friction, internal_forces, nut_groove_speed, rhs
+from twin.engine.plant import (
+    ball_groove_friction,
+    internal_forces,
+    nut_groove_speed,
+    rhs,
+)
 from twin.fidelity import full_plant, resolve_fidelity
 
 DURATION = 0.02  # s: several periods of the chain's modes, many velocity reversals of the nuts
