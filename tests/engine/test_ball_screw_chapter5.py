@@ -8,6 +8,7 @@ from scipy.optimize import brentq, root
 from test_energy_convergence import LOSSLESS
 
 from twin.engine.energy import mechanical_energy
+from twin.engine.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
 from twin.engine.integrators import INTEGRATORS, step, work_array
 from twin.engine.layout import N_INPUTS, K, S
 from twin.engine.model import build_model, contact_position_for_force
@@ -115,3 +116,24 @@ def test_fig_5_13_regimes_and_closed_form_transition_load(bench, scene_factory):
     # 1e-4: the shaft-stiffness gradient force on the sled (k^2 x_s^2 / 2 (1/EA + twist), 0.02 N at 1 kN) is not
     # in the closed form
     assert crossing == pytest.approx(transition, rel=1e-4)
+
+
+def test_drag_torque_feature_known_answer():
+    """drag_torque_feature on a synthetic record: a sinusoidal screw motion with plateaus of constant speed, the
+    torque = friction 0.15 N m opposing the motion + an inertial term + a load torque 0.4 N m + an offset
+    0.02 N m: the half hysteresis width at constant speed returns the friction alone."""
+    dt = 1e-3
+    t = np.arange(0.0, 8.0, dt)
+    speed = 0.02 * np.clip(1.5 * np.sin(2 * np.pi * t / 4.0), -1.0, 1.0)  # m/s, flat tops of constant speed
+    screw = np.cumsum(speed) * dt
+    acceleration = np.gradient(speed, dt)
+    torque = 0.15 * np.sign(speed) + 5.0 * acceleration + 0.4 + 0.02
+    acc = np.zeros(N_ACCUMULATORS)
+    for k in range(t.size):
+        accumulate(acc, 0.0, screw[k], torque[k], k == 0, MOTION_SPEED_THRESHOLD * dt)
+    assert finish(acc, t.size)["drag_torque_feature"] == pytest.approx(0.15, rel=1e-9)
+    # never at constant speed both ways: NaN
+    acc = np.zeros(N_ACCUMULATORS)
+    for k in range(2000):
+        accumulate(acc, 0.0, screw[k], torque[k], k == 0, MOTION_SPEED_THRESHOLD * dt)
+    assert np.isnan(finish(acc, 2000)["drag_torque_feature"])

@@ -164,9 +164,9 @@ def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise
     arm = c[K.LEAD_ARM]
     threshold = MOTION_SPEED_THRESHOLD * sample_time
     accumulate(memory[M.FEATURES_TRUE:M.FEATURES_TRUE + N_ACCUMULATORS], x[S.NUT1_POSITION] - c[K.NUT1_ZERO],
-               arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]), n == 0, threshold)
-    accumulate(memory[M.FEATURES_MEASURED:M.FEATURES_MEASURED + N_ACCUMULATORS], sled, arm * screw_angle, n == 0,
-               threshold)
+               arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]), torque, n == 0, threshold)
+    accumulate(memory[M.FEATURES_MEASURED:M.FEATURES_MEASURED + N_ACCUMULATORS], sled, arm * screw_angle,
+               memory[M.TORQUE], n == 0, threshold)
     memory[M.SAMPLES] = n + 1
 
 
