@@ -102,8 +102,8 @@ def efficiency_study(params) -> dict:
             for f in (0.5 * NOMINAL_FORCE, NOMINAL_FORCE, 2.0 * NOMINAL_FORCE) for rpm in SPEEDS_RPM}
     k_rf = np.linspace(0.5, 2.0, 7)
     out["k_rf"] = k_rf.tolist()
-    out["vs_k_rf"] = {f"{rpm:.0f}": [steady_efficiency(params.with_values({"ball_screw.rolling_friction_multiplier": k}),
-                                                        NOMINAL_PRELOAD, NOMINAL_FORCE, rpm * RPM)[0] for k in k_rf]
+    scaled = [params.with_values({"ball_screw.rolling_friction_multiplier": k}) for k in k_rf]
+    out["vs_k_rf"] = {f"{rpm:.0f}": [steady_efficiency(q, NOMINAL_PRELOAD, NOMINAL_FORCE, rpm * RPM)[0] for q in scaled]
                       for rpm in SPEEDS_RPM}
     map_loads, map_preloads = np.linspace(200.0, DYNAMIC_LOAD, 40), np.linspace(0.0, 2.0 * NOMINAL_PRELOAD, 30)
     out["map"] = {"loads": map_loads.tolist(), "preloads": map_preloads.tolist(),
@@ -130,7 +130,8 @@ def hysteresis_study(params, backlashes=(0.0, 10e-6, 40e-6), duration: float = 4
         scene = scene_from_dict({
             "name": f"hysteresis_{b * 1e6:.0f}um", "duration": duration,
             "position_demand": [{"kind": "hold", "end": 0.2},
-                                {"kind": "sinusoid", "end": duration, "amplitude": 0.01, "frequency": 0.5, "phase": 0.0}],
+                                {"kind": "sinusoid", "end": duration, "amplitude": 0.01, "frequency": 0.5,
+                                 "phase": 0.0}],
             "force_demand": [],
             "conditions": {**CONDITIONS, "preload": 0.0, "backlash": b}})
         ds = twin.simulate(scene, params, rng=0, fidelity={"encoders": "ideal", "analog_sensors": "ideal"})
@@ -278,7 +279,8 @@ def run_chapter5(directory: str | Path, params=None, *, dynamic: bool = True) ->
     directory.mkdir(parents=True, exist_ok=True)
     params = params if params is not None else twin.load_parameters("bench")
     efficiency, drag, regimes = efficiency_study(params), drag_study(params), regimes_study(params)
-    paths = _figure_efficiency(efficiency, directory) + [_figure_drag(drag, directory), _figure_regimes(regimes, directory)]
+    paths = _figure_efficiency(efficiency, directory) + [_figure_drag(drag, directory),
+                                                         _figure_regimes(regimes, directory)]
     data = {"efficiency": efficiency, "drag": drag, "regimes": regimes}
     if dynamic:
         hysteresis = hysteresis_study(params)
