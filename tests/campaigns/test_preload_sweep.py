@@ -22,7 +22,8 @@ def test_preload_loss_spec_loads_with_its_reference_and_requirement():
 def test_preload_sweep_without_reference_or_requirement_is_rejected(tmp_path):
     text = SPEC.read_text().replace('reference = "p1000"\n', "").replace("requirement = 200.0\n", "")
     bad = tmp_path / "bad.toml"
-    bad.write_text(text.replace('extends = "thesis_backlash.toml"', f'extends = "{SPEC.parent / "thesis_backlash.toml"}"'))
+    parent = SPEC.parent / "thesis_backlash.toml"
+    bad.write_text(text.replace('extends = "thesis_backlash.toml"', f'extends = "{parent}"'))
     with pytest.raises(SpecError) as error:
         load_spec(bad)
     message = str(error.value)
