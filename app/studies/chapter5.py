@@ -155,7 +155,10 @@ def regimes_study(params, preload: float = 1000.0) -> dict:
     for sharing in SHARINGS:
         loads = [nut_loads(preload, f, sharing) for f in forces]
         out[sharing] = {"nut1": [a for a, _ in loads], "nut2": [b for _, b in loads]}
-    out["transition"] = {"chapter5": 2.0 * preload, "bench": preload, "rigid_spacer": 2.0**1.5 * preload}
+    # where a nut's contact changes side: the load F here opposes a +x motion, i.e. the external force on the
+    # nuts is -F; on the bench the master changes side when the external force (+x) exceeds the preload
+    out["transition"] = {"chapter5": [-2.0 * preload, 2.0 * preload], "bench": [-preload],
+                         "rigid_spacer": [-(2.0**1.5) * preload, 2.0**1.5 * preload]}
     return out
 
 
@@ -225,14 +228,20 @@ def _figure_drag(data: dict, directory: Path) -> Path:
 
 def _figure_hysteresis(data: dict, directory: Path) -> list[Path]:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    zoom = (0.6, 0.9)  # s: the first reversal of the sinusoid (at 0.7 s)
     for b, run in data.items():
         t = np.array(run["time"])
-        axes[0].plot(t, np.array(run["nut"]) * 1e3, label=f"nut, b = {b} um")
-        axes[1].plot(t, np.array(run["nut_speed"]) * 1e3, label=f"nut, b = {b} um")
+        axes[0].plot(t, (np.array(run["nut"]) - np.array(run["screw"])) * 1e6, label=f"b = {b} um")
+        near = (t >= zoom[0]) & (t <= zoom[1])
+        axes[1].plot(t[near], np.array(run["nut_speed"])[near] * 1e3, label=f"nut, b = {b} um")
     first = next(iter(data.values()))
-    axes[0].plot(first["time"], np.array(first["screw"]) * 1e3, "k:", lw=0.8, label="screw (b = 0)")
-    axes[0].set(xlabel="time [s]", ylabel="position [mm]", title="Fig. 5.11 analogue: positions")
-    axes[1].set(xlabel="time [s]", ylabel="nut speed [mm/s]", title="nut speeds")
+    t = np.array(first["time"])
+    near = (t >= zoom[0]) & (t <= zoom[1])
+    screw_speed = np.gradient(np.array(first["screw"]), t)
+    axes[1].plot(t[near], screw_speed[near] * 1e3, "k:", lw=1.0, label="screw (b = 0)")
+    axes[0].set(xlabel="time [s]", ylabel="nut - screw equivalent position [um]",
+                title="Fig. 5.11 analogue: the nut leaves the screw by the backlash")
+    axes[1].set(xlabel="time [s]", ylabel="speed [mm/s]", title="speeds at the first reversal")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -257,9 +266,10 @@ def _figure_regimes(data: dict, directory: Path) -> Path:
         ax.plot(forces, np.array(data[sharing]["nut1"]) / 1e3, label="nut 1 (master)")
         ax.plot(forces, np.array(data[sharing]["nut2"]) / 1e3, label="nut 2 (slave)")
         ax.axhline(0.0, color="k", lw=0.6)
-        ax.axvline(data["transition"][sharing] / 1e3, color="r", ls="--",
-                   label=f"side change at {data['transition'][sharing] / data['preload']:g} F_pr")
-        ax.set(xlabel="external force (load opposing the motion) [kN]", title=f"Fig. 5.13 regimes, {sharing}")
+        for k, load in enumerate(data["transition"][sharing]):
+            ax.axvline(load / 1e3, color="r", ls="--",
+                       label=f"side change at {abs(load) / data['preload']:g} F_pr" if k == 0 else None)
+        ax.set(xlabel="load F opposing a +x motion (external force -F) [kN]", title=f"Fig. 5.13 regimes, {sharing}")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     axes[0].set_ylabel("axial contact force of the screw on the nut [kN]")
