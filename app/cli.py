@@ -245,6 +245,17 @@ def cmd_report(args) -> int:
     return 0
 
 
+def cmd_chapter5(args) -> int:
+    from app.studies.chapter5 import run_chapter5
+
+    result = run_chapter5(args.out, dynamic=not args.no_dynamic)
+    for path in result["figures"]:
+        print(f"wrote {path}")
+    for key, value in result["summary"].items():
+        print(f"{key}: {value}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -282,6 +293,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--replot", action="store_true", help="only regenerate the charts from the data in --out")
     p.set_defaults(func=cmd_accuracy)
 
+    p = sub.add_parser("chapter5", help="validation against the thesis's Ch. 5: Figs. 5.6-5.13 and 7.22 regenerated")
+    p.add_argument("--out", type=Path, default=Path("out/chapter5"), help="output directory (default out/chapter5)")
+    p.add_argument("--no-dynamic", action="store_true", help="skip the simulated hysteresis of Figs. 5.11-5.12")
+    p.set_defaults(func=cmd_chapter5)
     campaign = sub.add_parser("campaign", help="Monte Carlo campaigns: run a spec, analyse its results")
     campaign_sub = campaign.add_subparsers(dest="campaign_command", required=True)
     p = campaign_sub.add_parser("run", help="run a campaign spec (TOML) on a local dask cluster or a scheduler")

@@ -38,6 +38,10 @@ REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear back
 MIN_OK_RUNS = 20
 _VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not met / undetermined / insufficient data"}
 _STATEMENT_ATTRS = {"long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, in one sentence"}
+#: What a sweep's condition measures: condition -> (fault quantity, unit, display scale, display unit). The
+#: fault size of a data set is ``|condition - condition of the reference|`` (the backlash itself; the loss of
+#: preload from the healthy reference).
+SWEEP_QUANTITIES = {"backlash": ("backlash", "m", 1e6, "µm"), "preload": ("preload loss", "N", 1.0, "N")}
 #: Spawn-key tag of the observability bootstrap's random stream (the correlation bootstraps use (dataset, feature)).
 _OBSERVABILITY_STREAM = 1_000_003
 #: Spawn-key tag of the first-order index bootstrap's random stream.
@@ -321,10 +325,6 @@ def _runs(n: int) -> str:
     return f"{n} ok run{'s' if n != 1 else ''}"
 
 
-def _micrometres(value: float) -> str:
-    return f"{value * 1e6:.3g} µm"
-
-
 def requirement_statement(
     verdict: str,
     estimate: float,
@@ -335,8 +335,11 @@ def requirement_statement(
     power: float = 0.95,
     min_ok_runs: int = MIN_OK_RUNS,
     largest_level: float = math.nan,
+    condition: str = "backlash",
+    requirement: float = BACKLASH_REQUIREMENT,
+    requirement_source: str = "Table 9.3",
 ) -> str:
-    """The one sentence that states the verdict on the Table 9.3 requirement, from the numbers.
+    """The one sentence that states the verdict on the requirement (Table 9.3's by default), from the numbers.
 
     Parameters
     ----------
@@ -350,27 +353,34 @@ def requirement_statement(
         Ok runs of each sweep data set (empty: no sweep).
     confidence, power, min_ok_runs, largest_level
         As used for the numbers (``largest_level``: the largest backlash of the sweep).
+    condition, requirement, requirement_source
+        The swept condition (:data:`SWEEP_QUANTITIES`), the requirement on its fault size (SI) and its source.
     """
-    against = f"against the {_micrometres(BACKLASH_REQUIREMENT)} requirement of Table 9.3"
+    quantity, _, scale, unit = SWEEP_QUANTITIES[condition]
+
+    def fmt(value: float) -> str:  # in the display unit of the fault quantity (µm for the backlash)
+        return f"{value * scale:.3g} {unit}"
+
+    against = f"against the {fmt(requirement)} requirement of {requirement_source}"
     if not n_used:
-        return f"insufficient data: the spec has no observability sweep, so no minimum detectable backlash is estimated {against}"
+        return f"insufficient data: the spec has no observability sweep, so no minimum detectable {quantity} is estimated {against}"
     short = [f"{name} has {_runs(n)}" for name, n in n_used.items() if n < min_ok_runs]
     if len(short) == len(n_used) > 1 and len(set(n_used.values())) == 1:
         short = [f"each of the {len(n_used)} sweep data sets has {_runs(next(iter(n_used.values())))}"]
     if short:
         return (
             f"insufficient data: {', '.join(short)} (at least {min_ok_runs} per sweep data set are needed), "
-            f"so no minimum detectable backlash is estimated {against}"
+            f"so no minimum detectable {quantity} is estimated {against}"
         )
     counts = sorted(set(n_used.values()))
     runs = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
     lower, upper = bounds
-    upper_text = f"at most {_micrometres(upper)}" if math.isfinite(upper) else f"possibly beyond the sweep ({_micrometres(largest_level)})"
-    level = "" if math.isfinite(estimate) else f"not reached up to {_micrometres(largest_level)}: "
-    value = _micrometres(estimate) if math.isfinite(estimate) else f"detection probability below {power * 100:g} %"
+    upper_text = f"at most {fmt(upper)}" if math.isfinite(upper) else f"possibly beyond the sweep ({fmt(largest_level)})"
+    level = "" if math.isfinite(estimate) else f"not reached up to {fmt(largest_level)}: "
+    value = fmt(estimate) if math.isfinite(estimate) else f"detection probability below {power * 100:g} %"
     return (
-        f"{verdict}: minimum detectable backlash {level}{value} ({confidence * 100:g} % bootstrap bounds: above "
-        f"{_micrometres(lower)}, {upper_text}; {runs} ok runs per sweep data set, {len(n_used)} data sets) {against}"
+        f"{verdict}: minimum detectable {quantity} {level}{value} ({confidence * 100:g} % bootstrap bounds: above "
+        f"{fmt(lower)}, {upper_text}; {runs} ok runs per sweep data set, {len(n_used)} data sets) {against}"
     )
 
 
@@ -389,8 +399,12 @@ def observability_sweep(
     confidence: float = 0.95,
     min_ok_runs: int = MIN_OK_RUNS,
     seed=None,
+    condition: str = "backlash",
+    reference: str | None = None,
+    requirement: float = BACKLASH_REQUIREMENT,
+    requirement_source: str = REQUIREMENT_SOURCE,
 ) -> xr.Dataset:
-    """Detection probability along a backlash sweep, the minimum detectable backlash and the verdict.
+    """Detection probability along a fault sweep, the minimum detectable fault size and the verdict.
 
     Parameters
     ----------
@@ -408,18 +422,25 @@ def observability_sweep(
     min_ok_runs : int
         Ok runs every sweep data set needs; below it the verdict is ``"insufficient data"``
         and the sweep statistics of that data set are NaN.
+    condition, reference, requirement, requirement_source
+        The swept scene condition (:data:`SWEEP_QUANTITIES`; ``observability.condition`` of the
+        spec), the reference data set (default: the one where it is zero), the requirement on the
+        fault size (SI) and its source.
 
     Returns
     -------
     xarray.Dataset
-        ``sweep_backlash(sweep_point)``, ``sweep_detection_probability(sweep_point)``,
-        the scalar ``minimum_detectable_backlash`` (the Table 9.3 requirement in its
-        attributes), ``minimum_detectable_bracket(bound)`` (the sweep levels around
-        the estimate), ``minimum_detectable_backlash_ci(bound)``,
-        ``requirement_verdict`` and ``requirement_statement``.
+        ``sweep_<q>(sweep_point)``, ``sweep_detection_probability(sweep_point)``,
+        the scalar ``minimum_detectable_<q>`` (the requirement in its attributes),
+        ``minimum_detectable_bracket(bound)`` (the sweep levels around the estimate),
+        ``minimum_detectable_<q>_ci(bound)``, ``requirement_verdict`` and ``requirement_statement``,
+        where ``<q>`` is the fault quantity (``backlash``, ``preload_loss``).
     """
-    backlash = np.array([float(results["condition_backlash"].sel(dataset=n)) for n in datasets])
-    reference = int(np.flatnonzero(backlash == 0.0)[0])
+    quantity, unit, _, _ = SWEEP_QUANTITIES[condition]
+    stem = quantity.replace(" ", "_")
+    values = np.array([float(results[f"condition_{condition}"].sel(dataset=n)) for n in datasets])
+    reference = datasets.index(reference) if reference is not None else int(np.flatnonzero(values == 0.0)[0])
+    backlash = np.abs(values - values[reference])  # the fault size of each sweep data set
     used = _used(results, feature)
     samples = [results[feature].sel(dataset=n).values[used.sel(dataset=n).values] for n in datasets]
     n_used = {n: len(s) for n, s in zip(datasets, samples, strict=False)}
@@ -434,40 +455,41 @@ def observability_sweep(
             confidence=confidence, seed=seed,
         )
         probability, estimate, bracket, bounds = found["probability"], found["estimate"], found["bracket"], found["bounds"]
-        verdict = requirement_verdict(*bounds)
+        verdict = requirement_verdict(*bounds, requirement)
     statement = requirement_statement(
         verdict, estimate, bounds, n_used, confidence=confidence, power=power, min_ok_runs=min_ok_runs,
-        largest_level=float(backlash.max()),
+        largest_level=float(backlash.max()), condition=condition, requirement=requirement,
+        requirement_source=requirement_source.removeprefix("Bertolino (2020) ").split(":")[0],
     )
     return xr.Dataset(
         {
-            "sweep_backlash": ("sweep_point", backlash, {"units": "m", "long_name": "backlash of the sweep data set"}),
+            f"sweep_{stem}": ("sweep_point", backlash, {"units": unit, "long_name": f"{quantity} of the sweep data set"}),
             "sweep_detection_probability": (
                 "sweep_point",
                 probability,
                 {"units": "1", "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against {datasets[reference]} (NaN: insufficient data)"},
             ),
-            "minimum_detectable_backlash": (
+            f"minimum_detectable_{stem}": (
                 (),
                 estimate,
                 {
-                    "units": "m",
-                    "long_name": f"smallest backlash detected with probability {power:g} at false-alarm rate {false_alarm_rate:g} (linear interpolation along the sweep; NaN: not reached or insufficient data)",
-                    "requirement": BACKLASH_REQUIREMENT,
-                    "requirement_source": REQUIREMENT_SOURCE,
+                    "units": unit,
+                    "long_name": f"smallest {quantity} detected with probability {power:g} at false-alarm rate {false_alarm_rate:g} (linear interpolation along the sweep; NaN: not reached or insufficient data)",
+                    "requirement": requirement,
+                    "requirement_source": requirement_source,
                 },
             ),
             "minimum_detectable_bracket": (
                 "bound",
                 np.array(bracket),
-                {"units": "m", "long_name": "sweep levels bracketing minimum_detectable_backlash (inf: never detected)"},
+                {"units": unit, "long_name": f"sweep levels bracketing minimum_detectable_{stem} (inf: never detected)"},
             ),
-            "minimum_detectable_backlash_ci": (
+            f"minimum_detectable_{stem}_ci": (
                 "bound",
                 np.array(bounds),
                 {
-                    "units": "m",
-                    "long_name": "bootstrap bounds of the minimum detectable backlash: lower = a sweep level not detected "
+                    "units": unit,
+                    "long_name": f"bootstrap bounds of the minimum detectable {quantity}: lower = a sweep level not detected "
                     "(the minimum lies above it), upper = a sweep level detected (inf: not reached)",
                     "confidence": confidence,
                     "n_boot": n_boot,
@@ -612,19 +634,25 @@ def analysis_dataset(
         "status": ("status", np.array(statuses, dtype=object)),
     }
     analysis = xr.Dataset(data_vars, coords=coords)
-    sweep = json.loads(results.attrs["spec_json"])["spec"]["observability"]["sweep"]
+    observability = json.loads(results.attrs["spec_json"])["spec"]["observability"]
+    sweep = observability["sweep"]
+    condition = observability.get("condition", "backlash")
+    requirement = (observability.get("requirement") or BACKLASH_REQUIREMENT, observability.get("requirement_source")
+                   or REQUIREMENT_SOURCE)
     if sweep:
         per_feature = [
             observability_sweep(
                 results, feature, sweep, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
                 confidence=confidence, min_ok_runs=min_ok_runs,
-                seed=np.random.SeedSequence(seed, spawn_key=(_OBSERVABILITY_STREAM, f)),
+                seed=np.random.SeedSequence(seed, spawn_key=(_OBSERVABILITY_STREAM, f)), condition=condition,
+                reference=observability.get("reference"), requirement=requirement[0], requirement_source=requirement[1],
             )
             for f, feature in enumerate(features)
         ]
-        combined = xr.concat([s.drop_vars("sweep_backlash") for s in per_feature], dim="feature")
+        levels = f"sweep_{SWEEP_QUANTITIES[condition][0].replace(' ', '_')}"
+        combined = xr.concat([s.drop_vars(levels) for s in per_feature], dim="feature")
         analysis = analysis.merge(combined.assign_coords(feature=analysis["feature"]))
-        analysis["sweep_backlash"] = per_feature[0]["sweep_backlash"]
+        analysis[levels] = per_feature[0][levels]
     else:
         statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
         analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object), _VERDICT_ATTRS)
@@ -639,9 +667,10 @@ def analysis_dataset(
         "detection_power": power,
         "backlash_sweep": json.dumps(sweep),
         "min_ok_runs": min_ok_runs,
-        "requirement": BACKLASH_REQUIREMENT,
-        "requirement_units": "m",
-        "requirement_source": REQUIREMENT_SOURCE,
+        "observability_condition": condition,
+        "requirement": requirement[0],
+        "requirement_units": SWEEP_QUANTITIES[condition][1],
+        "requirement_source": requirement[1],
     }
     robustness = control_robustness(results, correlate=bootstrap_correlation, verdict_rule=requirement_verdict,
                                     features=features, n_boot=n_boot, confidence=confidence, seed=seed,

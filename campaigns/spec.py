@@ -197,13 +197,20 @@ class Dataset(_Strict):
 
 
 class Observability(_Strict):
-    """The backlash sweep analysed for the minimum detectable backlash (Table 9.3).
+    """The fault sweep analysed for the minimum detectable fault size.
 
-    ``sweep`` names data sets that differ only in their backlash (each sets
-    ``conditions.backlash``); the one with zero backlash is the reference.
+    ``sweep`` names data sets that differ only in the scene condition ``condition``
+    (each sets it). For ``"backlash"`` (default) the reference is the data set with zero backlash
+    and the requirement is Table 9.3's 1 µm. For ``"preload"`` (preload loss) the reference is
+    named by ``reference`` (the healthy preload), the fault size is the loss ``preload_ref -
+    preload``, and ``requirement`` [N] with its ``requirement_source`` must be given.
     """
 
     sweep: list[str] = []
+    condition: Literal["backlash", "preload"] = "backlash"
+    reference: str | None = None
+    requirement: float | None = Field(default=None, gt=0)
+    requirement_source: str = ""
 
 
 class Uncertainty(_Strict):
@@ -399,24 +406,35 @@ def cross_field_problems(data: dict) -> list[str]:
     observability = data.get("observability")
     sweep = observability.get("sweep") if isinstance(observability, dict) else None
     if isinstance(sweep, list):
-        problems += _sweep_problems([n for n in sweep if isinstance(n, str)], datasets)
+        problems += _sweep_problems([n for n in sweep if isinstance(n, str)], datasets, observability)
     return problems
 
 
-def _sweep_problems(sweep: list[str], datasets: list[dict]) -> list[str]:
+def _sweep_problems(sweep: list[str], datasets: list[dict], observability: dict) -> list[str]:
     if not sweep:
         return []
+    condition = observability.get("condition", "backlash")
+    reference = observability.get("reference")
     by_name = {d["name"]: d for d in datasets if isinstance(d.get("name"), str)}
     unknown = [n for n in sweep if n not in by_name]
     if unknown:
         return [f"observability.sweep: unknown data set(s) {', '.join(unknown)}"]
     conditions = {n: by_name[n].get("conditions") if isinstance(by_name[n].get("conditions"), dict) else {} for n in sweep}
-    problems = [f"observability.sweep: data set {n} does not set conditions.backlash" for n in sweep if "backlash" not in conditions[n]]
-    zeros = [n for n in sweep if conditions[n].get("backlash") == 0.0]
-    if not problems and len(zeros) != 1:
-        problems.append(f"observability.sweep: needs exactly one zero-backlash reference, found {len(zeros)}")
+    problems = [f"observability.sweep: data set {n} does not set conditions.{condition}" for n in sweep
+                if condition not in conditions[n]]
+    if reference is not None:
+        if reference not in sweep:
+            problems.append(f"observability.reference: {reference!r} is not in observability.sweep")
+    elif condition != "backlash":
+        problems.append(f"observability.reference: required for a {condition} sweep (the healthy data set)")
+    else:
+        zeros = [n for n in sweep if conditions[n].get("backlash") == 0.0]
+        if not problems and len(zeros) != 1:
+            problems.append(f"observability.sweep: needs exactly one zero-backlash reference, found {len(zeros)}")
+    if condition != "backlash" and observability.get("requirement") is None:
+        problems.append(f"observability.requirement: required for a {condition} sweep (the fault size to detect)")
     if len(sweep) < 2:
-        problems.append("observability.sweep: needs the reference and at least one backlash level")
+        problems.append(f"observability.sweep: needs the reference and at least one {condition} level")
     return problems
 
 

@@ -213,6 +213,23 @@ class K(IntEnum):
     CURRENT_LOOP_TAU = 119    # s, time constant of the ideal current loop (1 / (2 pi bandwidth))
     NUT_ROTATION = 120        # 1.0 = nut roll on the guides integrated, 0.0 = rigid guides
     LINEAR_CONTACT_STIFFNESS = 121  # N/m per sphere along the normal, the "linear" contact level
+    # ball-groove friction of the reduced Ch. 5 model (twin.physics.ball_groove_friction)
+    BALL_GROOVE_FRICTION = 122  # BALL_GROOVE_FRICTION_* code below (fidelity "ball_groove_friction")
+    FRICTION_G1 = 123         # Eq. 5.16 coefficients g_1 ... g_6
+    FRICTION_G2 = 124
+    FRICTION_G3 = 125
+    FRICTION_G4 = 126
+    FRICTION_G5 = 127
+    FRICTION_G6 = 128
+    ROLLING_K_GC = 129        # m/N^0.26, Eqs. 5.20-5.23
+    ROLLING_K_RF = 130        # friction multiplier k_rf
+    ROLLING_F_V1 = 131        # s^2, Eqs. 5.19/5.21
+    ROLLING_THRESHOLD = 132   # m/s, direction regularisation of the rolling term
+    BALL_RADIUS = 133         # r_b [m]
+    PITCH_RADIUS = 134        # r_m [m]
+    SIN_HELIX = 135           # sin(alpha_e)
+    # screw torsion between the coupling and the nuts (fidelity "screw_torsion")
+    SHAFT_TWIST_COMPLIANCE = 136  # (p/2pi)^2 / (G J_p) [1/N]: the shaft twist as an axial compliance per length
 
 N_CONSTANTS = len(K)
 
@@ -222,6 +239,11 @@ CONTACT_VARIABLE_ANGLE = 1  # Hertz with the Eq. 9.4 load-dependent angle
 CONTACT_LINEAR = 2          # linear normal stiffness at the design angle (elasto-backlash of Ch. 5)
 CONTACT_LEVELS = {"constant_angle": CONTACT_CONSTANT_ANGLE, "variable_angle": CONTACT_VARIABLE_ANGLE,
                   "linear": CONTACT_LINEAR}
+
+# Ball-groove friction codes (constant K.BALL_GROOVE_FRICTION).
+BALL_GROOVE_FRICTION_LUMPED = 0     # no ball-groove friction; the support bearings' lumped term only
+BALL_GROOVE_FRICTION_CHAPTER5 = 1   # sliding (Eq. 5.16) and rolling (Eqs. 5.17-5.24) friction on both nuts
+BALL_GROOVE_FRICTION_LEVELS = {"lumped": BALL_GROOVE_FRICTION_LUMPED, "chapter5": BALL_GROOVE_FRICTION_CHAPTER5}
 
 
 class Signal(IntEnum):
@@ -259,6 +281,10 @@ class Signal(IntEnum):
     TORQUE_MEASURED = 28
     PRELOAD_FORCE_MEASURED = 29
     EXTERNAL_FORCE_MEASURED = 30
+    # reduced Ch. 5 ball screw outputs (twin.physics.ball_groove_friction)
+    BALL_GROOVE_FRICTION_TORQUE = 31
+    BALL_SCREW_EFFICIENCY = 32
+    SCREW_TWIST = 33
 
 
 N_SIGNALS = len(Signal)
@@ -301,6 +327,11 @@ SIGNAL_META = {
     Signal.TORQUE_MEASURED: ("N m", "torque-meter reading"),
     Signal.PRELOAD_FORCE_MEASURED: ("N", "preload load-cell reading"),
     Signal.EXTERNAL_FORCE_MEASURED: ("N", "external-force load-cell reading"),
+    Signal.BALL_GROOVE_FRICTION_TORQUE: ("N m", "ball-groove friction torque opposing the screw rotation, both nuts "
+                                                "(Eqs. 5.16-5.24; the drag torque, Eq. 7.85, without external force)"),
+    Signal.BALL_SCREW_EFFICIENCY: ("1", "ball-screw mechanical efficiency (Eq. 5.25): P_out/P_in driving, "
+                                        "-P_in/P_out back-driving, 0 at rest or when both powers enter"),
+    Signal.SCREW_TWIST: ("rad", "torsion of the screw shaft between the coupling and the master nut"),
 }
 
 

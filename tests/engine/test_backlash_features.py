@@ -24,7 +24,7 @@ FEATURES = ["backlash_feature", "backlash_feature_true", "backlash_hysteresis", 
 def _accumulated(sled, screw, threshold):
     acc = np.zeros(N_ACCUMULATORS)
     for k, (x, s) in enumerate(zip(sled, screw, strict=False)):
-        accumulate(acc, x, s, k == 0, threshold)
+        accumulate(acc, x, s, 0.0, k == 0, threshold)
     return finish(acc, len(sled))
 
 

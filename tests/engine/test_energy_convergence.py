@@ -11,7 +11,13 @@ from twin.engine.model import build_model
 from twin.fidelity import resolve_fidelity
 from twin.layout import N_INPUTS, S
 
+#: The ball-groove friction of the reduced Ch. 5 model (twin.physics.ball_groove_friction), off.
+BALL_GROOVE_FRICTION_OFF = {
+    "ball_screw.sliding_friction_g1": 0.0, "ball_screw.sliding_friction_g4": 0.0, "ball_screw.sliding_friction_g6": 0.0,
+    "ball_screw.rolling_friction_load_coefficient": 0.0, "ball_screw.rolling_friction_speed_coefficient": 0.0,
+}
 LOSSLESS = {
+    **BALL_GROOVE_FRICTION_OFF,
     "motor.viscous_damping": 0.0, "motor.friction_static_torque": 0.0, "motor.friction_dynamic_torque": 0.0,
     "reducer.efficiency": 1.0, "drivetrain.damping": 0.0, "ball_screw.contact_damping_coefficient": 0.0,
     "ball_screw.screw_axial_damping": 0.0, "ball_screw.screw_rotational_damping": 0.0,

@@ -6,7 +6,7 @@ import numpy as np
 from scipy.integrate import quad
 
 from twin.engine.model import contact_force
-from twin.engine.plant import nut_relative_position
+from twin.engine.plant import nut_relative_position, screw_axial_stiffness
 from twin.layout import K, S
 from twin.physics.coupling import elasto_backlash_energy
 
@@ -26,7 +26,7 @@ def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) 
     """Kinetic plus elastic energy of the drivetrain, screw, nuts and preload spring [J].
 
     Covers every spring of :func:`twin.engine.plant.rhs` (torsional elasto-backlash,
-    screw axial support, ball-groove contacts, guides' roll stiffness, preload set).
+    screw axial support and shaft twist, ball-groove contacts, guides' roll stiffness, preload set).
     The preload damping/saturation and the external force are not included:
     use it with those inactive.
     """
@@ -38,7 +38,7 @@ def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) 
         + c[K.MASS_NUT2] * x[S.NUT2_SPEED] ** 2
         + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
     )
-    axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + (c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]) / c[K.SHAFT_EA])
+    axial_stiffness, _ = screw_axial_stiffness(x, c)
     compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     elastic = (
         elasto_backlash_energy(x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], c[K.TORSION_STIFFNESS], c[K.REDUCER_BACKLASH])

@@ -15,6 +15,7 @@ from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.integrators import WORK_VECTORS, step
 from twin.engine.plant import (
+    ball_screw_outputs,
     external_force,
     internal_forces,
     nut_relative_position,
@@ -73,13 +74,14 @@ def guard(x, c):
 @numba.njit(cache=True)
 def record(row, t, x, c, u, memory, force_table, stiffness_poly):
     """Write one output row: true signals from the state, measured ones from the last acquisition."""
-    torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
+    torque, f1, f2, preload, external, p1, p2 = internal_forces(t, x, c, force_table, stiffness_poly)
     row[Signal.POSITION_DEMAND] = memory[M.DEMAND]
     row[Signal.NUT1_POSITION] = x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
     row[Signal.NUT2_POSITION] = x[S.NUT2_POSITION] - c[K.NUT1_ZERO]
     row[Signal.SCREW_ANGLE] = x[S.SCREW_ANGLE]
     row[Signal.SCREW_EQUIVALENT_POSITION] = c[K.LEAD_ARM] * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO])
-    row[Signal.SCREW_AXIAL_POSITION] = x[S.SCREW_AXIAL]
+    (row[Signal.BALL_GROOVE_FRICTION_TORQUE], row[Signal.BALL_SCREW_EFFICIENCY], row[Signal.SCREW_TWIST],
+     row[Signal.SCREW_AXIAL_POSITION]) = ball_screw_outputs(x, c, f1, f2, p1, p2)
     row[Signal.MOTOR_CURRENT] = x[S.CURRENT]
     row[Signal.MOTOR_TORQUE] = c[K.TORQUE_CONSTANT] * x[S.CURRENT]
     row[Signal.MOTOR_SPEED] = c[K.RATIO] * x[S.REDUCER_SPEED]
@@ -162,9 +164,9 @@ def acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise
     arm = c[K.LEAD_ARM]
     threshold = MOTION_SPEED_THRESHOLD * sample_time
     accumulate(memory[M.FEATURES_TRUE:M.FEATURES_TRUE + N_ACCUMULATORS], x[S.NUT1_POSITION] - c[K.NUT1_ZERO],
-               arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]), n == 0, threshold)
-    accumulate(memory[M.FEATURES_MEASURED:M.FEATURES_MEASURED + N_ACCUMULATORS], sled, arm * screw_angle, n == 0,
-               threshold)
+               arm * (x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]), torque, n == 0, threshold)
+    accumulate(memory[M.FEATURES_MEASURED:M.FEATURES_MEASURED + N_ACCUMULATORS], sled, arm * screw_angle,
+               memory[M.TORQUE], n == 0, threshold)
     memory[M.SAMPLES] = n + 1
 
 

@@ -12,6 +12,7 @@ from scipy.optimize import brentq
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
 from twin.layout import (
+    BALL_GROOVE_FRICTION_LEVELS,
     CONTACT_LEVELS,
     CONTACT_LINEAR,
     N_CONSTANTS,
@@ -118,6 +119,18 @@ PARAMETER_CONSTANTS: dict[K, str] = {
     K.BEARING_STIFFNESS: "ball_screw.rear_bearing_axial_stiffness",
     K.SHAFT_LENGTH_0: "ball_screw.bearing_to_nut_distance",
     K.SCREW_AXIAL_DAMPING: "ball_screw.screw_axial_damping",
+    K.FRICTION_G1: "ball_screw.sliding_friction_g1",  # Eq. 5.16 coefficients
+    K.FRICTION_G2: "ball_screw.sliding_friction_g2",
+    K.FRICTION_G3: "ball_screw.sliding_friction_g3",
+    K.FRICTION_G4: "ball_screw.sliding_friction_g4",
+    K.FRICTION_G5: "ball_screw.sliding_friction_g5",
+    K.FRICTION_G6: "ball_screw.sliding_friction_g6",
+    K.ROLLING_K_GC: "ball_screw.rolling_friction_load_coefficient",  # Eqs. 5.19-5.24
+    K.ROLLING_K_RF: "ball_screw.rolling_friction_multiplier",
+    K.ROLLING_F_V1: "ball_screw.rolling_friction_speed_coefficient",
+    K.ROLLING_THRESHOLD: "ball_screw.rolling_friction_direction_threshold",
+    K.BALL_RADIUS: "ball_screw.ball_radius",
+    K.PITCH_RADIUS: "ball_screw.pitch_radius",
     # sled.toml
     K.MASS_NUT1: "sled.master_mass",
     K.MASS_NUT2: "sled.slave_mass",
@@ -185,6 +198,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     if c[K.CONTACT_MODEL] == CONTACT_LINEAR:
         c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
     c[K.BACKLASH] = scene.condition("backlash")
+    ball_groove_friction_constants(c, p, fidelity)
     # nuts, guides (Eq. 9.8, Eq. 7.63)
     c[K.NUT_ROTATION] = 1.0 if fidelity.level("nut_rotation") == "on" else 0.0
     # preload (Secs. 9.2-9.3)
@@ -244,6 +258,19 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
     return stiffness_poly
+
+
+def ball_groove_friction_constants(c: np.ndarray, p: dict[str, float], fidelity: Levels) -> None:
+    """Fill the derived constants of the ball-groove friction (Eqs. 5.16-5.24, reduced:
+    :mod:`twin.physics.ball_groove_friction`; its coefficients are rows of :data:`PARAMETER_CONSTANTS`) and of
+    the screw's torsion between the coupling and the nuts (:func:`twin.engine.plant.screw_axial_stiffness`) at
+    their fidelity levels."""
+    c[K.BALL_GROOVE_FRICTION] = BALL_GROOVE_FRICTION_LEVELS[fidelity.level("ball_groove_friction")]
+    c[K.SIN_HELIX] = math.sin(helix_angle(p["ball_screw.lead"], p["ball_screw.pitch_radius"]))
+    polar_moment = math.pi * p["ball_screw.screw_root_diameter"] ** 4 / 32.0
+    torsion = fidelity.level("screw_torsion") == "static"
+    torsional_rigidity = p["ball_screw.shear_modulus"] * polar_moment
+    c[K.SHAFT_TWIST_COMPLIANCE] = c[K.LEAD_ARM] ** 2 / torsional_rigidity if torsion else 0.0
 
 
 def secant_contact_stiffness(c: np.ndarray, stiffness_poly: np.ndarray, load: float) -> float:

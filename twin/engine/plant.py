@@ -6,8 +6,9 @@ a held input (zero-order hold between drive samples).
 
 import numba
 
-from twin.layout import PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
+from twin.layout import BALL_GROOVE_FRICTION_CHAPTER5, PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
 from twin.physics import pneumatics as pn
+from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force
 from twin.physics.coupling import elasto_backlash
 from twin.physics.friction import stribeck_friction
@@ -58,6 +59,96 @@ def nut_contact(x, c, stiffness_poly, nut):
         c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
         c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
     return force, normal
+
+
+@numba.njit(cache=True)
+def nut_groove_speed(x, c, nut):
+    """``v_t`` of nut ``nut``: the screw grooves' speed relative to its grooves along the helix [m/s]."""
+    speed, angular = (S.NUT1_SPEED, S.NUT1_ANGULAR_SPEED) if nut == 0 else (S.NUT2_SPEED, S.NUT2_ANGULAR_SPEED)
+    return tangential_speed(x[S.SCREW_SPEED], x[angular], x[S.SCREW_AXIAL_SPEED], x[speed], c[K.PITCH_RADIUS],
+                            c[K.COS_HELIX], c[K.SIN_HELIX])
+
+
+@numba.njit(cache=True)
+def ball_groove_friction(x, c, normal_load, nut):
+    """Helix friction force of nut ``nut`` [N, along ``+v_t`` on the nut] from its per-sphere normal load,
+    at the ``ball_groove_friction`` fidelity (zero at ``lumped``; :mod:`twin.physics.ball_groove_friction`)."""
+    if int(c[K.BALL_GROOVE_FRICTION]) != BALL_GROOVE_FRICTION_CHAPTER5:
+        return 0.0
+    return nut_friction_force(normal_load, nut_groove_speed(x, c, nut), c[K.LOADED_BALLS], c[K.BALL_RADIUS],
+                              c[K.FRICTION_G1], c[K.FRICTION_G2], c[K.FRICTION_G3], c[K.FRICTION_G4],
+                              c[K.FRICTION_G5], c[K.FRICTION_G6], c[K.ROLLING_K_GC], c[K.ROLLING_K_RF],
+                              c[K.ROLLING_F_V1], c[K.ROLLING_THRESHOLD])
+
+
+@numba.njit(cache=True)
+def screw_axial_stiffness(x, c):
+    """Axial stiffness of the screw seen by the nuts [N/m] and its energy-gradient force on the sled [N].
+
+    The rear bearing in series with the shaft ``E A / (l0 + x_n1)`` (Sec. 9.3) and, at the ``static``
+    ``screw_torsion`` fidelity, the shaft's torsion between the coupling and the nuts. The coupling
+    sits at the rear-bearing end (assumption, docs/model.md), so the twisted length is the same
+    ``l = l0 + x_n1``; the shaft carries the nuts' torque ``(p/2pi)(f_1 + f_2)``, whose twist
+    ``(p/2pi)(f_1 + f_2) l / (G J_p)`` moves both nuts' relative position (Eq. 9.5) exactly as an axial
+    compliance ``(p/2pi)^2 l / (G J_p)`` in series with the shaft's (a static compliance: the shaft's
+    own inertia, 3 % of the screw-side inertia, stays with the coupling's). The stiffness depends on the
+    sled position, so the spring energy ``k(x_n1) x_s^2 / 2`` also pushes the sled with
+    ``-dE/dx_n1 = k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2``: tiny, but it keeps the model conservative.
+    """
+    # written so that a rigid shaft (zero twist compliance) gives the torsion-free model to the last bit
+    length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
+    twist = c[K.SHAFT_TWIST_COMPLIANCE]
+    stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + length / c[K.SHAFT_EA] + length * twist)
+    half_squared = 0.5 * stiffness**2 * x[S.SCREW_AXIAL] ** 2
+    return stiffness, half_squared / c[K.SHAFT_EA] + half_squared * twist
+
+
+EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)
+
+
+@numba.njit(cache=True)
+def ball_screw_outputs(x, c, f1, f2, p1, p2):
+    """Ball-screw output signals at state ``x`` from the nuts' axial forces and per-sphere normal loads.
+
+    Returns
+    -------
+    (friction_torque, efficiency, twist, axial_displacement)
+        Ball-groove friction torque opposing the screw rotation, both nuts [N m] (Eqs. 5.17-5.18 in the
+        reduced form; without external force, the drag torque of Eq. 7.85); the efficiency of Eq. 5.25
+        (below); the shaft twist between the coupling and the nuts [rad]; the screw's axial
+        displacement without the twist's share of ``x_s`` [m] (:func:`screw_axial_stiffness`).
+
+    Notes
+    -----
+    Eq. 5.25 excludes the inertial terms: the input is the torque the screw puts into the ball-groove
+    contacts (the nuts' reaction ``(p/2pi)(f_1+f_2)`` plus the friction torque) times the screw speed, the
+    output the axial force of the contacts on the nuts (friction included) times the nuts' speeds.
+    Driving (both powers positive), ``eta = P_out / P_in`` in (0, 1). Back-driving (the load drives the
+    screw, both negative), ``eta = -P_in / P_out``: the magnitude is the inverse efficiency, the negative
+    sign the reversed power flow ("when the motor brakes the action of the external force, it assumes a
+    negative sign", Sec. 5.5). Powers of opposite signs (both enter the screw: a reversal, a gap
+    crossing) or an input below ``EFFICIENCY_POWER_FLOOR`` give 0, where Fig. 5.18 drops to zero.
+    """
+    fr1 = ball_groove_friction(x, c, p1, 0)
+    fr2 = ball_groove_friction(x, c, p2, 1)
+    screw_torque_1, _, _, nut_axial_1 = friction_generalised_forces(fr1, c[K.PITCH_RADIUS], c[K.COS_HELIX],
+                                                                     c[K.SIN_HELIX])
+    screw_torque_2, _, _, nut_axial_2 = friction_generalised_forces(fr2, c[K.PITCH_RADIUS], c[K.COS_HELIX],
+                                                                     c[K.SIN_HELIX])
+    friction_torque = -(screw_torque_1 + screw_torque_2)
+    power_in = (c[K.LEAD_ARM] * (f1 + f2) + friction_torque) * x[S.SCREW_SPEED]
+    power_out = (f1 + nut_axial_1) * x[S.NUT1_SPEED] + (f2 + nut_axial_2) * x[S.NUT2_SPEED]
+    efficiency = 0.0
+    if power_in > EFFICIENCY_POWER_FLOOR and power_out >= 0.0:
+        efficiency = power_out / power_in
+    elif power_in < -EFFICIENCY_POWER_FLOOR and power_out < 0.0:
+        efficiency = -power_in / power_out
+    stiffness, _ = screw_axial_stiffness(x, c)
+    length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
+    # series springs carry the same force -k x_s: each share of x_s is its compliance times that force
+    twist = -stiffness * x[S.SCREW_AXIAL] * length * c[K.SHAFT_TWIST_COMPLIANCE] / c[K.LEAD_ARM]
+    axial = stiffness * x[S.SCREW_AXIAL] * (1.0 / c[K.BEARING_STIFFNESS] + length / c[K.SHAFT_EA])
+    return friction_torque, efficiency, twist, axial
 
 
 @numba.njit(cache=True)
@@ -181,7 +272,12 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
             c[K.THERMAL_TAU], c[K.HEAT_TRANSFER], c[K.MOTOR_AREA], c[K.EMISSIVITY],
         )
 
-    torque, f1, f2, preload, external, _, _ = internal_forces(t, x, c, force_table, stiffness_poly)
+    torque, f1, f2, preload, external, p1, p2 = internal_forces(t, x, c, force_table, stiffness_poly)
+    # ball-groove friction of each nut along the helix (reduced Ch. 5) and its generalised forces
+    screw_fr_1, nut_fr_torque_1, screw_fr_axial_1, nut_fr_axial_1 = friction_generalised_forces(
+        ball_groove_friction(x, c, p1, 0), c[K.PITCH_RADIUS], c[K.COS_HELIX], c[K.SIN_HELIX])
+    screw_fr_2, nut_fr_torque_2, screw_fr_axial_2, nut_fr_axial_2 = friction_generalised_forces(
+        ball_groove_friction(x, c, p2, 1), c[K.PITCH_RADIUS], c[K.COS_HELIX], c[K.SIN_HELIX])
 
     # --- motor-reducer mechanics (Eq. 9.3), written for the reducer output angle
     w_r = x[S.REDUCER_SPEED]
@@ -197,16 +293,13 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC], c[K.SCREW_FRICTION_DYNAMIC],
                                    c[K.SCREW_FRICTION_RATE], c[K.SCREW_FRICTION_VISCOUS], c[K.ANGULAR_V_THRESHOLD])
     dxdt[S.SCREW_ANGLE] = w_s
-    dxdt[S.SCREW_SPEED] = (torque - c[K.SCREW_DAMPING] * w_s - friction_s - arm * (f1 + f2)) / c[K.J_SCREW_SIDE]
+    dxdt[S.SCREW_SPEED] = (torque - c[K.SCREW_DAMPING] * w_s - friction_s - arm * (f1 + f2) + screw_fr_1 + screw_fr_2
+                           ) / c[K.J_SCREW_SIDE]
 
-    # --- screw axial motion: rear bearing in series with the shaft length to the sled (Sec. 9.3)
-    shaft_length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
-    axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + shaft_length / c[K.SHAFT_EA])
-    # The stiffness depends on the sled position, so the spring energy k(x_n1) x_s^2 / 2
-    # also pushes the sled: -dE/dx_n1 = k^2 x_s^2 / (2 EA). Tiny, but it keeps the model conservative.
-    stiffness_gradient_force = 0.5 * axial_stiffness**2 * x[S.SCREW_AXIAL] ** 2 / c[K.SHAFT_EA]
+    # --- screw axial motion: rear bearing in series with the shaft (and its twist) to the sled (Sec. 9.3)
+    axial_stiffness, stiffness_gradient_force = screw_axial_stiffness(x, c)
     dxdt[S.SCREW_AXIAL] = x[S.SCREW_AXIAL_SPEED]
-    dxdt[S.SCREW_AXIAL_SPEED] = (-(f1 + f2) - axial_stiffness * x[S.SCREW_AXIAL]
+    dxdt[S.SCREW_AXIAL_SPEED] = (-(f1 + f2) - axial_stiffness * x[S.SCREW_AXIAL] + screw_fr_axial_1 + screw_fr_axial_2
                                  - c[K.SCREW_AXIAL_DAMPING] * x[S.SCREW_AXIAL_SPEED]) / c[K.SCREW_MASS]
 
     # --- nuts (Eq. 9.8): master carries the external force, preload acts between the nuts
@@ -217,18 +310,21 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
         x[S.NUT2_SPEED], c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC],
         c[K.GUIDE_FRICTION_RATE], c[K.GUIDE_FRICTION_VISCOUS], c[K.LINEAR_V_THRESHOLD])
     dxdt[S.NUT1_POSITION] = x[S.NUT1_SPEED]
-    dxdt[S.NUT1_SPEED] = (f1 - guide_1 - orientation * preload + external + stiffness_gradient_force) / c[K.MASS_NUT1]
+    dxdt[S.NUT1_SPEED] = (f1 + nut_fr_axial_1 - guide_1 - orientation * preload + external + stiffness_gradient_force
+                          ) / c[K.MASS_NUT1]
     dxdt[S.NUT2_POSITION] = x[S.NUT2_SPEED]
-    dxdt[S.NUT2_SPEED] = (f2 - guide_2 + orientation * preload) / c[K.MASS_NUT2]
+    dxdt[S.NUT2_SPEED] = (f2 + nut_fr_axial_2 - guide_2 + orientation * preload) / c[K.MASS_NUT2]
 
     # --- nut rotation restrained by the linear guides (Sec. 9.3): contact torque (p/2pi) f_i
     if c[K.NUT_ROTATION] > 0.5:
         k_roll = c[K.GUIDE_ROLL_STIFFNESS]
         c_roll = c[K.GUIDE_ROLL_DAMPING]
         dxdt[S.NUT1_ANGLE] = x[S.NUT1_ANGULAR_SPEED]
-        dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 - k_roll * x[S.NUT1_ANGLE] - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
+        dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 + nut_fr_torque_1 - k_roll * x[S.NUT1_ANGLE]
+                                      - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
         dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
-        dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 - k_roll * x[S.NUT2_ANGLE] - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
+        dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 + nut_fr_torque_2 - k_roll * x[S.NUT2_ANGLE]
+                                      - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
 
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
         pneumatics_rhs(x, c, u[U.VALVE_COMMAND], external, dxdt)

@@ -73,6 +73,17 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
         Level("linear", "linear normal stiffness at the design angle, secant to the Hertz curve at the scene's "
                         "peak contact load (the elasto-backlash contact of Ch. 5)"),
     )),
+    Subsystem("ball_groove_friction", "friction of the spheres on the screw and nut grooves (Eqs. 5.16-5.24)", (
+        Level("chapter5", "reduced Ch. 5 friction on both nuts: sliding (Eq. 5.16) and load- and speed-dependent "
+                          "rolling (Eqs. 5.19-5.24) at the contact loads, with the drag torque and efficiency"),
+        Level("lumped", "lossless screw-nut conversion: the support bearings' lumped friction only",
+              removes_signals=("ball_groove_friction_torque", "ball_screw_efficiency")),
+    )),
+    Subsystem("screw_torsion", "torsion of the screw shaft between the coupling and the nuts", (
+        Level("static", "static torsional compliance of the shaft core under the nuts' torque, in series with its "
+                        "axial compliance"),
+        Level("rigid", "torsionally rigid shaft", removes_signals=("screw_twist",)),
+    )),
     Subsystem("nut_rotation", "nut roll on the linear guides (Sec. 9.3)", (
         Level("on", "each nut's roll angle integrated against the guides' roll stiffness"),
         Level("off", "rigid guides: the nuts do not roll",

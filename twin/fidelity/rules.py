@@ -199,6 +199,19 @@ def _angle_deflection_error(needs: SceneNeeds, limit: float, decided) -> tuple[b
                             f"deflection at {needs.peak_contact_load:.0f} N (limit {limit * 1e9:g} nm)")
 
 
+def _twist_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    """Shaft twist's share of the nut-to-screw difference under the net axial load (force demand + allowance)
+    at the longest shaft (sled at the end of its stroke): ``(p/2pi)^2 F l / (G J_p)``."""
+    value = needs.params.value
+    arm = value("ball_screw.lead") / (2.0 * math.pi)
+    length = value("ball_screw.bearing_to_nut_distance") + value("sled.stroke_limit")
+    load = needs.peak_force_demand + needs.settings["contact_load_allowance"]
+    torsional = value("ball_screw.shear_modulus") * math.pi * value("ball_screw.screw_root_diameter") ** 4 / 32.0
+    deflection = arm**2 * load * length / torsional
+    return deflection <= limit, (f"twist share of the nut-to-screw difference {deflection * 1e9:.1f} nm at "
+                                 f"{load:.0f} N net axial load, {length * 1e3:.0f} mm of shaft (limit {limit * 1e9:g} nm)")
+
+
 CONDITIONS = {
     "force_demand": _force_demand,
     "outputs_exclude": _outputs_exclude,
@@ -208,6 +221,7 @@ CONDITIONS = {
     "max_duration_over_thermal_tau": _duration_over_tau,
     "max_nut_roll_deflection": _nut_roll_deflection,
     "max_angle_deflection_error": _angle_deflection_error,
+    "max_twist_deflection": _twist_deflection,
 }
 
 
