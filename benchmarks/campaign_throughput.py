@@ -11,7 +11,8 @@ Usage::
 end on a fresh local cluster of 2 workers, stage by stage (compilation check, cluster start, runs with
 storage, the fidelity audit, the analysis), and prints runs/s over the whole and the estimate for the
 full 7 x 1000 study (the runs stage scaled to 7000 runs, the other stages as measured: the audit re-runs
-the same 10 runs per data set whatever N).
+the same 10 runs per data set whatever N). The runs stage includes each worker's sandbox start-up (a few
+seconds), so a small N overestimates the full study.
 
 For each worker count a local cluster is started first and warmed up (worker
 and sandbox start-up are not campaign throughput); the campaign then runs on it
