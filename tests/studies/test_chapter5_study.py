@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from twin.cli import main
+from app.cli import main
 
 
 def test_chapter5_study_writes_the_figures_and_the_trends_of_chapter5(tmp_path, capsys):
