@@ -88,19 +88,24 @@ def cmd_simulate(args) -> int:
         from twin.scenes import CYLINDER_STATES, ZERO_PROCEDURES
 
         print(f"test procedure of scene {scene.name}:")
-        print(f"  zero_procedure = {scene.condition('zero_procedure')}: {ZERO_PROCEDURES[scene.condition('zero_procedure')]}")
+        print(
+            f"  zero_procedure = {scene.condition('zero_procedure')}: "
+            f"{ZERO_PROCEDURES[scene.condition('zero_procedure')]}")
         print(f"  cylinder = {scene.condition('cylinder')}: {CYLINDER_STATES[scene.condition('cylinder')]}")
         print(f"fidelity of scene {scene.name}:")
         print(resolve_fidelity(scene, params, args.fidelity, args.outputs).explain())
     ds = twin.simulate(scene, params, **options)
     print(f"scene {scene.name}: status {ds.attrs['status']}"
-          + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok" else "")
+          + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok"
+             else "")
           + f", wall time {ds.attrs['wall_time']:.3f} s")
     print(f"test procedure: zero_procedure = {ds.attrs['zero_procedure']}, cylinder = {ds.attrs['cylinder']}")
     for name, label in (("backlash_feature", "backlash feature (Eq. 9.12)"),
                         ("backlash_hysteresis", "backlash hysteresis (zero-independent)")):
         if name in ds:
-            print(f"{label}: measured {float(ds[name]) * 1e6:.4f} um, true signals {float(ds[name + '_true']) * 1e6:.4f} um")
+            print(
+                f"{label}: measured {float(ds[name]) * 1e6:.4f} um, "
+                f"true signals {float(ds[name + '_true']) * 1e6:.4f} um")
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
     if args.out:
         ds.to_netcdf(args.out, engine="netcdf4")
@@ -308,7 +313,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="skip finished chunks of an interrupted run")
     p.add_argument("--timeout", type=float, help="wall-clock budget of one run [s] (overrides execution.timeout)")
     p.add_argument("--allow-version-mix", action="store_true",
-                   help="on --resume, accept chunks computed by another BenchTwin/numpy/numba/scipy version or model code")
+                   help="on --resume, accept chunks computed by another BenchTwin/numpy/numba/scipy version "
+                        "or model code")
     p.add_argument("--analyze", action="store_true", help="also write analysis.nc")
     p.add_argument("--report", action="store_true", help="also write report.html and report.pdf")
     p.set_defaults(func=cmd_campaign_run)

@@ -91,14 +91,17 @@ def measure(args, workers: int, tmp: Path) -> dict:
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         address = cluster.scheduler_address
         warm = _spec(args, tmp, workers)  # one run per worker thread starts every sandbox
-        campaigns.run_campaign(warm, tmp / f"warm-{workers}", scheduler=address, progress=False, run_function=run_function)
+        campaigns.run_campaign(warm, tmp / f"warm-{workers}", scheduler=address, progress=False,
+                               run_function=run_function)
         spec = _spec(args, tmp, args.runs)
         start = time.perf_counter()
-        results = campaigns.run_campaign(spec, tmp / f"run-{workers}", scheduler=address, progress=False, run_function=run_function)
+        results = campaigns.run_campaign(spec, tmp / f"run-{workers}", scheduler=address, progress=False,
+                                         run_function=run_function)
         elapsed = time.perf_counter() - start
         # tracing slows the driver, so memory is measured on a second, untimed pass
         tracemalloc.start()
-        campaigns.run_campaign(spec, tmp / f"memory-{workers}", scheduler=address, progress=False, run_function=run_function)
+        campaigns.run_campaign(spec, tmp / f"memory-{workers}", scheduler=address, progress=False,
+                               run_function=run_function)
         _, peak = tracemalloc.get_traced_memory()
         tracemalloc.stop()
     with xr.open_dataset(results) as ds:
@@ -183,12 +186,15 @@ def main() -> None:
         rows = [measure(args, w, Path(tmp)) for w in args.workers]
     for r in rows:
         print(
-            f"workers={r['workers']}: {r['runs']} runs ({r['ok']} ok) in {r['elapsed']:.2f} s -> {r['runs_per_s']:.1f} runs/s; "
+            f"workers={r['workers']}: {r['runs']} runs ({r['ok']} ok) in {r['elapsed']:.2f} s -> "
+            f"{r['runs_per_s']:.1f} runs/s; "
             f"mean run {1e3 * r['mean_run_s']:.2f} ms; scheduling overhead {r['overhead_pct']:.1f} %; "
             f"driver traced peak {r['traced_peak_mb']:.1f} MiB"
         )
     if len(rows) > 1:
-        print(f"scaling {rows[0]['workers']} -> {rows[-1]['workers']} workers: x{rows[-1]['runs_per_s'] / rows[0]['runs_per_s']:.2f}")
+        print(
+            f"scaling {rows[0]['workers']} -> {rows[-1]['workers']} workers: "
+            f"x{rows[-1]['runs_per_s'] / rows[0]['runs_per_s']:.2f}")
     print(f"driver peak RSS: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
 
 

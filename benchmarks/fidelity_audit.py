@@ -54,7 +54,8 @@ def main() -> None:
         sim = simulation_speedup(name, 1 if args.quick else 3)
         for feature in audit.feature.values:
             row = audit.sel(dataset=name, feature=feature)
-            print(f"{name:4s} {feature:22s} {float(row.mean_shift) * 1e6:+9.4f}um {float(row.max_paired_difference) * 1e6:9.4f}um "
+            print(f"{name:4s} {feature:22s} {float(row.mean_shift) * 1e6:+9.4f}um "
+                  f"{float(row.max_paired_difference) * 1e6:9.4f}um "
                   f"{float(row.sampling_error) * 1e6:7.4f}um {float(row.ks_pvalue):5.2f} "
                   f"{'pass' if bool(row.passed) else 'FLAGGED':7s} x{float(row.speedup):15.2f} x{sim:17.2f}")
         print(f"     auto: {audit.attrs['fidelity_auto']}  ({time.perf_counter() - start:.0f} s)", flush=True)

@@ -48,8 +48,8 @@ def main() -> None:
         scene = twin.load_scene(name).with_duration(1.0 if args.quick else full_duration)
         wall, ds = median_wall(scene, repeats)
         walls.append(wall * full_duration / scene.duration)  # per full-length run, for the study estimate
-        print(f"{name:8s} {scene.duration:4.1f} s scene: {wall:.3f} s per run ({scene.duration / wall:.0f}x real time), "
-              f"f_b {float(ds.backlash_feature) * 1e6:.4f} um")
+        print(f"{name:8s} {scene.duration:4.1f} s scene: {wall:.3f} s per run "
+              f"({scene.duration / wall:.0f}x real time), f_b {float(ds.backlash_feature) * 1e6:.4f} um")
     for name in ("ds2", "nominal"):
         scene = twin.load_scene(name).with_duration(args.reference_duration)
         ideal = full_plant()  # the solvers are compared on the plant, seen through ideal instruments
@@ -66,7 +66,8 @@ def main() -> None:
               f"{abs(float(ds_fast.backlash_feature - ds_ref.backlash_feature)) * 1e6:.2e} um (LSODA), "
               f"{abs(float(ds_fast.backlash_feature - ds_radau.backlash_feature)) * 1e6:.2e} um (Radau)")
     for row in compare():
-        print(f"open-loop plant 0.05 s: {row['method']:50s} {row['wall_time']:.4f} s, max nut error {row['error']:.2e} m")
+        print(
+            f"open-loop plant 0.05 s: {row['method']:50s} {row['wall_time']:.4f} s, max nut error {row['error']:.2e} m")
     per_run = statistics.mean(walls)
     print(f"thesis study estimate: 7000 runs x {per_run:.3f} s / {os.cpu_count()} cores = "
           f"{7000 * per_run / os.cpu_count() / 60:.1f} min (plus scheduling and storage)")

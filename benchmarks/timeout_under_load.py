@@ -39,7 +39,8 @@ RESUME_TEST = "tests/campaigns/test_campaign_resume.py::test_resume_after_sigkil
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=20, help="pytest runs of the timeout tests (default 20)")
-    parser.add_argument("--load", type=int, default=os.cpu_count(), help="CPU-burning processes (default: one per core)")
+    parser.add_argument("--load", type=int, default=os.cpu_count(),
+                        help="CPU-burning processes (default: one per core)")
     parser.add_argument("--with-resume", action="store_true", help="also run the SIGKILL-and-resume test")
     parser.add_argument("--quick", action="store_true", help="3 repeats (a first look)")
     args = parser.parse_args()

@@ -37,7 +37,9 @@ REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear back
 #: Below that the bootstrap has too few distinct resamples for a 95 % interval (docs/campaigns.md, Analysis).
 MIN_OK_RUNS = 20
 _VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not met / undetermined / insufficient data"}
-_STATEMENT_ATTRS = {"long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, in one sentence"}
+_STATEMENT_ATTRS = {
+    "long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, "
+                 "in one sentence"}
 #: What a sweep's condition measures: condition -> (fault quantity, unit, display scale, display unit). The
 #: fault size of a data set is ``|condition - condition of the reference|`` (the backlash itself; the loss of
 #: preload from the healthy reference).
@@ -106,7 +108,8 @@ def _correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, co
         return _resampled_ranks(v, idx) if spearman else v[idx]
 
     def standardized(v: np.ndarray) -> np.ndarray:
-        """Rows centred and scaled to unit norm (NaN rows without variance): a Pearson correlation is then a dot product."""
+        """Rows centred and scaled to unit norm (NaN rows without variance): a Pearson correlation is then a dot
+        product."""
         centred = v - v.mean(axis=-1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):
             return centred / np.sqrt((centred * centred).sum(axis=-1, keepdims=True))
@@ -188,7 +191,8 @@ def overlap_coefficient(a, b, bins: int | None = None) -> float:
 
 
 def _detection_probabilities(reference: np.ndarray, test: np.ndarray, false_alarm_rate: float) -> np.ndarray:
-    """:func:`detection_probability` of each row of ``test`` (shape (B, n_t)) against the same row of ``reference`` (B, n_r)."""
+    """:func:`detection_probability` of each row of ``test`` (shape (B, n_t)) against the same row of ``reference``
+    (B, n_r)."""
     upward = np.median(test, axis=-1) >= np.median(reference, axis=-1)
     high = np.quantile(reference, 1.0 - false_alarm_rate, axis=-1)
     low = np.quantile(reference, false_alarm_rate, axis=-1)
@@ -363,7 +367,9 @@ def requirement_statement(
 
     against = f"against the {fmt(requirement)} requirement of {requirement_source}"
     if not n_used:
-        return f"insufficient data: the spec has no observability sweep, so no minimum detectable {quantity} is estimated {against}"
+        return (
+            "insufficient data: the spec has no observability sweep, "
+            f"so no minimum detectable {quantity} is estimated {against}")
     short = [f"{name} has {_runs(n)}" for name, n in n_used.items() if n < min_ok_runs]
     if len(short) == len(n_used) > 1 and len(set(n_used.values())) == 1:
         short = [f"each of the {len(n_used)} sweep data sets has {_runs(next(iter(n_used.values())))}"]
@@ -375,7 +381,8 @@ def requirement_statement(
     counts = sorted(set(n_used.values()))
     runs = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
     lower, upper = bounds
-    upper_text = f"at most {fmt(upper)}" if math.isfinite(upper) else f"possibly beyond the sweep ({fmt(largest_level)})"
+    upper_text = (f"at most {fmt(upper)}" if math.isfinite(upper)
+                  else f"possibly beyond the sweep ({fmt(largest_level)})")
     level = "" if math.isfinite(estimate) else f"not reached up to {fmt(largest_level)}: "
     value = fmt(estimate) if math.isfinite(estimate) else f"detection probability below {power * 100:g} %"
     return (
@@ -447,14 +454,16 @@ def observability_sweep(
     nan2 = (math.nan, math.nan)
     if min(n_used.values()) < min_ok_runs:
         enough = [len(s) >= min_ok_runs and n_used[datasets[reference]] >= min_ok_runs for s in samples]
-        probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan for s, ok in zip(samples, enough, strict=False)])
+        probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
+                                for s, ok in zip(samples, enough, strict=False)])
         estimate, bracket, bounds, verdict = math.nan, nan2, nan2, "insufficient data"
     else:
         found = bootstrap_minimum_detectable(
             backlash, samples, reference, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
             confidence=confidence, seed=seed,
         )
-        probability, estimate, bracket, bounds = found["probability"], found["estimate"], found["bracket"], found["bounds"]
+        probability, estimate, bracket, bounds = (found["probability"], found["estimate"], found["bracket"],
+                                                  found["bounds"])
         verdict = requirement_verdict(*bounds, requirement)
     statement = requirement_statement(
         verdict, estimate, bounds, n_used, confidence=confidence, power=power, min_ok_runs=min_ok_runs,
@@ -463,18 +472,23 @@ def observability_sweep(
     )
     return xr.Dataset(
         {
-            f"sweep_{stem}": ("sweep_point", backlash, {"units": unit, "long_name": f"{quantity} of the sweep data set"}),
+            f"sweep_{stem}": ("sweep_point", backlash,
+                              {"units": unit, "long_name": f"{quantity} of the sweep data set"}),
             "sweep_detection_probability": (
                 "sweep_point",
                 probability,
-                {"units": "1", "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against {datasets[reference]} (NaN: insufficient data)"},
+                {"units": "1",
+                 "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against "
+                              f"{datasets[reference]} (NaN: insufficient data)"},
             ),
             f"minimum_detectable_{stem}": (
                 (),
                 estimate,
                 {
                     "units": unit,
-                    "long_name": f"smallest {quantity} detected with probability {power:g} at false-alarm rate {false_alarm_rate:g} (linear interpolation along the sweep; NaN: not reached or insufficient data)",
+                    "long_name": f"smallest {quantity} detected with probability {power:g} at false-alarm rate "
+                                 f"{false_alarm_rate:g} (linear interpolation along the sweep; NaN: "
+                                 "not reached or insufficient data)",
                     "requirement": requirement,
                     "requirement_source": requirement_source,
                 },
@@ -482,14 +496,16 @@ def observability_sweep(
             "minimum_detectable_bracket": (
                 "bound",
                 np.array(bracket),
-                {"units": unit, "long_name": f"sweep levels bracketing minimum_detectable_{stem} (inf: never detected)"},
+                {"units": unit,
+                 "long_name": f"sweep levels bracketing minimum_detectable_{stem} (inf: never detected)"},
             ),
             f"minimum_detectable_{stem}_ci": (
                 "bound",
                 np.array(bounds),
                 {
                     "units": unit,
-                    "long_name": f"bootstrap bounds of the minimum detectable {quantity}: lower = a sweep level not detected "
+                    "long_name": f"bootstrap bounds of the minimum detectable {quantity}: "
+                                 "lower = a sweep level not detected "
                     "(the minimum lies above it), upper = a sweep level detected (inf: not reached)",
                     "confidence": confidence,
                     "n_boot": n_boot,
@@ -524,7 +540,8 @@ def analysis_dataset(
     (:func:`campaigns.sensitivity.first_order`).
     """
     if min_ok_runs < 3:
-        raise ValueError(f"min_ok_runs = {min_ok_runs}: must be at least 3 (a standard deviation and a correlation need 3 runs)")
+        raise ValueError(
+            f"min_ok_runs = {min_ok_runs}: must be at least 3 (a standard deviation and a correlation need 3 runs)")
     parameters = [v for v in results.data_vars if results[v].attrs.get("role") == "sampled"]
     features = [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]
     names = [str(n) for n in results["dataset"].values]
@@ -590,39 +607,50 @@ def analysis_dataset(
         "feature_mean": (("dataset", "feature"), mean, {"long_name": "mean of the feature over used runs"}),
         "feature_std": (("dataset", "feature"), std, {"long_name": "standard deviation of the feature over used runs"}),
         "pearson": (corr_dims, out["pearson"], {"units": "1", "long_name": "Pearson correlation"}),
-        "pearson_ci": (corr_dims + ("bound",), ci["pearson"], {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of pearson"}),
+        "pearson_ci": (corr_dims + ("bound",), ci["pearson"],
+                       {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of pearson"}),
         "spearman": (corr_dims, out["spearman"], {"units": "1", "long_name": "Spearman rank correlation"}),
-        "spearman_ci": (corr_dims + ("bound",), ci["spearman"], {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of spearman"}),
+        "spearman_ci": (corr_dims + ("bound",), ci["spearman"],
+                        {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of spearman"}),
         "prcc": (corr_dims, out["prcc"], {"units": "1", "long_name": "partial rank correlation coefficient"}),
         "first_order_index": (
             corr_dims,
             out["first_order_index"],
-            {"units": "1", "long_name": "first-order (Sobol') index: share of the feature's variance explained by the parameter alone, any shape of dependence", "method": sensitivity.METHOD},
+            {"units": "1",
+             "long_name": "first-order (Sobol') index: share of the feature's variance explained by the parameter "
+                          "alone, any shape of dependence", "method": sensitivity.METHOD},
         ),
         "first_order_index_ci": (
             corr_dims + ("bound",),
             ci["first_order_index"],
-            {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of first_order_index", "n_boot": sensitivity_boot, "method": sensitivity.METHOD},
+            {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of first_order_index",
+             "n_boot": sensitivity_boot, "method": sensitivity.METHOD},
         ),
         "effect_size": (
             corr_dims,
             effect_size,
             {
                 "units": feature_units,
-                "long_name": "standard deviation of the conditional mean E[feature | parameter] over the parameter's distribution, sqrt(max(first_order_index, 0) var(feature)): what the parameter alone moves the feature by",
+                "long_name": "standard deviation of the conditional mean E[feature | parameter] over the parameter's "
+                             "distribution, sqrt(max(first_order_index, 0) var(feature)): "
+                             "what the parameter alone moves the feature by",
                 "method": sensitivity.METHOD,
             },
         ),
         "effect_size_ci": (
             corr_dims + ("bound",),
             ci["effect_size"],
-            {"units": feature_units, "long_name": "effect_size at the bounds of first_order_index_ci (feature variance held fixed)"},
+            {"units": feature_units,
+             "long_name": "effect_size at the bounds of first_order_index_ci (feature variance held fixed)"},
         ),
-        "overlap": (("feature", "dataset", "reference"), overlap, {"units": "1", "long_name": "overlap coefficient of the feature distributions"}),
+        "overlap": (("feature", "dataset", "reference"), overlap,
+                    {"units": "1", "long_name": "overlap coefficient of the feature distributions"}),
         "detection_probability": (
             ("feature", "dataset", "reference"),
             detection,
-            {"units": "1", "long_name": f"fraction of dataset runs beyond the reference's threshold at false-alarm rate {false_alarm_rate:g}"},
+            {"units": "1",
+             "long_name": "fraction of dataset runs beyond the reference's threshold at false-alarm rate "
+                          f"{false_alarm_rate:g}"},
         ),
     }
     coords = {
@@ -655,14 +683,17 @@ def analysis_dataset(
         analysis[levels] = per_feature[0][levels]
     else:
         statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
-        analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object), _VERDICT_ATTRS)
-        analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object), _STATEMENT_ATTRS)
+        analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object),
+                                           _VERDICT_ATTRS)
+        analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object),
+                                             _STATEMENT_ATTRS)
     analysis.attrs = {
         "Conventions": "CF-1.8",
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",
         "source_spec_hash": results.attrs.get("spec_hash", ""),
         "selection": "statistics use runs with status 'ok' and a finite feature; see n_used, n_excluded, n_status",
-        "bootstrap": json.dumps({"method": "percentile, pairs resampled", "n_boot": n_boot, "confidence": confidence, "seed": seed}),
+        "bootstrap": json.dumps({"method": "percentile, pairs resampled", "n_boot": n_boot, "confidence": confidence,
+                                 "seed": seed}),
         "false_alarm_rate": false_alarm_rate,
         "detection_power": power,
         "backlash_sweep": json.dumps(sweep),
@@ -692,12 +723,14 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     for feature in (str(f) for f in analysis["feature"].values):
         statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
         n_used = analysis["n_used"].sel(feature=feature)
-        short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values, strict=False) if n < min_ok_runs]
+        short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values, strict=False)
+                 if n < min_ok_runs]
         if len(short) == len(n_used) > 1 and len(set(n_used.values)) == 1:
             short = [f"all {len(short)} data sets ({_runs(int(n_used[0]))} each)"]
         if short:
             warnings.append(
-                f"{feature}: insufficient data in {', '.join(short)}: fewer than {min_ok_runs} ok runs, their statistics are NaN"
+                f"{feature}: insufficient data in {', '.join(short)}: fewer than {min_ok_runs} ok runs, "
+                "their statistics are NaN"
             )
     return statements, warnings
 

@@ -49,7 +49,8 @@ def dataset_conditions(spec) -> tuple[dict, dict]:
         entries["external_force_peak"] = {"value": force_demand_peak(scene), "unit": "N"}
         return entries
 
-    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_conditions(dict(d.conditions))) for d in spec.datasets}
+    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_conditions(dict(d.conditions)))
+                for d in spec.datasets}
     return datasets, described(_scene(spec.base.scene))
 
 
@@ -147,7 +148,8 @@ def warm_up(spec) -> float:
     params = _parameters(spec.base.parameters)
     options = {k: v for k, v in spec.solver.model_dump().items() if v is not None}
     options["outputs"] = list(spec.features) + (list(spec.traces.variables) if spec.traces.runs_per_dataset else [])
-    twin.simulate(scene.with_duration(min(scene.duration, 0.1)), params, throw=False, **options)  # compiles (or loads the cache)
+    # compiles (or loads the cache)
+    twin.simulate(scene.with_duration(min(scene.duration, 0.1)), params, throw=False, **options)
     start = time.perf_counter()
     twin.simulate(scene, params, throw=False, **options)
     return time.perf_counter() - start
@@ -181,7 +183,8 @@ class BenchCatalog:
         except InputError:
             raise
         except Exception as exc:  # twin missing or broken: report it as a spec problem
-            raise InputError("bench twin", [f"cannot load parameters {parameters!r} / scene {scene!r}: {type(exc).__name__}: {exc}"]) from exc
+            raise InputError("bench twin", [f"cannot load parameters {parameters!r} / scene {scene!r}: "
+                                            f"{type(exc).__name__}: {exc}"]) from exc
         self._parameters = {n: (params[n].value, params[n].unit) for n in params.names}
         self.condition_units = condition_units()
         self._conditions = {k: (v, self.condition_units[k]) for k, v in scene_conditions(base_scene).items()}

@@ -126,6 +126,7 @@ def lookup_nominal(
     if target not in parameters:
         group = target.split(".")[0]
         siblings = [n for n in parameters if n.startswith(group + ".")]
-        hint = f"known in '{group}': {', '.join(siblings)}" if siblings else f"known groups: {', '.join(sorted({n.split('.')[0] for n in parameters}))}"
+        hint = (f"known in '{group}': {', '.join(siblings)}" if siblings
+                else f"known groups: {', '.join(sorted({n.split('.')[0] for n in parameters}))}")
         raise KeyError(f"unknown parameter {target!r}; {hint}")
     return parameters[target]

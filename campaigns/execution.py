@@ -220,15 +220,19 @@ def run_campaign(
         executed = len(pending)
         start = time.perf_counter()
         per_run = None
-        if pending and bench:  # once here, before the workers start, so they load the compiled code instead of compiling it
-            announce("compile", f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
+        # once here, before the workers start, so they load the compiled code instead of compiling it
+        if pending and bench:
+            announce("compile",
+                     f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
             per_run = bench_adapter.warm_up(spec)
         if pending:
             slots = 1 if scheduler else workers
             announce("cluster start",
-                     f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} (about 10-20 s)")
+                     f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
+                     "(about 10-20 s)")
             with _client(workers, scheduler) as client:
-                expected = f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run else "see the bar"
+                expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
+                            else "see the bar")
                 announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
                 with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
                     _execute(client, spec, samples, pending, run_function, store, bar)
@@ -238,12 +242,15 @@ def run_campaign(
             conditions, base = bench_adapter.dataset_conditions(spec)
             attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
             margins = bench_adapter.margin_variables(spec, lambda d, i: build_request(spec, samples, d, i))
-        results = store.assemble(samples, {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+        results = store.assemble(samples,
+                                 {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
                                            "workers": scheduler or workers}, attrs, margins)
         if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
             runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
-            announce("fidelity audit", f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
-                     + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)" if per_run else ""))
+            announce("fidelity audit",
+                     f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
+                     + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)" if per_run
+                        else ""))
         audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume,
                        progress=progress, run_function=None if bench else run_function,
                        allow_version_mix=allow_version_mix, announce=announce)

@@ -65,7 +65,8 @@ def summary_attrs(audit: xr.Dataset) -> dict[str, str]:
             row = audit.sel(dataset=name, feature=feature)
             verdict = "pass" if bool(row.passed) else "FLAGGED"
             lines.append(f"{feature}: mean shift {float(row.mean_shift) * 1e6:+.4f} um, max paired "
-                         f"{float(row.max_paired_difference) * 1e6:.4f} um, MC error {float(row.sampling_error) * 1e6:.4f} um, "
+                         f"{float(row.max_paired_difference) * 1e6:.4f} um, MC error "
+                         f"{float(row.sampling_error) * 1e6:.4f} um, "
                          f"KS p {float(row.ks_pvalue):.2f} -> {verdict}")
             if not bool(row.passed):
                 flagged.append(f"{name}/{feature}")
@@ -87,8 +88,8 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
     if runs < 2 or spec.solver.fidelity == "full" or not reported:
         why = ("the campaign runs at full fidelity" if spec.solver.fidelity == "full"
                else "the run function reports no fidelity" if not reported
-               else f"fidelity_audit.runs = {spec.fidelity_audit.runs} with {spec.runs_per_dataset} run(s) per data set; "
-                    "it needs 2 or more")
+               else f"fidelity_audit.runs = {spec.fidelity_audit.runs} with {spec.runs_per_dataset} run(s) "
+                    "per data set; it needs 2 or more")
         _write_attrs(results_path, auto, {"fidelity_audit": f"not run ({why})"})
         return None
     out_dir = results_path.parent / "fidelity_audit"

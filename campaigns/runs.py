@@ -198,7 +198,8 @@ def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
         status, reason = "error", f"run function returned unknown status {status!r}: {reason}"
     limit = request.wall_time_limit + kill_grace(request.wall_time_limit)
     if status == "ok" and wall_time > limit:
-        reason = (f"ran {wall_time:.3g} s wall clock, over its {request.wall_time_limit:g} s budget + {limit - request.wall_time_limit:.3g} s "
+        reason = (f"ran {wall_time:.3g} s wall clock, over its {request.wall_time_limit:g} s budget + "
+                  f"{limit - request.wall_time_limit:.3g} s "
                   "grace (not interruptible in this process: it ran to the end; its features are discarded)")
         return record(request, "timeout", reason, result.get("t_reached", math.nan), wall_time)
     return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"),

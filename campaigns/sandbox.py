@@ -96,7 +96,8 @@ class Sandbox:
         # (a fresh child's imports and compilation are not the run's time).
         if not self._from_child.poll(STARTUP_TIMEOUT):
             self._kill()
-            return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"), float("nan"))
+            return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"),
+                          float("nan"))
         start = time.perf_counter()
         try:
             message = self._from_child.recv()
@@ -108,7 +109,8 @@ class Sandbox:
         if not self._from_child.poll(request.wall_time_limit + grace):
             self._kill()
             elapsed = time.perf_counter() - start
-            reason = f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {grace:.3g} s grace)"
+            reason = (
+                f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {grace:.3g} s grace)")
             return record(request, "timeout", reason, float("nan"), elapsed)
         try:
             return self._from_child.recv()
@@ -118,7 +120,8 @@ class Sandbox:
     def _died(self, request: RunRequest, start: float) -> dict:
         code = self._proc.wait()
         self.close()
-        return record(request, "error", f"run process died (exit code {code})", float("nan"), time.perf_counter() - start)
+        return record(request, "error", f"run process died (exit code {code})", float("nan"),
+                      time.perf_counter() - start)
 
 
 def run_isolated(run_function: RunFunction, request: RunRequest) -> dict:

@@ -49,5 +49,6 @@ def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str 
         audit = handle.load()
     with xr.open_dataset(results) as handle:
         audit.attrs["fidelity_auto"] = handle.attrs.get(f"fidelity_{name}", "")
-        audit.attrs["summary"] = "\n".join(f"{k}: {v}" for k, v in handle.attrs.items() if k.startswith("fidelity_audit"))
+        audit.attrs["summary"] = "\n".join(f"{k}: {v}" for k, v in handle.attrs.items()
+                                           if k.startswith("fidelity_audit"))
     return audit

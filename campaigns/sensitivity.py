@@ -83,8 +83,9 @@ def first_order(X, y, *, n_boot: int = 200, confidence: float = 0.95, seed=None)
     -------
     dict
         ``index`` (p,), ``ci`` (p, 2) percentile bounds, ``effect_size`` (p,) in the units of
-        ``y`` and ``effect_size_ci`` (p, 2) (the index's bounds through the same transform). NaN for a constant column, and for every column when ``y`` is constant or
-        ``n <= 2 HARMONICS`` (too few runs to separate the harmonics from the rest).
+        ``y`` and ``effect_size_ci`` (p, 2) (the index's bounds through the same transform). NaN for a constant column,
+        and for every column when ``y`` is constant or ``n <= 2 HARMONICS`` (too few runs to separate the harmonics from
+        the rest).
     """
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
     n, p = X.shape

@@ -419,7 +419,8 @@ def _sweep_problems(sweep: list[str], datasets: list[dict], observability: dict)
     unknown = [n for n in sweep if n not in by_name]
     if unknown:
         return [f"observability.sweep: unknown data set(s) {', '.join(unknown)}"]
-    conditions = {n: by_name[n].get("conditions") if isinstance(by_name[n].get("conditions"), dict) else {} for n in sweep}
+    conditions = {n: by_name[n].get("conditions") if isinstance(by_name[n].get("conditions"), dict) else {}
+                  for n in sweep}
     problems = [f"observability.sweep: data set {n} does not set conditions.{condition}" for n in sweep
                 if condition not in conditions[n]]
     if reference is not None:
@@ -461,7 +462,8 @@ def _row_problems(data: dict, rows: set[int], catalog: Catalog | None) -> list[s
                 continue
             value = row[key]
             if kind is float:
-                fields[key] = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else math.nan
+                fields[key] = (float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
+                               else math.nan)
             elif isinstance(value, kind):
                 fields[key] = value
         uncertainty = Uncertainty.model_construct(**fields)

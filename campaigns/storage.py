@@ -162,7 +162,8 @@ class ChunkStore:
             if stored["hash"] != self.hash:
                 differ = _differences(stored["canonical"], spec.canonical())
                 raise CampaignError(
-                    f"{self.root} holds results of a different spec (hash {stored['hash'][:16]}, this spec {self.hash[:16]}; "
+                    f"{self.root} holds results of a different spec (hash {stored['hash'][:16]}, "
+                    f"this spec {self.hash[:16]}; "
                     f"differences in: {', '.join(differ)}); refusing to mix them. Use another output directory."
                 )
         self.chunk_dir = self.root / "chunks" / self.hash[:16]
@@ -194,7 +195,8 @@ class ChunkStore:
             )
         if not resume:
             raise CampaignError(
-                f"{self.root} already holds campaign results; pass resume=True (--resume) to continue them or choose another output directory"
+                f"{self.root} already holds campaign results; pass resume=True "
+                "(--resume) to continue them or choose another output directory"
             )
 
     def _intact_chunks(self) -> list[dict]:
@@ -410,7 +412,8 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     data_vars = {}
     for k, dist in enumerate(spec.distributions()):
         long_name = dist.target + (f" ({dist.source})" if dist.source else "")
-        attrs = {"units": dist.unit, "long_name": long_name, "role": "sampled", "distribution": json.dumps(dist.as_dict())}
+        attrs = {"units": dist.unit, "long_name": long_name, "role": "sampled",
+                 "distribution": json.dumps(dist.as_dict())}
         data_vars[dist.target] = (dims, samples[:, :, k], attrs)
     for f in spec.features:
         unit, long_name = spec.feature_meta(f)
@@ -418,19 +421,24 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     data_vars["status"] = (dims, status, {"long_name": "run status", "flag_meanings": json.dumps(STATUS_MEANINGS)})
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
     data_vars["t_reached"] = (dims, t_reached, {"units": "s", "long_name": "simulated time reached"})
-    data_vars["wall_time"] = (dims, wall_time, {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})
+    data_vars["wall_time"] = (dims, wall_time,
+                              {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})
     for key, unit in spec.condition_units().items():
         values = [ds.conditions.get(key, math.nan) for ds in spec.datasets]
         if any(not math.isnan(v) for v in values):
             long_name = f"data-set condition {key} (NaN: the scene's own value)"
-            data_vars[f"condition_{key}"] = (("dataset",), np.array(values, dtype=float), {"units": unit, "long_name": long_name})
+            data_vars[f"condition_{key}"] = (("dataset",), np.array(values, dtype=float),
+                                             {"units": unit, "long_name": long_name})
     coords = {
         "dataset": ("dataset", np.array([d.name for d in spec.datasets], dtype=object), {"long_name": "data set"}),
-        "run": ("run", np.arange(spec.runs_per_dataset, dtype=np.int64), {"long_name": "run index within the data set"}),
-        "scene": ("dataset", np.array([d.scene or spec.base.scene for d in spec.datasets], dtype=object), {"long_name": "scene"}),
+        "run": ("run", np.arange(spec.runs_per_dataset, dtype=np.int64),
+                {"long_name": "run index within the data set"}),
+        "scene": ("dataset", np.array([d.scene or spec.base.scene for d in spec.datasets], dtype=object),
+                  {"long_name": "scene"}),
     }
     if k_traces and trace_len:
-        coords["trace_run"] = ("trace_run", np.arange(k_traces, dtype=np.int64), {"long_name": "run index of the kept traces"})
+        coords["trace_run"] = ("trace_run", np.arange(k_traces, dtype=np.int64),
+                               {"long_name": "run index of the kept traces"})
         coords["trace_time"] = ("trace_time", trace_time, {"units": "s", "long_name": "time", "standard_name": "time"})
         for v in spec.traces.variables:
             attrs = {"units": trace_units[v], "long_name": f"{v}, decimated by {spec.traces.decimation}"}
@@ -443,12 +451,14 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "spec_json": spec.to_json(),
         "spec_hash": spec.spec_hash(),
         "root_seed_entropy": str(spec.root_seed),
-        "seeding": "run i of data set d: SeedSequence(root_seed, spawn_key=(d, i)).spawn(2) -> [parameters, sensor noise]",
+        "seeding": "run i of data set d: SeedSequence(root_seed, spawn_key=(d, i)).spawn(2) -> [parameters, "
+                   "sensor noise]",
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
         **_provenance_attrs(chunks),
         "date_created": datetime.now(UTC).isoformat(timespec="seconds"),
         "fidelity_requested": json.dumps(spec.solver.fidelity),
-        **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity, strict=False) if used},
+        **{f"fidelity_{d.name}": " | ".join(sorted(used)) for d, used in zip(spec.datasets, fidelity, strict=False)
+           if used},
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

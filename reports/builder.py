@@ -34,7 +34,8 @@ Z95 = 1.96
 TRACE_PANELS = (
     ("Position demand and response", "position", ("position_demand", "nut1_position", "linear_encoder_position")),
     ("Motor current", "current", ("motor_current", "motor_current_measured", "current_demand")),
-    ("Preload and external force", "force", ("preload_force", "preload_force_measured", "external_force", "external_force_measured", "force_demand")),
+    ("Preload and external force", "force",
+     ("preload_force", "preload_force_measured", "external_force", "external_force_measured", "force_demand")),
     ("Chamber pressures", "pressure (absolute)", ("chamber1_pressure", "chamber2_pressure")),
 )
 #: Variables of the nut-minus-screw signal of Eq. 9.12 (Fig. 9.11).
@@ -50,7 +51,8 @@ class Builder:
         self.datasets = [str(d) for d in self.results["dataset"].values]
         self.color = {name: f"C{i % 10}" for i, name in enumerate(self.datasets)}
         self.features = [str(v) for v in self.results.data_vars if self.results[v].attrs.get("role") == "feature"]
-        self.measured = [f for f in self.features if not (f.endswith("_true") and f.removesuffix("_true") in self.features)]
+        self.measured = [f for f in self.features
+                         if not (f.endswith("_true") and f.removesuffix("_true") in self.features)]
         self.parameters = [str(v) for v in self.results.data_vars if self.results[v].attrs.get("role") == "sampled"]
         # one source for the parameter counts of every sentence and caption: sampled, and of those varying
         self.constant = [p for p in self.parameters if not np.ptp(np.nan_to_num(self.results[p].values.astype(float)))]
@@ -102,7 +104,8 @@ class Builder:
         return name if name in self.features else None
 
     def used_mask(self, feature: str, dataset: str) -> np.ndarray:
-        """The runs of a data set that the statistics use (status ok, finite feature), as in :mod:`campaigns.analysis`."""
+        """The runs of a data set that the statistics use (status ok, finite feature), as in
+        :mod:`campaigns.analysis`."""
         row = self.results.sel(dataset=dataset)
         return (row["status"].values == "ok") & np.isfinite(row[feature].values.astype(float))
 
@@ -129,10 +132,12 @@ class Builder:
                 for f, kind in zip(pair, ("measured", "true signals"), strict=False)]
 
     def describe(self, dataset: str) -> str:
-        """``ds3 (backlash 0 µm, preload 0 kN, external force 4 kN)``: every condition that tells the data sets apart."""
+        """``ds3 (backlash 0 µm, preload 0 kN, external force 4 kN)``: every condition that tells the data sets
+        apart."""
         entry = next(d for d in self.spec["datasets"] if d["name"] == dataset)
         scene = entry.get("scene") or self.spec["base"]["scene"]
-        parts = ([f"scene {scene}"] if scene != dataset else []) + ([self.conditions.label(dataset)] if self.conditions.shown else [])
+        parts = ([f"scene {scene}"] if scene != dataset else []) + ([self.conditions.label(dataset)]
+                                                                    if self.conditions.shown else [])
         return f"{dataset} ({'; '.join(parts)})" if parts else dataset
 
     def label(self, name: str) -> str:

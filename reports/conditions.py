@@ -51,7 +51,8 @@ class DatasetConditions:
 
     def scale(self, condition: str) -> tuple[float, str]:
         """One display unit per quantity, chosen from its largest magnitude over the data sets."""
-        numbers = [v for v, _ in (d[condition] for d in self.values.values() if condition in d) if isinstance(v, (int, float))]
+        numbers = [v for v, _ in (d[condition] for d in self.values.values() if condition in d)
+                   if isinstance(v, (int, float))]
         unit = next((u for d in self.values.values() if condition in d for _, u in [d[condition]]), "")
         return display_scale(unit, numbers)
 
@@ -88,7 +89,8 @@ def dataset_conditions(results, spec: dict) -> DatasetConditions:
         from_scene = True
     else:
         entries = {d["name"]: d for d in spec["datasets"]}
-        values = {d: {k: (v, _condition_unit(results, k)) for k, v in entries[d].get("conditions", {}).items()} for d in datasets}
+        values = {d: {k: (v, _condition_unit(results, k)) for k, v in entries[d].get("conditions", {}).items()}
+                  for d in datasets}
         base, from_scene = {}, False
     names = list(dict.fromkeys(k for d in datasets for k in values[d]))
     names.sort(key=lambda k: _FIRST.index(k) if k in _FIRST else len(_FIRST))

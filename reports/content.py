@@ -2,8 +2,8 @@
 
 :func:`build` turns the loaded inputs (:mod:`reports.inputs`) into one
 :class:`reports.model.Report`: the executive summary and the sections, one module each in
-:mod:`reports.sections` (shared state and chart limits: :mod:`reports.builder`). Every number shown is read from ``results.nc``
-or ``analysis.nc`` (or the accuracy data set); nothing is simulated. Figures
+:mod:`reports.sections` (shared state and chart limits: :mod:`reports.builder`). Every number shown is read from
+``results.nc`` or ``analysis.nc`` (or the accuracy data set); nothing is simulated. Figures
 and tables are numbered in the order they appear, which both renderers keep.
 """
 

@@ -82,7 +82,8 @@ def _new(nrows: int, ncols: int, height: float, **subplots) -> Figure:
 
 
 def wrap(text: str, width: int = LABEL_WIDTH) -> str:
-    """Break a long identifier after ``.``, ``_`` or a space so that no line exceeds ``width`` characters (where it can).
+    """Break a long identifier after ``.``, ``_`` or a space so that no line exceeds ``width`` characters (where it
+    can).
 
     ``sensors.preload_load_cell_offset_tempco_range1`` becomes
     ``sensors.preload_load_cell_`` / ``offset_tempco_range1``: the whole name stays readable, so no key is needed.
@@ -159,7 +160,8 @@ def _density(ax, group: Group) -> bool:
     ax.hist(values, bins=bins, density=True, color=group.color, alpha=0.3, edgecolor=group.color, linewidth=0.5)
     grid = np.linspace(values.min() - 0.15 * spread, values.max() + 0.15 * spread, 300)
     try:
-        ax.plot(grid, stats.gaussian_kde(values)(grid), color=group.color, lw=1.6, label=f"{group.label} (n = {len(values)})")
+        ax.plot(grid, stats.gaussian_kde(values)(grid), color=group.color, lw=1.6,
+                label=f"{group.label} (n = {len(values)})")
     except np.linalg.LinAlgError:  # (near-)singular data: the histogram alone says it
         ax.plot([], [], color=group.color, label=f"{group.label} (n = {len(values)})")
     return True
@@ -235,10 +237,12 @@ def tornado(labels, estimate, lower, upper, *, interval: str, marker=None, band:
     colors = np.where(estimate >= 0, "#c0504d", "#4f81bd") if muted is None else np.full(n, "#b0b0b0")
     ax.barh(y, estimate, color=colors, alpha=0.75, height=0.65, label="Spearman ρ")
     # drawn about the interval's midpoint: a percentile interval need not contain the estimate
-    ax.errorbar((lower + upper) / 2, y, xerr=(upper - lower) / 2, fmt="none", ecolor="black" if muted is None else "#909090",
+    ax.errorbar((lower + upper) / 2, y, xerr=(upper - lower) / 2, fmt="none",
+                ecolor="black" if muted is None else "#909090",
                 capsize=2.5, lw=0.9, label=interval)
     if marker is not None:
-        ax.plot(np.asarray(marker[1], dtype=float), y, "D", color="black" if muted is None else "#909090", ms=3.5, mfc="white",
+        ax.plot(np.asarray(marker[1], dtype=float), y, "D", color="black" if muted is None else "#909090", ms=3.5,
+                mfc="white",
                 label=marker[0])
     if band:
         ax.axvspan(-band, band, color="grey", alpha=0.2, lw=0, label="|ρ| indistinguishable from 0")
@@ -272,7 +276,8 @@ def heatmap(matrix, row_labels, col_labels, *, colorbar_label: str, xlabel: str,
             if np.isfinite(matrix[i, j]):
                 red, green, blue, _ = image.cmap(image.norm(matrix[i, j]))
                 dark = 0.299 * red + 0.587 * green + 0.114 * blue < 0.5  # perceived luminance of the cell
-                ax.text(j, i, f"{matrix[i, j]:.2f}", ha="center", va="center", fontsize=7, color="white" if dark else "black")
+                ax.text(j, i, f"{matrix[i, j]:.2f}", ha="center", va="center", fontsize=7,
+                        color="white" if dark else "black")
     ax.set_xticks(range(cols), col_labels)
     ax.set_yticks(range(rows), row_labels, fontsize=7.5 if lines > 1 else 8.0)
     ax.grid(False)
@@ -310,8 +315,8 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
     """Stacked time-series panels sharing the time axis; ``items`` are :class:`Line` s.
 
     Each panel has its legend to the right of the axes, never over the data (small
-    multiples name their line in the title instead); callers keep at most :data:`MAX_TRACES` lines per panel (small multiples otherwise).
-    ``sharey`` gives every panel the same value axis (small multiples of one quantity).
+    multiples name their line in the title instead); callers keep at most :data:`MAX_TRACES` lines per panel (small
+    multiples otherwise). ``sharey`` gives every panel the same value axis (small multiples of one quantity).
     """
     compact = sharey and len(panels) > 3
     fig = _new(len(panels), 1, (0.6 + 1.05 * len(panels)) if compact else (0.45 + 1.25 * len(panels)))
@@ -377,7 +382,8 @@ def work_precision(panels: list[Panel]) -> bytes:
 
 
 @_styled
-def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: list[str], col_titles: list[str]) -> bytes:
+def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: list[str],
+                 col_titles: list[str]) -> bytes:
     """Strips of values per category against a limit, on a grid of panels.
 
     ``grid[row][col]`` is ``(values, limit, side, note)``: ``values`` of shape ``(categories, n)`` (NaN: none),
@@ -403,7 +409,8 @@ def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: 
                 ax.set_ylim(bottom, top)
                 ax.axhspan(*((bottom, limit) if side == "below" else (limit, top)), color="tab:red", alpha=0.08, lw=0)
             else:
-                ax.text(0.5, 0.75, note, transform=ax.transAxes, ha="center", va="center", fontsize=8)  # clear of the limit
+                # clear of the limit
+                ax.text(0.5, 0.75, note, transform=ax.transAxes, ha="center", va="center", fontsize=8)
             ax.axhline(limit, color="tab:red", ls="--", lw=1.0)
             ax.set_xticks(x, categories, rotation=90 if len(categories) > 4 else 0)
             ax.grid(False, axis="x")

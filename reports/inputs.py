@@ -3,8 +3,8 @@
 A report never runs a simulation: it reads ``results.nc`` (written by
 :mod:`campaigns.storage`), ``analysis.nc`` (:mod:`campaigns.analysis`; computed
 in memory from the results when absent) and, optionally, the speed-versus-accuracy
-study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`app.studies.work_precision`). Every problem is a :class:`ReportError` that
-names the file.
+study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`app.studies.work_precision`). Every problem is a
+:class:`ReportError` that names the file.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ from reports.errors import ReportError
 
 ANALYSIS_NAME = "analysis.nc"
 _RESULTS_VARIABLES = ("status", "failure_reason", "wall_time")
-_ANALYSIS_VARIABLES = ("n_used", "feature_mean", "feature_std", "spearman", "spearman_ci", "prcc", "overlap", "detection_probability")
+_ANALYSIS_VARIABLES = ("n_used", "feature_mean", "feature_std", "spearman", "spearman_ci", "prcc", "overlap",
+                       "detection_probability")
 #: What the report needs of a work-precision study (``work_precision.nc`` of ``twin accuracy``).
 _ACCURACY_VARIABLES = ("wall_time", "feature_error", "status", "method")
 
@@ -111,7 +112,8 @@ def _open(path: Path, what: str) -> xr.Dataset:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             return ds.load()
     except Exception as exc:  # netCDF4/HDF5 raise many types for a truncated or foreign file
-        raise ReportError(path, f"cannot be read as a netCDF {what} file ({type(exc).__name__}: {exc}); is it complete?") from exc
+        raise ReportError(path, f"cannot be read as a netCDF {what} file ({type(exc).__name__}: {exc}); "
+                                "is it complete?") from exc
 
 
 def _describe(role: str, path: Path) -> InputFile:
@@ -155,6 +157,10 @@ def _check_analysis(analysis: xr.Dataset, path: Path, results: xr.Dataset) -> No
 def _check_accuracy(accuracy: xr.Dataset, path: Path) -> None:
     missing = _missing(accuracy, _ACCURACY_VARIABLES)
     if missing:
-        raise ReportError(path, f"not a work-precision study (twin accuracy's work_precision.nc): variable(s) {', '.join(missing)} missing")
+        raise ReportError(path,
+                          "not a work-precision study (twin accuracy's work_precision.nc): "
+                          f"variable(s) {', '.join(missing)} missing")
     if any(accuracy[v].dims != ("run",) for v in _ACCURACY_VARIABLES):
-        raise ReportError(path, f"{', '.join(_ACCURACY_VARIABLES)} must all lie along the dimension 'run' (one entry per study run)")
+        raise ReportError(path,
+                          f"{', '.join(_ACCURACY_VARIABLES)} must all lie along the dimension 'run' "
+                          "(one entry per study run)")

@@ -26,7 +26,8 @@ def _document(report: Report, figure_names: dict[int, str]) -> dict:
 
     def block_data(block) -> dict:
         if isinstance(block, Figure):
-            return {"type": "Figure", "number": block.number, "caption": block.caption, "path": figure_names[block.number]}
+            return {"type": "Figure", "number": block.number, "caption": block.caption,
+                    "path": figure_names[block.number]}
         data = {"type": type(block).__name__, **asdict(block)}
         if isinstance(block, Callout) and block.link:
             data["link_text"] = report.link_text(block.link)
@@ -38,7 +39,8 @@ def _document(report: Report, figure_names: dict[int, str]) -> dict:
         "generated_at": report.generated_at,
         "facts": [list(f) for f in report.facts],
         "executive": [block_data(b) for b in report.executive],
-        "sections": [{"key": s.key, "title": s.title, "blocks": [block_data(b) for b in s.blocks]} for s in report.sections],
+        "sections": [{"key": s.key, "title": s.title, "blocks": [block_data(b) for b in s.blocks]}
+                     for s in report.sections],
     }
 
 
@@ -65,7 +67,8 @@ def render_pdf(report: Report, path: str | Path, timestamp: datetime) -> Path:
     try:
         import typst
     except ImportError as exc:
-        raise ReportError(path, "cannot write the PDF: the typst package is not installed (pip install 'benchtwin[report]')") from exc
+        raise ReportError(path, "cannot write the PDF: the typst package is not installed "
+                                "(pip install 'benchtwin[report]')") from exc
     path = Path(path)
     with tempfile.TemporaryDirectory(prefix="benchtwin-report-") as tmp:
         root = Path(tmp)
@@ -79,7 +82,8 @@ def render_pdf(report: Report, path: str | Path, timestamp: datetime) -> Path:
         with resources.as_file(resources.files("reports") / "templates" / "report.typ") as template:
             shutil.copyfile(template, root / "main.typ")
         try:
-            pdf = typst.compile(str(root / "main.typ"), root=str(root), ignore_system_fonts=True, timestamp=int(timestamp.timestamp()))
+            pdf = typst.compile(str(root / "main.typ"), root=str(root), ignore_system_fonts=True,
+                                timestamp=int(timestamp.timestamp()))
         except Exception as exc:  # typst raises its own error types with the template's diagnostics
             raise ReportError(path, f"typst could not compile the report: {exc}") from exc
     path.write_bytes(pdf)

@@ -13,7 +13,8 @@ import numpy as np
 
 #: Units that take an SI prefix.
 _PREFIXABLE = {"m", "N", "A", "s", "V", "W", "N m", "N/m", "rad"}
-_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"), (1e-15, "f"))
+_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"),
+             (1e-15, "f"))
 #: Units shown in another unit: SI unit -> (display unit, SI value of one display unit).
 _CONVERTED = {"Pa": ("bar", 1e5)}
 _DIMENSIONLESS = {"", "1"}

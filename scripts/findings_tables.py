@@ -96,7 +96,9 @@ def observability(analysis: xr.Dataset) -> None:
         return
     if "sweep_point" in analysis.dims:
         points = [str(s) for s in analysis.sweep_point.values]
-        print("| feature | " + " | ".join(f"{p} ({um(float(b), 1)} µm)" for p, b in zip(points, analysis.sweep_backlash.values, strict=False)) + " |")
+        print("| feature | "
+              + " | ".join(f"{p} ({um(float(b), 1)} µm)"
+                           for p, b in zip(points, analysis.sweep_backlash.values, strict=False)) + " |")
         print("|---|" + "---|" * len(points))
         for feature in (str(f) for f in analysis.feature.values):
             probability = analysis.sweep_detection_probability.sel(feature=feature).values

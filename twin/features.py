@@ -152,8 +152,10 @@ def finish(acc: np.ndarray, samples: float) -> dict[str, float]:
     from one accumulator block after ``samples`` acquisition instants (NaN where there is nothing to average)."""
     feature = acc[A.SUM_ABS] / samples if samples > 0 else math.nan
     moved_both_ways = acc[A.COUNT_UP] > 0 and acc[A.COUNT_DOWN] > 0
-    hysteresis = (acc[A.SUM_DOWN] / acc[A.COUNT_DOWN] - acc[A.SUM_UP] / acc[A.COUNT_UP]) if moved_both_ways else math.nan
+    hysteresis = (acc[A.SUM_DOWN] / acc[A.COUNT_DOWN] - acc[A.SUM_UP] / acc[A.COUNT_UP]
+                  if moved_both_ways else math.nan)
     turned_both_ways = acc[A.COUNT_TORQUE_UP] > 0 and acc[A.COUNT_TORQUE_DOWN] > 0
     drag = (0.5 * (acc[A.SUM_TORQUE_UP] / acc[A.COUNT_TORQUE_UP] - acc[A.SUM_TORQUE_DOWN] / acc[A.COUNT_TORQUE_DOWN])
             if turned_both_ways else math.nan)
-    return {"backlash_feature": float(feature), "backlash_hysteresis": float(hysteresis), "drag_torque_feature": float(drag)}
+    return {"backlash_feature": float(feature), "backlash_hysteresis": float(hysteresis),
+            "drag_torque_feature": float(drag)}

@@ -70,7 +70,8 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
     t = ds["time"].values
     panels = _panels(ds)
     rows = (len(panels) + 1) // 2
-    fig, axes = plt.subplots(rows, 2, figsize=(12, 0.9 + 2.3 * rows), sharex=True, constrained_layout=True, squeeze=False)
+    fig, axes = plt.subplots(rows, 2, figsize=(12, 0.9 + 2.3 * rows), sharex=True, constrained_layout=True,
+                             squeeze=False)
     for k, (ax, (title, ylabel, lines)) in enumerate(zip(axes.flat, panels, strict=False)):
         for label, values, style in lines:
             ax.plot(t, values, label=label, **style)
@@ -87,7 +88,8 @@ def plot_run(ds: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
         axes[-2, 1].tick_params(labelbottom=True)
         axes[-2, 1].set_xlabel("time [s]")
     title = (f"scene '{ds.attrs.get('scene', '?')}': status {ds.attrs.get('status')}; backlash feature (Eq. 9.12) "
-             f"{float(ds['backlash_feature']) * _MICRO:.3f} µm measured, {float(ds['backlash_feature_true']) * _MICRO:.3f} µm "
+             f"{float(ds['backlash_feature']) * _MICRO:.3f} µm measured, "
+             f"{float(ds['backlash_feature_true']) * _MICRO:.3f} µm "
              "true signals")
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=11)
     if path is not None:

@@ -62,7 +62,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "scipy_radau", "scipy_lsoda", "scipy_bdf", "scipy_rk45"}
+    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "scipy_radau", "scipy_lsoda", "scipy_bdf",
+                  "scipy_rk45"}
         Fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of
         the reference path (:mod:`twin.engine.reference`), which ignores ``dt``.
     dt : float
@@ -118,7 +119,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     n_steps = int(round(run.scene.duration / run.dt))
     instruments = build_instruments(run.params.values(), run.scene.condition("room_temperature"),
                                     instrument_levels(run.fidelity), generator, n_steps // run.position_every + 1,
-                                    run.dt, torque_meter_refresh=run.fidelity.level("torque_meter_refresh") == "modelled")
+                                    run.dt,
+                                    torque_meter_refresh=run.fidelity.level("torque_meter_refresh") == "modelled")
     output = np.full((n_steps // run.output_every + 1, N_SIGNALS), np.nan)
     memory = np.zeros(N_MEMORY)
     x = model.initial_state.copy()
@@ -179,7 +181,8 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     if reference:
         dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
     speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
-    position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period", problems)
+    position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period",
+                                problems)
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
         raise OptionError(problems)
@@ -212,7 +215,8 @@ def _package(run: _Run, model, x: np.ndarray, output: np.ndarray, memory: np.nda
     time_axis = np.arange(output.shape[0]) * run.output_every * dt
     removed = set(resolved.removed_signals)
     data_vars = {
-        signal.name.lower(): ("time", output[:, signal], {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
+        signal.name.lower(): ("time", output[:, signal],
+                              {"units": SIGNAL_META[signal][0], "long_name": SIGNAL_META[signal][1]})
         for signal in Signal
         if signal.name.lower() not in removed
     }
@@ -247,7 +251,8 @@ def _package(run: _Run, model, x: np.ndarray, output: np.ndarray, memory: np.nda
             "fidelity": resolved.summary(),
             "fidelity_reasons": "\n".join(f"{k}: {v}" for k, v in resolved.reasons.items()),
             "integrated_states": int(model.active.size),
-            "noise_seed": "caller generator" if isinstance(rng, np.random.Generator) else str(DEFAULT_NOISE_SEED if rng is None else rng),
+            "noise_seed": ("caller generator" if isinstance(rng, np.random.Generator)
+                           else str(DEFAULT_NOISE_SEED if rng is None else rng)),
             "wall_time": wall_time,
             "max_local_error": float(memory[M.LOCAL_ERROR]),
         },

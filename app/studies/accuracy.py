@@ -29,8 +29,8 @@ def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 
     with ``campaign_runs > 0``, the campaign-level comparison) into ``out_dir``.
 
     ``quick`` trims the step ladder to 1.25e-4 ... 3.1e-5 s and the adaptive baselines to
-    ``scipy_lsoda`` at one tolerance, times each run once, simulates at most :data:`QUICK_DURATION` seconds and skips the
-    stability map (a first look in under a minute; the full study takes many minutes).
+    ``scipy_lsoda`` at one tolerance, times each run once, simulates at most :data:`QUICK_DURATION` seconds and skips
+    the stability map (a first look in under a minute; the full study takes many minutes).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

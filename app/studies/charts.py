@@ -16,7 +16,8 @@ from app.studies.work_precision import quantization_floor  # noqa: E402
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
                 "quantizers_on": "quantizers on (encoders, resolver, converters)"}
 METRIC_LABELS = {"feature_error": "backlash-feature error [um]", "nut_position_error": "max nut-position error [um]",
-                 "current_rms_error": "RMS motor-current error [A]", "pressure_error": "max chamber-pressure error [Pa]"}
+                 "current_rms_error": "RMS motor-current error [A]",
+                 "pressure_error": "max chamber-pressure error [Pa]"}
 SCALE = {"feature_error": 1e6, "nut_position_error": 1e6, "current_rms_error": 1.0, "pressure_error": 1.0}
 
 

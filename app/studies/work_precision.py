@@ -129,7 +129,8 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
         attrs[f"{panel}_reference_stats"] = ", ".join(f"{k[7:]}={v}" for k, v in reference.attrs.items()
                                                      if k.startswith("solver_"))
         progress(f"[{panel}] reference {REFERENCE}: {reference_time:.2f} s, status {reference.attrs['status']}")
-        runs = [(m, dt, np.nan) for m in methods for dt in steps] + [(b, np.nan, r) for b in baselines for r in tolerances]
+        runs = ([(m, dt, np.nan) for m in methods for dt in steps]
+                + [(b, np.nan, r) for b in baselines for r in tolerances])
         for k, (method, dt, rtol) in enumerate(runs, start=1):
             options = {"integrator": method, "fidelity": fidelity}
             options.update({"dt": dt} if np.isfinite(dt) else {"rtol": rtol})
@@ -150,7 +151,8 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
 def _to_dataset(records: list[dict], attrs: dict) -> xr.Dataset:
     run = np.arange(len(records))
     data = {
-        "wall_time": ("run", [r["wall_time"] for r in records], {"units": "s", "long_name": "median wall time of one run"}),
+        "wall_time": ("run", [r["wall_time"] for r in records],
+                      {"units": "s", "long_name": "median wall time of one run"}),
         "status": ("run", np.array([r["status"] for r in records], dtype=str), {"long_name": "run status"}),
     }
     for name, (units, long_name) in METRICS.items():
@@ -160,7 +162,8 @@ def _to_dataset(records: list[dict], attrs: dict) -> xr.Dataset:
         "panel": ("run", np.array([r["panel"] for r in records], dtype=str)),
         "method": ("run", np.array([r["method"] for r in records], dtype=str)),
         "dt": ("run", [r["dt"] for r in records], {"units": "s", "long_name": "fixed step (NaN: adaptive)"}),
-        "rtol": ("run", [r["rtol"] for r in records], {"units": "1", "long_name": "relative tolerance (NaN: fixed step)"}),
+        "rtol": ("run", [r["rtol"] for r in records],
+                 {"units": "1", "long_name": "relative tolerance (NaN: fixed step)"}),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 

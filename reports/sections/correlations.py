@@ -50,8 +50,9 @@ def build(b: Builder):
             constant = [parameters[j] for j in np.flatnonzero(~np.isfinite(rho))]
             if len(order) == 0:
                 reason = b.insufficient(name, feature)
-                yield Callout(f"{feature}, data set {b.describe(name)}: " + (f"{reason} (minimum from {b.min_ok_source}); the "
-                              "analysis computed no statistics." if reason else f"no correlation could be computed ({n} runs used)."),
+                yield Callout(f"{feature}, data set {b.describe(name)}: "
+                              + (f"{reason} (minimum from {b.min_ok_source}); the analysis computed no statistics."
+                                 if reason else f"no correlation could be computed ({n} runs used)."),
                               "muted" if reason else "info")
                 continue
             ci = sel["spearman_ci"]
@@ -60,11 +61,14 @@ def build(b: Builder):
             yield b.figure(
                 f"tornado-{feature}-{name}",
                 f"Correlation of {feature} with the sampled parameters, data set {b.describe(name)}, {n} runs; the "
-                f"{shown} strongest by |ρ| of the {np.isfinite(rho).sum()} with a correlation ({b.parameter_counts(names=False)})."
-                + (f" Greyed: {reason} (minimum from {b.min_ok_source}); with so few runs a correlation of ±1 arises by chance, so none of these bars is "
-                   "a finding." if reason else
-                   " The top bars are the tolerances that drive the spread of the feature; look for bars clear of the grey band.")
-                + (f" Not shown (no correlation: constant, or no variance in this data set): {', '.join(constant)}." if constant else ""),
+                f"{shown} strongest by |ρ| of the {np.isfinite(rho).sum()} with a correlation "
+                f"({b.parameter_counts(names=False)})."
+                + (f" Greyed: {reason} (minimum from {b.min_ok_source}); with so few runs a correlation of ±1 arises "
+                   "by chance, so none of these bars is a finding." if reason else
+                   " The top bars are the tolerances that drive the spread of the feature; look for bars clear of the "
+                   "grey band.")
+                + (f" Not shown (no correlation: constant, or no variance in this data set): {', '.join(constant)}."
+                   if constant else ""),
                 figures.tornado(
                     [parameters[j] for j in order],
                     rho[order],
@@ -89,15 +93,17 @@ def build(b: Builder):
         left = len(ranked) - len(order)
         yield b.figure(
             f"heatmap-{feature}",
-            f"Spearman correlation of {feature} with each parameter (rows, strongest first) in each data set (columns). "
-            "Look for rows that stay strong across data sets (a tolerance that matters whatever the test) and for the "
-            "data set whose column is palest (the test procedure least sensitive to the tolerances)."
+            f"Spearman correlation of {feature} with each parameter (rows, strongest first) in each data set "
+            "(columns). Look for rows that stay strong across data sets (a tolerance that matters whatever the test) "
+            "and for the data set whose column is palest (the test procedure least sensitive to the tolerances)."
             + (f" The {left} weakest parameters are not shown." if left > 0 else "")
             + (f" Blank columns marked 'n<{b.min_ok_runs}' ({', '.join(thin)}): insufficient data, fewer than "
                f"{b.min_ok_runs} ok runs." if thin else ""),
             figures.heatmap(rho[order], [parameters[j] for j in order],
-                            [f"{d}\nn<{b.min_ok_runs}" if d in thin else d for d in b.datasets], colorbar_label="Spearman ρ [–]",
-                            xlabel="data set", ylabel="sampled parameter", vmin=-1.0, vmax=1.0, cmap="RdBu_r", center=0.0),
+                            [f"{d}\nn<{b.min_ok_runs}" if d in thin else d for d in b.datasets],
+                            colorbar_label="Spearman ρ [–]",
+                            xlabel="data set", ylabel="sampled parameter", vmin=-1.0, vmax=1.0, cmap="RdBu_r",
+                            center=0.0),
         )
     rows, muted = [], []
     for feature in b.measured:
@@ -107,9 +113,11 @@ def build(b: Builder):
             for rank, j in enumerate(rank_order(sel["spearman"].values)[:3], start=1):
                 lo, hi = sel["spearman_ci"].values[j]
                 prcc = sel["prcc"].values[j]
-                rows.append((feature, name, str(rank), parameters[j], f"{sel['spearman'].values[j]:+.2f} [{lo:+.2f}, {hi:+.2f}]",
+                rows.append((feature, name, str(rank), parameters[j],
+                             f"{sel['spearman'].values[j]:+.2f} [{lo:+.2f}, {hi:+.2f}]",
                              number(prcc, 2) if np.isfinite(prcc) or sel["n_used"] > len(b.varying) + 1
-                             else f"– (needs more than {len(b.varying) + 1} ok runs: one per varying parameter, plus one)",
+                             else f"– (needs more than {len(b.varying) + 1} ok runs: one per varying parameter, "
+                                  "plus one)",
                              reason or "–"))
                 muted.append(reason is not None)
             if reason and not np.isfinite(sel["spearman"].values).any():

@@ -33,7 +33,8 @@ def build(b: Builder):
     for name in b.datasets:
         for feature in b.features:
             f = b.analysis.sel(dataset=name, feature=feature)
-            mean, std, unit = float(f["feature_mean"]), float(f["feature_std"]), b.results[feature].attrs.get("units", "")
+            mean, std, unit = (float(f["feature_mean"]), float(f["feature_std"]),
+                               b.results[feature].attrs.get("units", ""))
             # a spread at round-off level is a constant feature, not a measurement of scatter
             spread = "0 (constant)" if std <= ROUND_OFF * abs(mean) else quantity(std, unit)
             reason = b.insufficient(name, feature)

@@ -43,16 +43,18 @@ def _influences(b: Builder, feature: str) -> str:
     parameters = [str(p) for p in a["parameter"].values]
     sufficient = [d for d in b.datasets if b.insufficient(d, feature) is None]
     if not sufficient:
-        return f"{feature}: insufficient data in every data set (fewer than {b.min_ok_runs} ok runs); no influence is ranked."
+        return (f"{feature}: insufficient data in every data set (fewer than {b.min_ok_runs} ok runs); "
+                "no influence is ranked.")
     unit = b.results[feature].attrs.get("units", "")
     if "effect_size" in a:
-        effect = np.abs(a["effect_size"].sel(feature=feature, dataset=sufficient).transpose("parameter", "dataset").values)
+        effect = np.abs(
+            a["effect_size"].sel(feature=feature, dataset=sufficient).transpose("parameter", "dataset").values)
         if "first_order_index_ci" in a:  # an index whose interval includes 0 is not an influence the data resolve
             lower = a["first_order_index_ci"].sel(feature=feature, dataset=sufficient, bound="lower")
             effect = np.where(lower.transpose("parameter", "dataset").values > 0.0, effect, np.nan)
         if not np.isfinite(effect).any():
-            return (f"{feature}: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) in any "
-                    "data set: the spread is not explained by a sampled tolerance at this sample size.")
+            return (f"{feature}: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) "
+                    "in any data set: the spread is not explained by a sampled tolerance at this sample size.")
         best = np.nanargmax(np.where(np.isfinite(effect), effect, -np.inf), axis=1)
         strength = np.array([effect[j, best[j]] for j in range(len(parameters))])
         items = []
@@ -69,14 +71,18 @@ def _influences(b: Builder, feature: str) -> str:
     rho = a["spearman"].sel(feature=feature, dataset=sufficient).transpose("parameter", "dataset").values
     magnitude = np.where(np.isfinite(rho), np.abs(rho), -np.inf)
     best = np.argmax(magnitude, axis=1)
-    strength = np.array([magnitude[j, best[j]] if np.isfinite(magnitude[j, best[j]]) else np.nan for j in range(len(parameters))])
+    strength = np.array([magnitude[j, best[j]] if np.isfinite(magnitude[j, best[j]]) else np.nan
+                         for j in range(len(parameters))])
     items = []
     for j in rank_order(strength)[:SUMMARY_INFLUENCES]:
         dataset = sufficient[best[j]]
         lo, hi = a["spearman_ci"].sel(feature=feature, dataset=dataset).values[j]
-        items.append(f"{parameters[j]} (ρ = {rho[j, best[j]]:+.2f} [{lo:+.2f}, {hi:+.2f}] in {dataset}, n = {b.n_used(dataset, feature)})")
-    return (f"{feature}, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
-            "effect_size): " + "; ".join(items) + ".") if items else f"{feature}: no parameter with a finite correlation."
+        items.append(
+            f"{parameters[j]} (ρ = {rho[j, best[j]]:+.2f} [{lo:+.2f}, {hi:+.2f}] in {dataset}, "
+            f"n = {b.n_used(dataset, feature)})")
+    return ((f"{feature}, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
+             "effect_size): " + "; ".join(items) + ".") if items
+            else f"{feature}: no parameter with a finite correlation.")
 
 
 def build(b: Builder):
@@ -86,7 +92,8 @@ def build(b: Builder):
     sweep = "sweep_point" in a.dims and a.sizes["sweep_point"] > 0
     yield Paragraph(
         f"Question. {spec.get('description') or spec['name']}. Can the bench tell the data sets' conditions apart with "
-        f"{', '.join(b.features)} when {b.parameter_counts(names=False)} are drawn per run, which of them move the features most"
+        f"{', '.join(b.features)} when {b.parameter_counts(names=False)} are drawn per run, "
+        "which of them move the features most"
         + (f", and is the minimum detectable backlash within the {quantity(requirement, 'm')} requirement ({source})?"
            if sweep else "? (No observability sweep in the spec: no requirement verdict is sought.)")
     )
@@ -102,14 +109,17 @@ def build(b: Builder):
     yield b.table(
         "Data sets: the conditions that differ between them or from the base scene "
         f"'{spec['base']['scene']}'" + (f" (all share {common})" if common else "")
-        + ("" if b.conditions.from_scene else "; read from the spec's overrides (results.nc stores no effective scene conditions)")
-        + f", and the runs the statistics use (status ok, finite feature; at least {b.min_ok_runs} needed, {b.min_ok_source}).",
+        + ("" if b.conditions.from_scene
+           else "; read from the spec's overrides (results.nc stores no effective scene conditions)")
+        + f", and the runs the statistics use (status ok, finite feature; at least {b.min_ok_runs} needed, "
+          f"{b.min_ok_source}).",
         ("Data set", "Conditions", "Runs used", "Data"), rows, muted,
     )
     for feature in b.measured:
         yield Callout(_influences(b, feature), "info", "correlations")
     n_failed = int((status != "ok").sum())
-    yield Callout(f"Failures: {n_failed} of {status.size} runs failed" + (" (left out of every statistic)." if n_failed else "."),
+    yield Callout(f"Failures: {n_failed} of {status.size} runs failed"
+                  + (" (left out of every statistic)." if n_failed else "."),
                   "bad" if n_failed else "good", "failures")
     audit = str(results.attrs.get("fidelity_audit", "not recorded in results.nc"))
     tone = "good" if audit.startswith("passed") else "bad" if audit.startswith("FLAGGED") else "info"

@@ -24,7 +24,8 @@ def build(b: Builder):
         groups.setdefault(key, []).append(int(results["run"].values[r]))
     rows = []
     for (name, st, reason), runs in groups.items():
-        listed = ", ".join(map(str, runs[:LISTED_RUNS])) + (f" and {len(runs) - LISTED_RUNS} more" if len(runs) > LISTED_RUNS else "")
+        listed = (", ".join(map(str, runs[:LISTED_RUNS]))
+                  + (f" and {len(runs) - LISTED_RUNS} more" if len(runs) > LISTED_RUNS else ""))
         rows.append((name, st, str(len(runs)), listed, reason or "–"))
     yield b.table("Failed runs grouped by data set, status and reason (run indices within the data set).",
                   ("Data set", "Status", "Count", "Runs", "Reason"), rows)

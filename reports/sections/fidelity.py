@@ -8,8 +8,8 @@ from reports.builder import Builder
 from reports.model import Callout, Paragraph
 
 #: One feature's line of a ``fidelity_audit_<data set>`` attribute (campaigns.fidelity_audit.summary_attrs).
-_AUDIT_LINE = re.compile(r"(?P<feature>\w+): mean shift (?P<shift>[-+0-9.e]+) um, max paired (?P<paired>[-+0-9.e]+) um, "
-                         r"MC error (?P<error>[-+0-9.e]+) um, KS p (?P<p>[-+0-9.e]+|nan) -> (?P<verdict>\w+)")
+_AUDIT_LINE = re.compile(r"(?P<feature>\w+): mean shift (?P<shift>[-+0-9.e]+) um, max paired (?P<paired>[-+0-9.e]+) "
+                         r"um, MC error (?P<error>[-+0-9.e]+) um, KS p (?P<p>[-+0-9.e]+|nan) -> (?P<verdict>\w+)")
 
 
 def _microns(text: str) -> str:
@@ -26,12 +26,12 @@ def build(b: Builder):
     audit = attrs.pop("fidelity_audit", "not recorded")
     runs = attrs.pop("fidelity_audit_runs", None)
     yield Paragraph(
-        f"The campaign asked for fidelity '{requested}': with 'auto' each subsystem of the twin runs at the cheapest level "
-        "the scene and its outputs allow (twin/fidelity/rules.toml). The audit re-runs the first "
+        f"The campaign asked for fidelity '{requested}': with 'auto' each subsystem of the twin runs at the cheapest "
+        "level the scene and its outputs allow (twin/fidelity/rules.toml). The audit re-runs the first "
         + (f"{runs} " if runs else "")
-        + "runs of every data set at full fidelity with the same parameters and noise and compares the features: a data "
-        "set passes when every feature's paired mean shift is below the tolerance and a two-sample Kolmogorov-Smirnov "
-        "test does not reject."
+        + "runs of every data set at full fidelity with the same parameters and noise and compares the features: "
+        "a data set passes when every feature's paired mean shift is below the tolerance and a two-sample "
+        "Kolmogorov-Smirnov test does not reject."
     )
     tone = "good" if audit.startswith("passed") else "bad" if audit.startswith("FLAGGED") else "info"
     yield Callout(f"Audit result: {audit}.", tone)
@@ -57,20 +57,22 @@ def build(b: Builder):
                          "pass" if m["verdict"] == "pass" else "flagged: rule to fix", shown_speedup))
     if rows:
         yield b.table(
-            "Automatic against full fidelity on the same runs: paired mean shift of the feature, largest paired difference, "
-            "Monte Carlo error of the mean (1.96 σ/√N), KS p-value, result, and speedup = full-fidelity wall time / "
-            "automatic wall time over the paired runs.",
-            ("Data set", "Feature", "Mean shift", "Largest paired difference", "Monte Carlo error", "KS p", "Result", "Speedup"),
+            "Automatic against full fidelity on the same runs: paired mean shift of the feature, largest paired "
+            "difference, Monte Carlo error of the mean (1.96 σ/√N), KS p-value, result, and speedup = full-fidelity "
+            "wall time / automatic wall time over the paired runs.",
+            ("Data set", "Feature", "Mean shift", "Largest paired difference", "Monte Carlo error", "KS p", "Result",
+             "Speedup"),
             rows,
         )
         slower = [x for x in speedups if x < 1]
         yield Paragraph(
             "Speedup above 1: the automatic choice ran faster than full fidelity. "
-            + (f"Here {len(slower)} of {len(speedups)} data sets show a speedup below 1, i.e. the automatic runs took longer. "
-               "The audit times the first runs of each data set, which on freshly started workers include loading the "
-               "compiled model, and wall time depends on the machine's load; it says nothing about accuracy, which the "
-               "mean-shift and KS columns judge." if slower else
-               "Wall time depends on the machine's load and on the first runs' start-up; it says nothing about accuracy.")
+            + (f"Here {len(slower)} of {len(speedups)} data sets show a speedup below 1, i.e. the automatic runs took "
+               "longer. The audit times the first runs of each data set, which on freshly started workers include "
+               "loading the compiled model, and wall time depends on the machine's load; it says nothing about "
+               "accuracy, which the mean-shift and KS columns judge." if slower else
+               "Wall time depends on the machine's load and on the first runs' start-up; it says nothing about "
+               "accuracy.")
         )
     if attrs:
         yield b.table("Other fidelity attributes recorded in results.nc.", ("Attribute", "Value"),

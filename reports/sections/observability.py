@@ -27,11 +27,12 @@ def build(b: Builder):
         detection = a["detection_probability"].sel(feature=feature).transpose("dataset", "reference").values
         yield b.figure(
             f"separation-{feature}",
-            f"Detection probability of {feature}: runs of the row data set flagged by a threshold set on the column data set "
-            f"at a {fa:.0%} false-alarm rate. Cells near 1 mean the bench tells the two conditions apart; compare the data sets "
-            "with backlash (rows) against those without (columns).",
+            f"Detection probability of {feature}: runs of the row data set flagged by a threshold set on the column "
+            f"data set at a {fa:.0%} false-alarm rate. Cells near 1 mean the bench tells the two conditions apart; "
+            "compare the data sets with backlash (rows) against those without (columns).",
             figures.heatmap(detection, b.datasets, b.datasets, colorbar_label="detection probability [–]",
-                            xlabel="reference data set (threshold)", ylabel="tested data set", vmin=0.0, vmax=1.0, cmap="viridis"),
+                            xlabel="reference data set (threshold)", ylabel="tested data set", vmin=0.0, vmax=1.0,
+                            cmap="viridis"),
         )
         overlap = a["overlap"].sel(feature=feature).transpose("dataset", "reference").values
         yield b.figure(
@@ -54,8 +55,8 @@ def build(b: Builder):
     factor, unit = display_scale("m", [requirement])
     yield Paragraph(
         f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
-        f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash data set "
-        f"is interpolated linearly to where it reaches {power:.0%}: the minimum detectable backlash."
+        f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash "
+        f"data set is interpolated linearly to where it reaches {power:.0%}: the minimum detectable backlash."
     )
     minimum = {f: float(a["minimum_detectable_backlash"].sel(feature=f)) for f in b.features}
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
@@ -67,20 +68,23 @@ def build(b: Builder):
         bounded = [f for f in b.features if probability[f][smallest] >= power]
         if bounded:
             yield Paragraph(
-                f"For {', '.join(bounded)} the smallest non-zero level of the sweep ({quantity(backlash[smallest], 'm')}) is "
-                "already detected, so the minimum detectable backlash is an upper bound from the interpolation between "
-                "0 and that level. Add data sets with backlash near the requirement to resolve it."
+                f"For {', '.join(bounded)} the smallest non-zero level of the sweep "
+                f"({quantity(backlash[smallest], 'm')}) is already detected, so the minimum detectable backlash is an "
+                "upper bound from the interpolation between 0 and that level. Add data sets with backlash near the "
+                "requirement to resolve it."
             )
-    curves = [Line(f, backlash * factor, probability[f], f"C{k}", "-" if k == 0 else "--") for k, f in enumerate(b.features)]
+    curves = [Line(f, backlash * factor, probability[f], f"C{k}", "-" if k == 0 else "--")
+              for k, f in enumerate(b.features)]
     minima = [(f"{f}: minimum detectable {number(minimum[f] * factor)} {unit}", minimum[f] * factor, f"C{k}")
               for k, f in enumerate(b.features)]
     yield b.figure(
         "detection-sweep",
-        f"Detection probability against backlash along the sweep, per feature. Where a curve crosses the {power:.0%} line "
-        f"(star) is the minimum detectable backlash, the green line the requirement; the verdict above also weighs the "
-        f"bootstrap bounds of the star's position.",
+        "Detection probability against backlash along the sweep, per feature. Where a curve crosses the "
+        f"{power:.0%} line (star) is the minimum detectable backlash, the green line the requirement; the verdict "
+        f"above also weighs the bootstrap bounds of the star's position.",
         figures.detection(curves, power=power, false_alarm_rate=fa,
-                          requirement=(f"requirement {number(requirement * factor)} {unit} ({source.split(':')[0]})", requirement * factor),
+                          requirement=(f"requirement {number(requirement * factor)} {unit} ({source.split(':')[0]})",
+                                       requirement * factor),
                           minima=minima, xlabel=axis_label("backlash", unit)),
     )
     for feature in b.measured:

@@ -35,10 +35,12 @@ def build(b: Builder):
                     y = b.results[feature].sel(dataset=name).values[mask]
                     x = b.results[parameter].sel(dataset=name).values[mask]
                     points.append(Line(name, x * p_factor, (y - y.mean()) * factor, b.color[name]))
-            panels.append(Panel(parameter, axis_label(parameter, p_unit), axis_label(f"{feature} − data-set mean", unit), tuple(points)))
+            panels.append(Panel(parameter, axis_label(parameter, p_unit),
+                                axis_label(f"{feature} − data-set mean", unit), tuple(points)))
         yield b.figure(
             f"scatter-{feature}",
-            f"{feature} (minus its data-set mean) against its {len(top)} top-ranked parameters, one colour per data set. "
+            f"{feature} (minus its data-set mean) against its {len(top)} top-ranked parameters, "
+            "one colour per data set. "
             "A clear slope means the tolerance moves the feature; compare the vertical spread it explains with the "
             "backlash to be detected.",
             figures.scatter(panels),

@@ -14,8 +14,8 @@ from reports.units import axis_label, display_scale, number, quantity
 def build(b: Builder):
     study = b.inputs.accuracy
     if study is None:
-        yield Callout("Speed-versus-accuracy chart and solver statistics: not available (no work-precision study was given; "
-                      "run `twin accuracy --out DIR` and pass DIR/work_precision.nc).")
+        yield Callout("Speed-versus-accuracy chart and solver statistics: not available (no work-precision study was "
+                      "given; run `twin accuracy --out DIR` and pass DIR/work_precision.nc).")
         return
     ok = study["status"].values == "ok"
     error = study["feature_error"].values.astype(float)
@@ -27,7 +27,8 @@ def build(b: Builder):
     for panel in dict.fromkeys(panels_of):
         lines = []
         for k, method in enumerate(methods):
-            runs = np.flatnonzero([p == panel and str(m) == method for p, m in zip(panels_of, study["method"].values, strict=False)])
+            runs = np.flatnonzero([p == panel and str(m) == method
+                                   for p, m in zip(panels_of, study["method"].values, strict=False)])
             good = runs[ok[runs] & (error[runs] > 0)]  # a log axis cannot show an exact zero
             if len(good):
                 good = good[np.argsort(study["wall_time"].values[good])]
@@ -37,13 +38,16 @@ def build(b: Builder):
                 best = runs[ok[runs]]
                 rows.append((panel.replace("_", " ") or "–", method, f"{len(best)} of {len(runs)}",
                              number(study["wall_time"].values[best].min()) if len(best) else "–",
-                             quantity(np.nanmin(error[best]), "m") if len(best) and np.isfinite(error[best]).any() else "–"))
-        panels.append(Panel(panel.replace("_", " "), "wall time of one run [s]", axis_label("backlash-feature error", unit), tuple(lines)))
+                             quantity(np.nanmin(error[best]), "m") if len(best) and np.isfinite(error[best]).any()
+                             else "–"))
+        panels.append(Panel(panel.replace("_", " "), "wall time of one run [s]",
+                            axis_label("backlash-feature error", unit), tuple(lines)))
     yield b.figure(
         "speed-accuracy",
-        f"Work-precision study of scene '{study.attrs.get('scene', '?')}' ({study.attrs.get('duration', '?')} s): error of "
-        f"the backlash feature against the reference ({study.attrs.get('reference', '?')}) versus the wall time of one run, "
-        f"per solver method. Configurations to the lower left are both fast and accurate; the campaign ran with {solver_description(b.spec)}.",
+        f"Work-precision study of scene '{study.attrs.get('scene', '?')}' ({study.attrs.get('duration', '?')} s): "
+        f"error of the backlash feature against the reference ({study.attrs.get('reference', '?')}) versus the wall "
+        "time of one run, per solver method. Configurations to the lower left are both fast and accurate; the "
+        f"campaign ran with {solver_description(b.spec)}.",
         figures.work_precision(panels),
     )
     yield b.table("Solver methods of the study: successful runs, fastest run and smallest backlash-feature error.",

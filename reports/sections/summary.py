@@ -41,15 +41,16 @@ def build(b: Builder):
         ("Seeding", results.attrs.get("seeding", "–")),
         ("Solver", solver_description(spec)),
         ("Execution", ", ".join(f"{k} = {'adaptive' if v is None else v}" for k, v in execution.items()) or "–"),
-        ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, decimated by {traces.get('decimation', 1)}: "
-                        f"{', '.join(traces.get('variables', [])) or 'none'}"),
+        ("Traces kept", f"{traces.get('runs_per_dataset', 0)} run(s) per data set, decimated by "
+                        f"{traces.get('decimation', 1)}: {', '.join(traces.get('variables', [])) or 'none'}"),
         ("Half-range sigmas", number(results.attrs.get("half_range_sigmas"))),
         ("Results created", results.attrs.get("date_created", "–")),
         ("Campaign elapsed time", f"{number(results.attrs['execution_wall_time'])} s for "
                                   f"{results.attrs.get('execution_executed_runs', '–')} runs on "
                                   f"{results.attrs.get('execution_workers', '–')} worker(s) (last invocation)"
          if "execution_wall_time" in results.attrs else "–"),
-        ("Analysis", "computed in memory from results.nc (no analysis.nc given)" if b.inputs.analysis_computed else "analysis.nc"),
+        ("Analysis",
+         "computed in memory from results.nc (no analysis.nc given)" if b.inputs.analysis_computed else "analysis.nc"),
         ("Bootstrap", ", ".join(f"{k} = {v}" for k, v in bootstrap.items()) or "–"),
     ]
     rows += [(f"Input file ({f.role})", f"{f.name}, SHA-256 {f.sha256}") for f in b.inputs.files]
@@ -75,11 +76,14 @@ def build(b: Builder):
     for name in b.parameters:
         dist = json.loads(results[name].attrs.get("distribution", "{}") or "{}")
         unit = results[name].attrs.get("units", "")
-        shape = ", ".join(f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "low", "high", "value") if key in dist)
+        shape = ", ".join(f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "low", "high", "value")
+                          if key in dist)
         if "sigma" in dist:  # a lognormal's sigma is that of the logarithm, without unit
-            shape += f", sigma {number(dist['sigma'])} (log)" if dist.get("kind") == "lognormal" else f", sigma {quantity(dist['sigma'], unit)}"
+            shape += (f", sigma {number(dist['sigma'])} (log)" if dist.get("kind") == "lognormal"
+                      else f", sigma {quantity(dist['sigma'], unit)}")
         rows.append((name, dist.get("kind", "–"), shape, dist.get("source") or "–"))
-    yield b.table("Uncertain parameters (sampled per run) with their resolved distributions; the Source column quotes the spec.",
+    yield b.table("Uncertain parameters (sampled per run) with their resolved distributions; the Source column "
+                  "quotes the spec.",
                   ("Parameter", "Distribution", "Values", "Source"), rows)
 
     versions = json.loads(results.attrs.get("package_versions", "{}") or "{}")

@@ -15,7 +15,8 @@ def _trace_run(b: Builder, dataset: str, variables: list[str]) -> int | None:
     """The first kept trace of a successful run with data (else of any run with data)."""
     results = b.results
     runs = [int(r) for r in results["trace_run"].values]
-    has_data = [r for r in runs if any(np.isfinite(results[v].sel(dataset=dataset, trace_run=r).values).any() for v in variables)]
+    has_data = [r for r in runs
+                if any(np.isfinite(results[v].sel(dataset=dataset, trace_run=r).values).any() for v in variables)]
     ok = [r for r in has_data if results["status"].sel(dataset=dataset, run=r).item() == "ok"]
     return (ok or has_data or [None])[0]
 
@@ -35,7 +36,8 @@ def build(b: Builder):
         "figure per data set from its first successful traced run, then the nut-minus-screw position of every data set."
     )
     derived = NUT in stored and SCREW in stored
-    groups = [(title, quantity_name, [v for v in variables if v in stored]) for title, quantity_name, variables in TRACE_PANELS]
+    groups = [(title, quantity_name, [v for v in variables if v in stored])
+              for title, quantity_name, variables in TRACE_PANELS]
     placed = {v for *_, variables in groups for v in variables} | ({SCREW} if derived else set())
     groups += [(v.replace("_", " "), v.replace("_", " "), [v]) for v in stored if v not in placed]
     for name in b.datasets:
@@ -48,8 +50,10 @@ def build(b: Builder):
             if not variables:
                 continue
             unit = b.results[f"trace_{variables[0]}"].attrs.get("units", "")
-            factor, shown = display_scale(unit, np.concatenate([b.results[f"trace_{v}"].values.ravel() for v in variables]))
-            lines = tuple(_trace_line(b, v, name, run, ("-", "--", ":", "-.")[k % 4], f"C{k}", factor) for k, v in enumerate(variables))
+            factor, shown = display_scale(unit,
+                                          np.concatenate([b.results[f"trace_{v}"].values.ravel() for v in variables]))
+            lines = tuple(_trace_line(b, v, name, run, ("-", "--", ":", "-.")[k % 4], f"C{k}", factor)
+                          for k, v in enumerate(variables))
             complete = len(variables) == len(next((v for t, _, v in TRACE_PANELS if t == title), variables))
             # a panel's title names only what it draws: a partial group is titled by its signals
             panels.append(Panel(title if complete else ", ".join(line.label for line in lines).capitalize(), "time [s]",
@@ -57,16 +61,17 @@ def build(b: Builder):
             if derived and title.startswith("Position"):
                 panels.append(_nut_minus_screw_panel(b, [(name, run)]))
         status = b.results["status"].sel(dataset=name, run=run).item()
-        yield b.figure(f"traces-{name}", f"Run {run} of data set {b.describe(name)} (status {status}). " + _drawn(panels),
+        yield b.figure(f"traces-{name}",
+                       f"Run {run} of data set {b.describe(name)} (status {status}). " + _drawn(panels),
                        figures.time_series(panels))
     if derived:
         pairs = [(name, _trace_run(b, name, [f"trace_{NUT}", f"trace_{SCREW}"])) for name in b.datasets]
         panels = [_nut_minus_screw_panel(b, [(n, r)], title=b.describe(n)) for n, r in pairs if r is not None]
         yield b.figure(
             "traces-nut-minus-screw",
-            "Nut position minus the screw's equivalent position (the integrand of Eq. 9.12, Fig. 9.11) for one run of each "
-            "data set, one panel per data set on a shared axis. Look at the gap between data sets with and without "
-            "backlash at motion reversals.",
+            "Nut position minus the screw's equivalent position (the integrand of Eq. 9.12, Fig. 9.11) for one run "
+            "of each data set, one panel per data set on a shared axis. Look at the gap between data sets with and "
+            "without backlash at motion reversals.",
             figures.time_series(panels, sharey=True),
         )
 
@@ -85,10 +90,13 @@ def _drawn(panels: list[Panel]) -> str:
     return text + (f" Check {' and '.join(checks)}." if checks else "")
 
 
-def _nut_minus_screw_panel(b: Builder, runs: list[tuple[str, int]], title: str = "Nut minus screw equivalent position") -> Panel:
+def _nut_minus_screw_panel(b: Builder, runs: list[tuple[str, int]],
+                           title: str = "Nut minus screw equivalent position") -> Panel:
     time = b.results["trace_time"].values
-    differences = {name: (b.results[f"trace_{NUT}"] - b.results[f"trace_{SCREW}"]).sel(dataset=name, trace_run=run).values
+    differences = {name: (b.results[f"trace_{NUT}"] - b.results[f"trace_{SCREW}"])
+                   .sel(dataset=name, trace_run=run).values
                    for name, run in runs}
     factor, unit = display_scale("m", np.concatenate(list(differences.values())))
-    lines = tuple(Line(name if len(runs) > 1 else "x_n1 − p·θ_s/2π", time, d * factor, b.color[name]) for name, d in differences.items())
+    lines = tuple(Line(name if len(runs) > 1 else "x_n1 − p·θ_s/2π", time, d * factor, b.color[name])
+                  for name, d in differences.items())
     return Panel(title, "time [s]", axis_label("x_n1 − p·θ_s/2π", unit), lines)

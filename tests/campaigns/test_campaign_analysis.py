@@ -69,8 +69,10 @@ def test_ranking_of_known_monotone_dependences_is_recovered():
     samples = sample(spec)
     names = [d.target for d in spec.distributions()]
     cases = {
-        0: (["synthetic.gain", "synthetic.offset", "scene.room_temperature"], ["synthetic.stiffness", "synthetic.inert", "scene.supply_pressure"]),
-        3: (["synthetic.offset", "synthetic.stiffness", "scene.room_temperature", "synthetic.gain"], ["synthetic.inert", "scene.supply_pressure"]),
+        0: (["synthetic.gain", "synthetic.offset", "scene.room_temperature"],
+            ["synthetic.stiffness", "synthetic.inert", "scene.supply_pressure"]),
+        3: (["synthetic.offset", "synthetic.stiffness", "scene.room_temperature", "synthetic.gain"],
+            ["synthetic.inert", "scene.supply_pressure"]),
     }
     for d, (effects, inert) in cases.items():
         records = [execute(synthetic_run, build_request(spec, samples, d, i)) for i in range(300)]
@@ -126,7 +128,8 @@ def test_separation_measures_against_normal_closed_forms():
 def test_minimum_detectable_interpolates_the_sweep():
     estimate, lower, upper = minimum_detectable([0.0, 5e-6, 40e-6], [0.05, 0.5, 1.0], 0.95)
     assert (estimate, lower, upper) == (pytest.approx(5e-6 + 35e-6 * 0.45 / 0.5), 5e-6, 40e-6)
-    assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == (pytest.approx(5e-6), 0.0, 5e-6)  # order-free
+    # order-free
+    assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == (pytest.approx(5e-6), 0.0, 5e-6)
     estimate, lower, upper = minimum_detectable([0.0, 5e-6], [0.05, 0.5], 0.95)
     assert math.isnan(estimate) and (lower, upper) == (5e-6, math.inf)
     assert requirement_verdict(0.5e-6, 0.8e-6) == "met"
@@ -146,7 +149,9 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         top = a["prcc"].sel(dataset="ds2", feature="backlash_feature").to_pandas().abs().idxmax()
         assert top == "synthetic.gain"
         ci = a["spearman_ci"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
-        assert ci.sel(bound="lower") <= a["spearman"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain") <= ci.sel(bound="upper")
+        assert (ci.sel(bound="lower")
+                <= a["spearman"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
+                <= ci.sel(bound="upper"))
         assert list(a["sweep_point"].values) == ["ds4", "ds6", "ds2"]
         # 80 um and 5 um are far above the ~1 um spread of the synthetic feature: both detected
         p = a["sweep_detection_probability"].sel(feature="backlash_feature")
@@ -164,7 +169,9 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         assert effect.to_pandas().idxmax() == "synthetic.gain" and a["effect_size"].attrs["units"] == "m"
         assert "rbd_fast" in a["first_order_index"].attrs["method"]
         index_ci = a["first_order_index_ci"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
-        assert index_ci.sel(bound="lower") <= a["first_order_index"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain") <= index_ci.sel(bound="upper")
+        assert (index_ci.sel(bound="lower")
+                <= a["first_order_index"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
+                <= index_ci.sel(bound="upper"))
         assert float(a["overlap"].sel(feature="backlash_feature", dataset="ds2", reference="ds4")) == 0.0
 
 

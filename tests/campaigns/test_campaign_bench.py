@@ -95,7 +95,8 @@ def test_campaign_records_fidelity_and_its_audit(tmp_path):
 
 def test_spec_fidelity_is_validated(tmp_path):
     path = tmp_path / "bad.toml"
-    path.write_text(f'extends = "{SPECS / "demo.toml"}"\n[solver]\nfidelity = {{ gearbox = "full", contact = "rigid" }}\n')
+    path.write_text(
+        f'extends = "{SPECS / "demo.toml"}"\n[solver]\nfidelity = {{ gearbox = "full", contact = "rigid" }}\n')
     with pytest.raises(campaigns.SpecError) as info:
         campaigns.load_spec(path)
     assert "unknown subsystem 'gearbox'" in str(info.value) and "contact: level 'rigid'" in str(info.value)

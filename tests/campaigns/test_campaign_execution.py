@@ -28,7 +28,8 @@ def test_failed_runs_are_recorded_and_the_campaign_goes_on(tmp_path):
     """A healthy synthetic run takes milliseconds; the 3 s budget leaves a margin of 100x or more even on a
     saturated machine (a fresh sandbox's start-up is not charged to its run), so only the hang times out."""
     spec = load(write_spec(tmp_path, "runs_per_dataset = 8\n[execution]\ntimeout = 3.0\n"))
-    path = campaigns.run_campaign(spec, tmp_path / "out", workers=2, progress=False, run_function=SyntheticModel(faults=FAULTS))
+    path = campaigns.run_campaign(spec, tmp_path / "out", workers=2, progress=False,
+                                  run_function=SyntheticModel(faults=FAULTS))
     with xr.open_dataset(path) as ds:
         status = ds["status"].to_pandas()
         reason = ds["failure_reason"].to_pandas()

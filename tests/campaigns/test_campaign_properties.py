@@ -22,7 +22,8 @@ import campaigns
 from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError, validate_spec
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
 
-CI = settings(max_examples=25, deadline=None, derandomize=True, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+CI = settings(max_examples=25, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
 BASE = tomllib.loads(SYNTHETIC_SPEC.read_text())
 
 
@@ -161,7 +162,8 @@ def test_a_valid_spec_validates_the_same_way_twice(choice):
     data["observability"]["sweep"] = [n for n in BASE["observability"]["sweep"] if n in names]
     if len(data["observability"]["sweep"]) < 2 or "ds4" not in data["observability"]["sweep"]:
         data["observability"]["sweep"] = []
-    first, second = validate_spec(copy.deepcopy(data), SYNTHETIC_CATALOG), validate_spec(copy.deepcopy(data), SYNTHETIC_CATALOG)
+    first, second = (validate_spec(copy.deepcopy(data), SYNTHETIC_CATALOG),
+                     validate_spec(copy.deepcopy(data), SYNTHETIC_CATALOG))
     assert first.to_json() == second.to_json() and first.spec_hash() == second.spec_hash()
     assert [d.as_dict() for d in first.distributions()] == [d.as_dict() for d in second.distributions()]
 

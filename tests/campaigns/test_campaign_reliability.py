@@ -79,7 +79,8 @@ def test_results_without_spec_json_are_refused(reference_results, tmp_path, resu
     foreign = _copy_results(reference_results, out)
     before = foreign.read_bytes()
     with pytest.raises(CampaignError, match="no spec.json"):
-        campaigns.run_campaign(load(SYNTHETIC_SPEC, runs=7), out, resume=resume, progress=False, run_function=synthetic_run)
+        campaigns.run_campaign(load(SYNTHETIC_SPEC, runs=7), out, resume=resume, progress=False,
+                               run_function=synthetic_run)
     assert foreign.read_bytes() == before and sorted(p.name for p in out.iterdir()) == [".lock", "results.nc"]
 
 
@@ -88,7 +89,8 @@ def test_results_without_spec_json_are_refused(reference_results, tmp_path, resu
 def test_a_second_driver_on_the_same_directory_is_refused_at_once(tmp_path):
     out = tmp_path / "out"
     holder = subprocess.Popen(
-        [sys.executable, "-c", f"from campaigns.storage import OutputLock; import sys, time; OutputLock({str(out)!r}).acquire(); "
+        [sys.executable, "-c",
+         f"from campaigns.storage import OutputLock; import sys, time; OutputLock({str(out)!r}).acquire(); "
                                "print('locked', flush=True); time.sleep(600)"],
         stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
     try:
@@ -140,7 +142,8 @@ def test_corrupt_and_truncated_chunks_are_named_moved_aside_and_rerun(reference_
         path = campaigns.run_campaign(spec, out, workers=1, resume=True, progress=False,
                                       run_function=SyntheticModel(log_dir=str(log)))
     assert str(truncated) in caplog.text and str(flipped) in caplog.text and "will run again" in caplog.text
-    assert sorted(p.name.split(".npz")[0] for p in out.glob("corrupt/*/*")) == sorted(p.stem for p in (truncated, flipped))
+    assert (sorted(p.name.split(".npz")[0] for p in out.glob("corrupt/*/*"))
+            == sorted(p.stem for p in (truncated, flipped)))
     assert _runs_logged(log) == 20  # the two chunks' runs, nothing else
     with xr.open_dataset(path) as resumed, xr.open_dataset(reference_results) as reference:
         xr.testing.assert_identical(data_variables(resumed), data_variables(reference))
@@ -250,7 +253,8 @@ timeout = 0.0
 # --- Row 8: runs = 200000 was accepted, then a killed start-up blocked the directory ----------------
 
 def test_runs_have_an_upper_bound(tmp_path):
-    with pytest.raises(SpecError, match=f"runs_per_dataset: Input should be less than or equal to {MAX_RUNS_PER_DATASET}"):
+    with pytest.raises(SpecError,
+                       match=f"runs_per_dataset: Input should be less than or equal to {MAX_RUNS_PER_DATASET}"):
         load(SYNTHETIC_SPEC, runs=200_000)
 
 
@@ -258,7 +262,8 @@ def test_a_directory_with_a_spec_but_no_results_is_not_refused(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "spec.json").write_text(json.dumps({"hash": "0" * 64, "canonical": {}}))  # a driver killed while sampling
-    path = campaigns.run_campaign(load(SYNTHETIC_SPEC, runs=2), out, workers=1, progress=False, run_function=synthetic_run)
+    path = campaigns.run_campaign(load(SYNTHETIC_SPEC, runs=2), out, workers=1, progress=False,
+                                  run_function=synthetic_run)
     with xr.open_dataset(path) as ds:
         assert (ds["status"] == "ok").all()
 
@@ -343,10 +348,12 @@ def test_replay_reproduces_stored_runs_bit_identically(fixture, request, tmp_pat
 
 def test_replay_cli_and_its_refusals(reference_results, tmp_path, capsys):
     out = tmp_path / "run.nc"
-    assert main(["campaign", "replay", str(reference_results), "--dataset", "ds6", "--run", "17", "--out", str(out)]) == 0
+    assert main(["campaign", "replay", str(reference_results), "--dataset", "ds6", "--run", "17", "--out",
+                 str(out)]) == 0
     printed = capsys.readouterr().out
     assert "backlash_feature: replayed" in printed and "bit-identical" in printed and "DIFFERENT" not in printed
-    assert main(["campaign", "replay", str(reference_results), "--dataset", "ds6", "--run", "17", "--out", str(out)]) == 2
+    assert main(["campaign", "replay", str(reference_results), "--dataset", "ds6", "--run", "17", "--out",
+                 str(out)]) == 2
     assert main(["campaign", "replay", str(reference_results), "--dataset", "ds9", "--run", "0"]) == 2
     assert "no data set 'ds9'; it has ds2, ds4, ds6, ds5" in capsys.readouterr().err
     assert main(["campaign", "replay", str(reference_results), "--dataset", "ds2", "--run", "40"]) == 2

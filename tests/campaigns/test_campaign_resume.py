@@ -33,7 +33,8 @@ def _runs_logged(log_dir: Path) -> int:
 
 
 def test_resume_after_sigkill_reruns_only_unfinished_chunks(reference_results, tmp_path):
-    spec_path = write_spec(tmp_path, "[execution]\nchunk_size = 5\ntimeout = 600.0\n")  # small chunks: several exist when killed
+    # small chunks: several exist when killed
+    spec_path = write_spec(tmp_path, "[execution]\nchunk_size = 5\ntimeout = 600.0\n")
     out, log_before, log_after = tmp_path / "out", tmp_path / "log1", tmp_path / "log2"
     log_before.mkdir()
     log_after.mkdir()
@@ -55,7 +56,8 @@ def test_resume_after_sigkill_reruns_only_unfinished_chunks(reference_results, t
     assert 30 <= finished <= 80  # at least the 6 chunks waited for, at most ds2 and ds4
 
     spec = load(spec_path)
-    path = campaigns.run_campaign(spec, out, workers=2, resume=True, progress=False, run_function=SyntheticModel(log_dir=str(log_after)))
+    path = campaigns.run_campaign(spec, out, workers=2, resume=True, progress=False,
+                                  run_function=SyntheticModel(log_dir=str(log_after)))
 
     assert {p: p.stat().st_mtime_ns for p in before} == before  # finished chunks untouched
     assert _runs_logged(log_after) == 160 - finished  # only the unfinished runs executed
@@ -76,6 +78,7 @@ def test_resume_of_a_finished_campaign_runs_nothing(reference_results, tmp_path)
     log = tmp_path / "log"
     log.mkdir()
     spec = load(SYNTHETIC_SPEC)
-    path = campaigns.run_campaign(spec, reference_results.parent, resume=True, progress=False, run_function=SyntheticModel(log_dir=str(log)))
+    path = campaigns.run_campaign(spec, reference_results.parent, resume=True, progress=False,
+                                  run_function=SyntheticModel(log_dir=str(log)))
     assert _runs_logged(log) == 0
     assert path == reference_results

@@ -38,7 +38,8 @@ def test_request_routes_scene_targets_to_conditions():
     request = build_request(spec, samples, 3, 0)
     assert request.conditions["preload"] == 1000.0
     assert request.conditions["room_temperature"] == samples[3, 0, 4]
-    assert set(request.parameter_values) == {"synthetic.gain", "synthetic.offset", "synthetic.stiffness", "synthetic.inert"}
+    assert set(request.parameter_values) == {"synthetic.gain", "synthetic.offset", "synthetic.stiffness",
+                                             "synthetic.inert"}
     assert request.trace_variables == ("nut1_position", "motor_current")
     assert build_request(spec, samples, 3, 2).trace_variables == ()
 
@@ -48,8 +49,10 @@ def test_request_routes_scene_targets_to_conditions():
     [
         (Distribution("x", "gaussian", "1", 1.0, mean=1.0, sigma=0.1), 1.0, 0.1, (-np.inf, np.inf)),
         (Distribution("x", "uniform", "1", 0.0, low=-1.0, high=3.0), 1.0, 4 / np.sqrt(12), (-1.0, 3.0)),
-        (Distribution("x", "truncated_gaussian", "1", 0.0, mean=0.0, sigma=1.0, low=-1.0, high=1.0), 0.0, stats.truncnorm(-1, 1).std(), (-1.0, 1.0)),
-        (Distribution("x", "lognormal", "1", 2.0, mean=2.0, sigma=0.1), 2.0 * np.exp(0.005), 2.0 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01)), (0.0, np.inf)),
+        (Distribution("x", "truncated_gaussian", "1", 0.0, mean=0.0, sigma=1.0, low=-1.0, high=1.0), 0.0,
+         stats.truncnorm(-1, 1).std(), (-1.0, 1.0)),
+        (Distribution("x", "lognormal", "1", 2.0, mean=2.0, sigma=0.1), 2.0 * np.exp(0.005),
+         2.0 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01)), (0.0, np.inf)),
         (Distribution("x", "constant", "1", 0.0, value=4.0), 4.0, 0.0, (4.0, 4.0)),
     ],
 )

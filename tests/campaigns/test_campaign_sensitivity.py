@@ -98,14 +98,16 @@ def test_effect_sizes_of_the_synthetic_model_bracket_its_known_spreads():
     spec = load(SYNTHETIC_SPEC, runs=1000)
     drawn = sample(spec)
     samples, names = drawn[0], [d.target for d in spec.distributions()]
-    y = np.array([execute(synthetic_run, build_request(spec, drawn, 0, i))["features"]["backlash_feature"] for i in range(1000)])
+    y = np.array([execute(synthetic_run, build_request(spec, drawn, 0, i))["features"]["backlash_feature"]
+                  for i in range(1000)])
     found = first_order(samples, y, seed=4)
     column = {n: j for j, n in enumerate(names)}
 
     def spread(name: str, slope: float = 1.0) -> float:
         return slope * samples[:, column[name]].std()
 
-    for name, truth in (("synthetic.gain", spread("synthetic.gain", 80e-6)), ("synthetic.offset", spread("synthetic.offset"))):
+    for name, truth in (("synthetic.gain", spread("synthetic.gain", 80e-6)),
+                        ("synthetic.offset", spread("synthetic.offset"))):
         lower, upper = found["effect_size_ci"][column[name]]
         assert lower <= truth <= upper, name
     assert found["effect_size"][column["synthetic.gain"]] == pytest.approx(spread("synthetic.gain", 80e-6), rel=0.05)

@@ -78,7 +78,8 @@ def test_a_bad_spec_reports_every_problem_and_runs_nothing(tmp_path):
     log = tmp_path / "log"
     log.mkdir()
     with pytest.raises(SpecError) as info:
-        campaigns.run_campaign(path, tmp_path / "out", catalog=SYNTHETIC_CATALOG, progress=False, run_function=SyntheticModel(log_dir=str(log)))
+        campaigns.run_campaign(path, tmp_path / "out", catalog=SYNTHETIC_CATALOG, progress=False,
+                               run_function=SyntheticModel(log_dir=str(log)))
     problems = info.value.problems
     for expected in EXPECTED:
         assert any(p.startswith(expected) for p in problems), f"{expected!r} not in {problems}"
@@ -92,10 +93,15 @@ def test_a_bad_spec_reports_every_problem_and_runs_nothing(tmp_path):
     [
         ("[execution]\ntimeout = -1.0\n", "execution.timeout:"),
         ("[observability]\nsweep = [\"ds2\", \"ds5\", \"nope\"]\n", "observability.sweep: unknown data set(s) nope"),
-        ("[observability]\nsweep = [\"ds2\", \"ds6\"]\n", "observability.sweep: needs exactly one zero-backlash reference"),
-        ("[[uncertainties]]\ntarget = \"synthetic.gain\"\ndistribution = \"constant\"\n", "uncertainties: target(s) listed twice: synthetic.gain"),
-        ("[[uncertainties]]\ntarget = \"synthetic.inert\"\ndistribution = \"lognormal\"\nhalf_range = 5.0\n", "uncertainties[6]: a lognormal needs relative = true"),
-        ("[[uncertainties]]\ntarget = \"synthetic.offset\"\ndistribution = \"gaussian\"\nrelative = true\nhalf_range = 5.0\n", "uncertainties[6]: relative range on synthetic.offset whose nominal value is 0"),
+        ("[observability]\nsweep = [\"ds2\", \"ds6\"]\n",
+         "observability.sweep: needs exactly one zero-backlash reference"),
+        ("[[uncertainties]]\ntarget = \"synthetic.gain\"\ndistribution = \"constant\"\n",
+         "uncertainties: target(s) listed twice: synthetic.gain"),
+        ("[[uncertainties]]\ntarget = \"synthetic.inert\"\ndistribution = \"lognormal\"\nhalf_range = 5.0\n",
+         "uncertainties[6]: a lognormal needs relative = true"),
+        ("[[uncertainties]]\ntarget = \"synthetic.offset\"\ndistribution = \"gaussian\"\n"
+         "relative = true\nhalf_range = 5.0\n",
+         "uncertainties[6]: relative range on synthetic.offset whose nominal value is 0"),
         ("unknown_key = 1\n", "unknown_key:"),
     ],
 )
@@ -146,4 +152,5 @@ def test_shipped_specs_validate_structurally():
         assert len(spec.datasets) == 7
         assert len(spec.uncertainties) == 38  # every row of Table 9.5
         assert spec.observability.sweep == ["ds4", "ds6", "ds7", "ds2"]
-    assert campaigns.spec.validate_spec(campaigns.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000
+    assert campaigns.spec.validate_spec(
+        campaigns.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000

@@ -1,4 +1,5 @@
-"""The requirement verdict: known answers on synthetic sweeps, bootstrap bounds, insufficient data (analysis.nc and CLI).
+"""The requirement verdict: known answers on synthetic sweeps, bootstrap bounds, insufficient data (analysis.nc and
+CLI).
 
 The synthetic sweeps have a Gaussian feature ``f = backlash + N(0, sigma)``. Detection at false-alarm rate
 alpha = 5 % with power 95 % then needs a shift of ``(z_0.95 + z_0.95) sigma = 3.29 sigma``: that is the true
@@ -25,7 +26,8 @@ LEVELS = (0.0, 0.5e-6, 1e-6, 1.5e-6, 2e-6, 3e-6, 5e-6)
 DETECTABLE_SHIFT = 2 * stats.norm.ppf(0.95)
 
 
-def sweep_results(sigma: float, levels=LEVELS, *, runs: int = 100, ok_runs: int | None = None, seed: int = 0) -> xr.Dataset:
+def sweep_results(sigma: float, levels=LEVELS, *, runs: int = 100, ok_runs: int | None = None,
+                  seed: int = 0) -> xr.Dataset:
     """A results dataset of a backlash sweep with feature ``f = backlash + N(0, sigma)`` and one inert parameter."""
     rng = np.random.default_rng(seed)
     names = [f"b{k}" for k in range(len(levels))]
@@ -47,7 +49,8 @@ def sweep_results(sigma: float, levels=LEVELS, *, runs: int = 100, ok_runs: int 
 
 def verdict_of(analysis: xr.Dataset) -> tuple[str, str, np.ndarray, float]:
     a = analysis.sel(feature="f")
-    return str(a["requirement_verdict"].item()), str(a["requirement_statement"].item()), a["minimum_detectable_backlash_ci"].values, float(a["minimum_detectable_backlash"])
+    return (str(a["requirement_verdict"].item()), str(a["requirement_statement"].item()),
+            a["minimum_detectable_backlash_ci"].values, float(a["minimum_detectable_backlash"]))
 
 
 def test_clearly_met():
@@ -76,7 +79,8 @@ def test_never_detected_along_the_sweep_is_not_met_with_an_infinite_upper_bound(
 
 
 def test_a_bracket_straddling_the_requirement_is_undetermined():
-    # truth 3.29 * 0.35 um = 1.15 um lies in the gap 0.5-2 um of this coarse sweep: the data cannot say which side of 1 um
+    # truth 3.29 * 0.35 um = 1.15 um lies in the gap 0.5-2 um of this coarse sweep: the data cannot say which side
+    # of 1 um
     for seed in range(3):
         results = sweep_results(0.35e-6, (0.0, 0.5e-6, 2e-6, 5e-6), seed=seed)
         verdict, statement, (lower, upper), _ = verdict_of(analysis_dataset(results, n_boot=300))
@@ -105,7 +109,8 @@ def test_bounds_contain_the_estimate_and_the_truth_on_a_fine_sweep():
 
 def test_the_bootstrap_is_deterministic_in_its_seed():
     results = sweep_results(0.3e-6)
-    xr.testing.assert_identical(analysis_dataset(results, n_boot=100, seed=3), analysis_dataset(results, n_boot=100, seed=3))
+    xr.testing.assert_identical(analysis_dataset(results, n_boot=100, seed=3),
+                                analysis_dataset(results, n_boot=100, seed=3))
     samples = [results["f"].sel(dataset=n).values for n in results["dataset"].values]
     same = [bootstrap_minimum_detectable(LEVELS, samples, 0, n_boot=100, seed=s)["replicates"] for s in (7, 7, 8)]
     np.testing.assert_array_equal(same[0], same[1])
@@ -119,7 +124,8 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     assert statement.startswith("insufficient data: each of the 7 sweep data sets has 1 ok run ")
     assert f"at least {MIN_OK_RUNS} per sweep data set" in statement
     assert (a["data_sufficient"] == 0).all() and (a["n_used"] == 1).all() and a.attrs["min_ok_runs"] == MIN_OK_RUNS
-    for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability", "sweep_detection_probability"):
+    for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability",
+                 "sweep_detection_probability"):
         assert np.isnan(a[name]).all(), name
     # one data set short is enough: the others keep their statistics, the verdict is withheld
     results = sweep_results(0.1e-6)
@@ -127,7 +133,8 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     a = analysis_dataset(results, n_boot=50)
     assert list(a["data_sufficient"].sel(feature="f").values) == [1, 1, 0, 1, 1, 1, 1]
     assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
-    assert np.isnan(a["feature_mean"].sel(dataset="b2")).all() and np.isfinite(a["feature_mean"].sel(dataset="b1")).all()
+    assert (np.isnan(a["feature_mean"].sel(dataset="b2")).all()
+            and np.isfinite(a["feature_mean"].sel(dataset="b1")).all())
     assert f"b2 has {MIN_OK_RUNS - 1} ok runs" in str(a["requirement_statement"].sel(feature="f").item())
 
 

@@ -22,7 +22,8 @@ def run(*args):
 def test_accuracy_quick_study(tmp_path):
     """A quick study of 50 ms of ds4: every run ok, RK4's errors fall with the step, the baseline table printed
     is the one stored, and --replot redraws the chart from the stored data."""
-    result = run("accuracy", "--quick", "--no-stability", "--scene", "ds4", "--duration", "0.05", "--out", str(tmp_path))
+    result = run("accuracy", "--quick", "--no-stability", "--scene", "ds4", "--duration", "0.05", "--out",
+                 str(tmp_path))
     assert result.returncode == 0, result.stderr
     assert f"wrote work_precision: {tmp_path / 'work_precision.png'}" in result.stdout
     with xr.open_dataset(tmp_path / "work_precision.nc") as study:
@@ -64,7 +65,8 @@ def _paired_shift(out, feature):
 
 
 def _printed_shifts(text):
-    return {m.group(1): float(m.group(2)) * 1e-6 for m in re.finditer(r"(backlash_\w+): mean shift ([-+]\d+\.\d+) um", text)}
+    return {m.group(1): float(m.group(2)) * 1e-6
+            for m in re.finditer(r"(backlash_\w+): mean shift ([-+]\d+\.\d+) um", text)}
 
 
 def test_fidelity_audit_passes_on_a_scene_file(tmp_path):
@@ -75,7 +77,8 @@ def test_fidelity_audit_passes_on_a_scene_file(tmp_path):
     out = tmp_path / "audit"
     spec = tmp_path / "eq_9_12.toml"
     spec.write_text(EQ_9_12_SPEC)
-    result = run("fidelity", "audit", str(scene), "--runs", "2", "--workers", "1", "--out", str(out), "--spec", str(spec))
+    result = run("fidelity", "audit", str(scene), "--runs", "2", "--workers", "1", "--out", str(out), "--spec",
+                 str(spec))
     assert result.returncode == 0, result.stderr
     assert "encoders=" in result.stdout.splitlines()[0]  # the automatic configuration comes first
     shifts = _printed_shifts(result.stdout)
@@ -107,5 +110,6 @@ def test_fidelity_audit_flags_a_shift_beyond_the_tolerance(tmp_path, monkeypatch
     assert over, "auto and full gave identical features: the test needs a nonzero shift"
     assert f"fidelity_audit: FLAGGED (rule to fix): {', '.join('short/' + f for f in over)}" in printed
     for feature in over:
-        assert f"{feature}: mean shift" in printed and shifts[feature] == pytest.approx(_paired_shift(out, feature), abs=0.6e-10)
+        assert (f"{feature}: mean shift" in printed
+                and shifts[feature] == pytest.approx(_paired_shift(out, feature), abs=0.6e-10))
         assert re.search(feature + r": mean shift [^;]*-> FLAGGED", printed)

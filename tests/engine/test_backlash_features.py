@@ -115,7 +115,8 @@ def test_features_recomputed_from_the_recorded_signals():
     for suffix, sled, screw in (("", ds.linear_encoder_position.values, arm * ds.screw_angle_measured.values),
                                 ("_true", ds.nut1_position.values, ds.screw_equivalent_position.values)):
         d = sled - screw
-        assert ds.time.size == 10_001 and float(ds["backlash_feature" + suffix]) == pytest.approx(np.mean(np.abs(d)), rel=1e-12)
+        assert (ds.time.size == 10_001
+                and float(ds["backlash_feature" + suffix]) == pytest.approx(np.mean(np.abs(d)), rel=1e-12))
         step = np.r_[0.0, np.diff(screw)]
         width = np.mean(d[step < -threshold]) - np.mean(d[step > threshold])
         assert float(ds["backlash_hysteresis" + suffix]) == pytest.approx(width, rel=1e-9)

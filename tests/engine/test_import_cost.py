@@ -13,11 +13,13 @@ def _modules_after(code: str) -> set[str]:
 
 def test_import_twin_and_a_simulation_do_not_load_python_control():
     assert "control" not in _modules_after("import twin")
-    after_run = _modules_after("import twin\nds = twin.simulate('ds2', duration=0.02)\nassert ds.attrs['status'] == 'ok'")
+    after_run = _modules_after(
+        "import twin\nds = twin.simulate('ds2', duration=0.02)\nassert ds.attrs['status'] == 'ok'")
     assert "twin.engine.loop" in after_run  # the simulation did run through the compiled loop
     assert "control" not in after_run
 
 
 def test_a_loop_design_loads_python_control():
-    code = "import twin\nfrom twin.control.design import design_loops\ndesign_loops(twin.load_parameters('bench').values())"
+    code = ("import twin\nfrom twin.control.design import design_loops\n"
+            "design_loops(twin.load_parameters('bench').values())")
     assert "control" in _modules_after(code)

@@ -56,7 +56,8 @@ def test_same_seed_same_noise_other_seed_other_noise():
 
 def test_preload_reading_close_to_truth(ds1_full, bench):
     """The preload reading: 1000 N within the noise (+/-2.5 % of the 10 kN range) and accuracy errors."""
-    half_width = bench.value("sensors.electrical_noise_half_width") * bench.value("sensors.preload_load_cell_nominal_force_range2")
+    half_width = bench.value("sensors.electrical_noise_half_width") * bench.value(
+        "sensors.preload_load_cell_nominal_force_range2")
     error = ds1_full.preload_force_measured - ds1_full.preload_force
     assert float(np.abs(error).max()) <= 1.05 * half_width
     assert abs(float(error.mean())) < 0.1 * half_width

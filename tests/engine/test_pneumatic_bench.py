@@ -129,7 +129,8 @@ def test_load_cell_noise_in_force_loop(scene_factory, bench, designed_loop):
     noisy = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": "full"}, output_dt=1.25e-4, rng=7)
     quiet = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET}, output_dt=1.25e-4)
     steady = slice(2.0, None)
-    sigma_noise = bench.value("sensors.electrical_noise_half_width") * bench.value("sensors.load_cell_nominal_force") / 3**0.5
+    sigma_noise = bench.value("sensors.electrical_noise_half_width") * bench.value(
+        "sensors.load_cell_nominal_force") / 3**0.5
     dt = designed_loop.dt
     impulse = control.impulse_response(designed_loop, T=np.arange(0.0, 3.0, dt)).outputs.ravel() * dt  # per unit pulse
     noise_gain = float(np.sqrt(np.sum(impulse**2)))

@@ -34,7 +34,8 @@ def test_static_hold_screw_torque_and_motor_current(bench, scene_factory, force)
     # Motor current: the reducer output torque reflected through ratio and efficiency (Eq. 9.3).
     ratio, eta, kt = p["reducer.ratio"], p["reducer.efficiency"], p["motor.torque_constant"]
     expected_current = expected_torque / (ratio * eta * kt)
-    current_tolerance = (p["motor.friction_static_torque"] + p["ball_screw.bearing_friction_static_torque"]) / (ratio * eta * kt)
+    current_tolerance = ((p["motor.friction_static_torque"] + p["ball_screw.bearing_friction_static_torque"])
+                         / (ratio * eta * kt))
     assert abs(_final(ds, "motor_current") - expected_current) <= current_tolerance
     # and it is at rest
     assert abs(_final(ds, "nut1_speed")) < 1e-5
@@ -76,7 +77,8 @@ def test_external_force_redistributes_preload(bench, scene_factory, external):
     nut when F_ext opposes the preload on it, and the slave keeps the preload.
     """
     preload = 1000.0
-    scene = scene_factory(1.2, force=[{"kind": "hold", "end": 0.1}, {"kind": "smooth_step", "end": 0.3, "to": external}],
+    scene = scene_factory(1.2,
+                          force=[{"kind": "hold", "end": 0.1}, {"kind": "smooth_step", "end": 0.3, "to": external}],
                           preload=preload)
     ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene))
     f_pr = _final(ds, "preload_force")
@@ -94,7 +96,8 @@ def test_backlash_hysteresis_width_and_nut_dwell(bench, scene_factory):
     plus elastic deformation, and the nut stands still while the gap is open (Figs. 5.11, 5.12)."""
     backlash = 20e-6
     scene = scene_factory(4.5, position=[{"kind": "hold", "end": 0.25},
-                                         {"kind": "sinusoid", "end": 4.25, "amplitude": 1e-3, "frequency": 0.5, "phase": 0.0}],
+                                         {"kind": "sinusoid", "end": 4.25, "amplitude": 1e-3, "frequency": 0.5,
+                                          "phase": 0.0}],
                           backlash=backlash)
     ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene), output_dt=1.25e-4)
     # the contacts' relative position: the screw's axial displacement and its twist at the nut (docs/model.md)

@@ -86,7 +86,8 @@ def test_removed_states_leave_the_integrated_vector(bench):
     ("cheap", None, "'cheap' is not 'auto', 'full'"),
     ({"default": "some"}, None, "'some' is not 'auto', 'full'"),
     ({"pneumatics": "absent"}, None, "'absent' cannot apply the force demand"),
-    ({"motor_thermal": "frozen"}, ["winding_temperature"], "does not produce the requested output(s) winding_temperature"),
+    ({"motor_thermal": "frozen"}, ["winding_temperature"],
+     "does not produce the requested output(s) winding_temperature"),
     ("auto", ["backlash_feature", "speedometer"], "outputs: 'speedometer' is not a signal or feature"),
 ])
 def test_bad_fidelity_input_is_a_clear_error(bench, fidelity, outputs, message):
@@ -104,7 +105,8 @@ def test_scene_outputs_are_validated():
 
 def test_rules_file_is_checked(tmp_path):
     bad = tmp_path / "rules.toml"
-    bad.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\nsubsystem = "contact"\nlevel = "rigid"\n'
+    bad.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\n'
+                   'subsystem = "contact"\nlevel = "rigid"\n'
                    'because = "x"\nmax_softness = 1.0\n')
     with pytest.raises(twin.OptionError) as info:
         load_rules(bad)
@@ -118,7 +120,8 @@ def test_force_demand_condition_as_data(tmp_path, bench):
     """A rules file is data: a project may drop the cylinder on force-free tests (the shipped rules do not,
     see rules.toml) and the decision cites the condition."""
     rules = tmp_path / "rules.toml"
-    rules.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\nsubsystem = "pneumatics"\n'
+    rules.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\n'
+                     'subsystem = "pneumatics"\n'
                      'level = "absent"\nbecause = "cylinder disconnected for force-free tests"\nforce_demand = false\n')
     free = resolve_fidelity(twin.load_scene("ds2"), bench, rules_file=rules)
     loaded = resolve_fidelity(twin.load_scene("ds3"), bench, rules_file=rules)

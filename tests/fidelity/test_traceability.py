@@ -66,11 +66,12 @@ def test_frozen_thermal(ds5_full, bench):
     # the current ripples faster than the 1 ms outputs: its mean square needs the 8 kHz drive rate
     fine = run("ds5", {}, output_dt=1.25e-4)
     assert float(fine.winding_temperature[-1] - fine.winding_temperature[0]) == rise
-    resistance = bench.value("motor.winding_resistance_20C") * (1.0 + bench.value("motor.resistance_temperature_coefficient")
-                                                                 * (float(fine.winding_temperature[0]) - 293.15))
+    resistance = bench.value("motor.winding_resistance_20C") * (
+        1.0 + bench.value("motor.resistance_temperature_coefficient") * (float(fine.winding_temperature[0]) - 293.15))
     power = resistance * float((fine.motor_current**2).mean())
     t = float(fine.time[-1])
-    closed_form = power * bench.value("motor.thermal_resistance") * (1.0 - np.exp(-t / bench.value("motor.thermal_time_constant")))
+    closed_form = power * bench.value("motor.thermal_resistance") * (
+        1.0 - np.exp(-t / bench.value("motor.thermal_time_constant")))
     assert closed_form > 1e-4
     assert rise == pytest.approx(closed_form, rel=0.10)
     with pytest.raises(twin.OptionError, match="winding_temperature"):

@@ -25,7 +25,8 @@ Z = 22.0
 
 def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0, linear_stiffness=None):
     """Axial nut force at the contact level: variable or constant angle Hertz, or linear if a stiffness is given."""
-    model = CONTACT_LINEAR if linear_stiffness is not None else (CONTACT_VARIABLE_ANGLE if variable else CONTACT_CONSTANT_ANGLE)
+    model = (CONTACT_LINEAR if linear_stiffness is not None
+             else (CONTACT_VARIABLE_ANGLE if variable else CONTACT_CONSTANT_ANGLE))
     return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z,
                            model, linear_stiffness or 0.0)
 
@@ -70,7 +71,8 @@ def test_linear_contact_is_an_elasto_backlash_spring():
     secant = K_CONST[0] * delta_n**0.5
     linear = force(dx, backlash=backlash, linear_stiffness=secant)[0]
     assert linear == pytest.approx(force(dx, backlash=backlash, variable=False)[0], rel=1e-12)
-    assert force(0.5 * backlash + 2 * (dx - 0.5 * backlash), backlash=backlash, linear_stiffness=secant)[0] == pytest.approx(2 * linear, rel=1e-12)
+    assert force(0.5 * backlash + 2 * (dx - 0.5 * backlash), backlash=backlash,
+                 linear_stiffness=secant)[0] == pytest.approx(2 * linear, rel=1e-12)
     assert force(9e-6, backlash=backlash, linear_stiffness=secant)[0] == 0.0
 
 

@@ -68,7 +68,8 @@ def test_current_derivative_equilibrium_and_time_constant():
     assert current_derivative(voltage, steady, speed, r, h, k_e, ratio) == pytest.approx(0.0, abs=1e-12)
     assert current_derivative(voltage, steady + 0.5, speed, r, h, k_e, ratio) == pytest.approx(-0.5 * r / h, rel=1e-12)
     # back-EMF acts through the reduction ratio: the output speed raises the EMF by k_e tau per rad/s
-    delta = current_derivative(voltage, 0.0, speed + 1.0, r, h, k_e, ratio) - current_derivative(voltage, 0.0, speed, r, h, k_e, ratio)
+    delta = (current_derivative(voltage, 0.0, speed + 1.0, r, h, k_e, ratio)
+             - current_derivative(voltage, 0.0, speed, r, h, k_e, ratio))
     assert delta == pytest.approx(-k_e * ratio / h, rel=1e-9)
 
 
@@ -93,7 +94,8 @@ def test_thermal_first_order_closed_form():
 
 
 def test_thermal_rise_and_time_constant_follow_the_conductance():
-    """In general dT_inf = P / (h A) and tau_eff = tau_w / (R_th h A); without losses the rise is a ramp P R_th t / tau_w."""
+    """In general dT_inf = P / (h A) and tau_eff = tau_w / (R_th h A); without losses the rise is a ramp P R_th t /
+    tau_w."""
     h = 20.0
     g = THERMAL["thermal_resistance"] * h * THERMAL["area"]
     sol = _integrate_temperature(10.0, h, 0.0, 600.0)

@@ -303,7 +303,8 @@ def test_end_stroke_damper_damping_resists_the_approach_at_both_ends():
     k, c = par("damper_stiffness"), par("damper_damping")
     assert c > 0.0
     assert pn.end_stroke_damper_force(0.006, -0.01, *DAMPER) == pytest.approx(k * 0.010 + c * 0.01, rel=1e-12)
-    assert pn.end_stroke_damper_force(STROKE - 0.006, 0.01, *DAMPER) == pytest.approx(-(k * 0.010 + c * 0.01), rel=1e-12)
+    assert pn.end_stroke_damper_force(STROKE - 0.006, 0.01, *DAMPER) == \
+        pytest.approx(-(k * 0.010 + c * 0.01), rel=1e-12)
 
 
 def test_load_cell_deflection_at_nominal_force():

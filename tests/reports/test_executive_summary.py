@@ -31,15 +31,17 @@ def _contract_analysis(analysis: xr.Dataset) -> xr.Dataset:
     features = [str(f) for f in analysis["feature"].values]
     verdicts = ["not met", "met", "undetermined"][: len(features)]
     n = int(analysis["n_used"].min())
-    statements = [f"{v}: minimum detectable backlash {1.9 + k:.1f} µm (95 % bootstrap CI {1.4 + k:.1f}–{2.6 + k:.1f} µm; "
-                  f"{n} ok runs per sweep data set, 3 data sets) against the 1 µm requirement of Table 9.3"
+    statements = [f"{v}: minimum detectable backlash {1.9 + k:.1f} µm "
+                  f"(95 % bootstrap CI {1.4 + k:.1f}–{2.6 + k:.1f} µm; {n} ok runs per sweep data set, 3 data sets) "
+                  "against the 1 µm requirement of Table 9.3"
                   for k, v in enumerate(verdicts)]
     sufficient = (analysis["n_used"] >= 10).astype(np.int8)
     return analysis.assign(
         requirement_verdict=("feature", np.array(verdicts, dtype=object)),
         requirement_statement=("feature", np.array(statements, dtype=object)),
         data_sufficient=sufficient.assign_attrs(flag_values=[0, 1], flag_meanings="insufficient sufficient"),
-    ).assign_attrs(min_ok_runs=10, requirement=1e-6, requirement_source="Table 9.3: minimum detectable linear backlash 1 µm")
+    ).assign_attrs(min_ok_runs=10, requirement=1e-6,
+                   requirement_source="Table 9.3: minimum detectable linear backlash 1 µm")
 
 
 @pytest.fixture(scope="module")
@@ -81,8 +83,8 @@ def test_page_one_links_each_finding_to_its_section(with_verdicts):
 def test_an_older_analysis_gives_no_verdict(campaign, generated_at, tmp_path):
     """An analysis.nc written before requirement_verdict existed: page 1 says "not available", composes nothing."""
     shutil.copyfile(campaign, tmp_path / "results.nc")
-    new = ["requirement_verdict", "requirement_statement", "data_sufficient", "first_order_index", "first_order_index_ci",
-           "effect_size", "effect_size_ci", "minimum_detectable_backlash_ci"]
+    new = ["requirement_verdict", "requirement_statement", "data_sufficient", "first_order_index",
+           "first_order_index_ci", "effect_size", "effect_size_ci", "minimum_detectable_backlash_ci"]
     with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
         old = stored.load().drop_vars(new, errors="ignore")
     old.attrs.pop("min_ok_runs", None)

@@ -28,7 +28,8 @@ LONG_NAMES = {
 }
 #: Signal words a trace caption may name; each must then be drawn (in a title, label or legend).
 SIGNALS = ("position demand", "nut1 position", "linear encoder position", "screw equivalent position", "motor current",
-           "current demand", "preload force", "external force", "force demand", "chamber1 pressure", "chamber2 pressure",
+           "current demand", "preload force", "external force", "force demand", "chamber1 pressure",
+           "chamber2 pressure",
            "pressure", "current", "temperature")
 
 
@@ -60,7 +61,8 @@ def layout_problems(fig) -> list[str]:
                     problems.append(f"axes {k}: {name} tick label {text.get_text()!r} leaves the figure")
                 for other, other_box in zip(texts[i + 1:], boxes[i + 1:], strict=False):
                     if box.overlaps(other_box):
-                        problems.append(f"axes {k}: {name} tick labels {text.get_text()!r} and {other.get_text()!r} overlap")
+                        problems.append(
+                            f"axes {k}: {name} tick labels {text.get_text()!r} and {other.get_text()!r} overlap")
         for text in (ax.title, ax.xaxis.label, ax.yaxis.label):
             if text.get_visible() and text.get_text() and outside(text.get_window_extent(renderer)):
                 problems.append(f"axes {k}: {text.get_text()!r} leaves the figure")
@@ -69,7 +71,8 @@ def layout_problems(fig) -> list[str]:
             box = legend.get_window_extent(renderer)
             for line in ax.get_lines():
                 points = ax.transData.transform(np.column_stack(line.get_data()).astype(float))
-                inside = ((points[:, 0] > box.x0) & (points[:, 0] < box.x1) & (points[:, 1] > box.y0) & (points[:, 1] < box.y1))
+                inside = ((points[:, 0] > box.x0) & (points[:, 0] < box.x1)
+                          & (points[:, 1] > box.y0) & (points[:, 1] < box.y1))
                 if inside.any():
                     problems.append(f"axes {k}: legend covers data of {line.get_label()!r}")
                     break
@@ -152,7 +155,8 @@ def test_seven_data_sets_become_small_multiples(demo_like):
     _, drawn, _ = demo_like
     for block, fig in drawn:
         for ax in fig.axes:
-            assert len([line for line in ax.get_lines() if not line.get_label().startswith("_")]) <= figures.MAX_TRACES + 2, block.key
+            assert len([line for line in ax.get_lines()
+                        if not line.get_label().startswith("_")]) <= figures.MAX_TRACES + 2, block.key
 
 
 def test_three_run_statistics_are_greyed_with_the_reason(three_runs):
@@ -200,7 +204,8 @@ def test_labels_from_the_stored_effective_scenes(demo_like):
     stored = {d: {"backlash": {"value": 8e-5 if d != "ds3" else 0.0, "unit": "m"},
                   "zero_procedure": {"value": "index pulse" if d == "ds2" else "hard stop", "unit": ""},
                   "room_temperature": {"value": 298.15, "unit": "K"},
-                  "external_force_peak": {"value": 4000.0 if d == "ds3" else 0.0, "unit": "N"}} for d in builder.datasets}
+                  "external_force_peak": {"value": 4000.0 if d == "ds3" else 0.0, "unit": "N"}}
+              for d in builder.datasets}
     results = builder.results.assign_attrs(dataset_conditions=json.dumps(stored))
     inputs = dataclasses.replace(builder.inputs, results=results)
     relabelled = Builder(inputs)

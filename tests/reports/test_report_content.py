@@ -37,7 +37,8 @@ def test_optional_sections_say_not_available(report):
     assert "not available" in _blocks(speed, Callout)[0].text
     assert not _blocks(speed, Figure)
     # the synthetic model reports no fidelity: the audit says why it did not run
-    assert "Audit result: not run (the run function reports no fidelity)." in [c.text for c in _blocks(fidelity, Callout)]
+    assert ("Audit result: not run (the run function reports no fidelity)."
+            in [c.text for c in _blocks(fidelity, Callout)])
 
 
 #: Bench-named traces added to the synthetic campaign's results: (units, values over the trace time).
@@ -75,7 +76,8 @@ def extended(campaign, tmp_path_factory):
     results = inputs.results
     time = results["trace_time"].values
     shape = (results.sizes["dataset"], results.sizes["trace_run"], len(time))
-    traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape), {"units": unit})
+    traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape),
+                                {"units": unit})
               for name, (unit, values) in BENCH_TRACES.items()}
     results = results.assign(traces).assign_attrs(
         fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="passed",
@@ -121,7 +123,8 @@ def test_every_figure_and_table_is_numbered_in_order(report):
 
 @pytest.mark.parametrize(
     ("value", "unit", "expected"),
-    [(2.5e-6, "m", "2.5 µm"), (0.012, "m", "12 mm"), (3e-16, "m", "0.3 fm"), (6e5, "Pa", "6 bar"), (4000.0, "N", "4 kN"), (298.15, "K", "298 K"), (0.5, "1", "0.5")],
+    [(2.5e-6, "m", "2.5 µm"), (0.012, "m", "12 mm"), (3e-16, "m", "0.3 fm"), (6e5, "Pa", "6 bar"),
+     (4000.0, "N", "4 kN"), (298.15, "K", "298 K"), (0.5, "1", "0.5")],
 )
 def test_quantities_are_shown_with_a_readable_unit(value, unit, expected):
     assert quantity(value, unit) == expected
@@ -143,4 +146,5 @@ def test_a_data_set_without_successful_runs(inputs):
     failures = _section(report, "failures")
     assert _blocks(failures, Callout)[0].text.startswith("32 of 90 runs failed")
     assert any(f.key == "distribution-backlash_feature" for f in _blocks(_section(report, "distributions"), Figure))
-    assert any(c.text.startswith("backlash_feature: insufficient data: ds4 has 0 ok runs") for c in _blocks(_section(report, "observability"), Callout))
+    assert any(c.text.startswith("backlash_feature: insufficient data: ds4 has 0 ok runs")
+               for c in _blocks(_section(report, "observability"), Callout))

@@ -30,7 +30,8 @@ def test_html_has_every_section_with_captioned_figures(report):
         assert f'<section id="{key}">' in html
         assert f"{title}</h2>" in html
         assert f'href="#{key}"' in html  # in the table of contents
-    figures = re.findall(r'<figure id="figure-(\d+)">\s*<img src="data:image/png;base64,[A-Za-z0-9+/=]+" alt="[^"]+">\s*'
+    figures = re.findall(r'<figure id="figure-(\d+)">\s*<img src="data:image/png;base64,[A-Za-z0-9+/=]+" '
+                         r'alt="[^"]+">\s*'
                          r"<figcaption><b>Figure (\d+)\.</b> [^<]{40,}</figcaption>", html)
     assert len(figures) >= 12  # per-data-set distributions are small multiples of one figure, not a figure each
     assert [int(a) for a, _ in figures] == list(range(1, len(figures) + 1))
@@ -48,7 +49,8 @@ def test_report_shows_the_failed_runs(report):
     _, pages = _pdf_text(report["pdf"])
     text = " ".join(pages)
     assert "87 of 90 runs succeeded; 3 failed" in html
-    for status, reason in (("error", "RuntimeError: injected failure"), ("failed", "feature backlash_feature is not finite"),
+    for status, reason in (("error", "RuntimeError: injected failure"),
+                           ("failed", "feature backlash_feature is not finite"),
                            ("diverged", "injected divergence")):
         assert re.search(rf"<td>{status}</td>.*<td>{re.escape(reason)}", html)
         assert reason in text
@@ -78,10 +80,12 @@ def test_same_input_gives_the_same_html_apart_from_the_timestamp(campaign, repor
     other = reports.build_report(campaign, out_dir=tmp_path, generated_at=later)
     first, second = report["html"].read_text(encoding="utf-8"), other["html"].read_text(encoding="utf-8")
     assert first != second
-    assert first.replace(generated_at.isoformat(timespec="seconds"), "T") == second.replace(later.isoformat(timespec="seconds"), "T")
+    assert first.replace(generated_at.isoformat(timespec="seconds"),
+                         "T") == second.replace(later.isoformat(timespec="seconds"), "T")
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="Chromium not found (/usr/bin/chromium; CI installs Debian's chromium package)")
+@pytest.mark.skipif(CHROMIUM is None,
+                    reason="Chromium not found (/usr/bin/chromium; CI installs Debian's chromium package)")
 def test_chromium_renders_the_html(report, tmp_path):
     shot = tmp_path / "shot.png"
     subprocess.run(

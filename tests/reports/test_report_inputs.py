@@ -40,7 +40,8 @@ def test_truncated_results(campaign, tmp_path):
 def test_netcdf_that_is_not_campaign_results(tmp_path):
     path = tmp_path / "signals.nc"
     xr.Dataset({"motor_current": ("time", np.zeros(3))}).to_netcdf(path)
-    with pytest.raises(ReportError, match="not a campaign results file: variable 'status' missing.*no feature variable"):
+    with pytest.raises(ReportError,
+                       match="not a campaign results file: variable 'status' missing.*no feature variable"):
         reports.build_report(path, out_dir=tmp_path / "out")
 
 

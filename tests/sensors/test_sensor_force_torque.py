@@ -98,14 +98,16 @@ def test_torque_meter_saturates_at_the_dac_full_scale():
         (
             torque_meter_parameters,
             20.0,
-            {"sensors.torque_meter_sensitivity_tempco_range1": -1.2e-4, "sensors.torque_meter_offset_tempco_range1": 0.8e-4},
+            {"sensors.torque_meter_sensitivity_tempco_range1": -1.2e-4,
+             "sensors.torque_meter_offset_tempco_range1": 0.8e-4},
             [-1.2e-4],
             [0.8e-4],
         ),
     ],
 )
 @pytest.mark.parametrize("delta_t", [10.0, -10.0])
-def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder, force, overrides, gain_tcs, offset_tcs, delta_t):
+def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder, force, overrides, gain_tcs, offset_tcs,
+                                                                        delta_t):
     cold = builder(bench_sensors({**overrides, **FINE_DAQ}), room_temperature=T25)
     warm = builder(bench_sensors({**overrides, **FINE_DAQ}), room_temperature=T25 + delta_t)
     full_scale = cold[AN_FULL_SCALE]
@@ -133,7 +135,8 @@ def test_static_errors_act_on_gain_and_offset():
     assert p[AN_GAIN] == pytest.approx(1.0 + 1e-3 - 5e-4)
     assert p[AN_OFFSET] == pytest.approx(2e-4)
     assert p[AN_REFRESH_PERIOD] == pytest.approx(1 / 19200)  # Table B.13
-    q = preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_accuracy_error": 2e-3}), room_temperature=T25)
+    q = preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_accuracy_error": 2e-3}),
+                                     room_temperature=T25)
     assert q[AN_FULL_SCALE] == 10e3 and q[AN_OFFSET] == pytest.approx(2e-3)  # 20 N on the 10 kN range
 
 
@@ -191,27 +194,32 @@ def test_bad_inputs_name_the_field():
     with pytest.raises(ValueError, match="sensors.load_cell_sensitivity_error"):  # beyond ±0.1 %Nom
         load_cell_parameters(bench_sensors({"sensors.load_cell_sensitivity_error": 0.01}), room_temperature=T25)
     with pytest.raises(ValueError, match="sensors.preload_load_cell_sensitivty_error_range1"):
-        preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}), room_temperature=T25)
+        preload_load_cell_parameters(bench_sensors({"sensors.preload_load_cell_sensitivty_error_range1": 0.0}),
+                                     room_temperature=T25)
 
 
 @pytest.mark.parametrize(
     "builder, selector, full_scale, error_name",
     [
-        (torque_meter_parameters, "sensors.torque_meter_range", {1: 50.0, 2: 5.0}, "sensors.torque_meter_sensitivity_error_range"),
-        (preload_load_cell_parameters, "sensors.preload_load_cell_range", {1: 1e3, 2: 10e3}, "sensors.preload_load_cell_sensitivity_error_range"),
+        (torque_meter_parameters, "sensors.torque_meter_range", {1: 50.0, 2: 5.0},
+         "sensors.torque_meter_sensitivity_error_range"),
+        (preload_load_cell_parameters, "sensors.preload_load_cell_range", {1: 1e3, 2: 10e3},
+         "sensors.preload_load_cell_sensitivity_error_range"),
     ],
 )
 @pytest.mark.parametrize("selected", [1, 2])
 def test_range_selection_picks_the_range_full_scale_and_errors(builder, selector, full_scale, error_name, selected):
     other = 3 - selected
-    p = builder(bench_sensors({selector: float(selected), f"{error_name}{selected}": 0.002, f"{error_name}{other}": -0.002}),
+    p = builder(bench_sensors({selector: float(selected), f"{error_name}{selected}": 0.002,
+                               f"{error_name}{other}": -0.002}),
                 room_temperature=T25)
     assert p[AN_FULL_SCALE] == full_scale[selected]
     assert p[AN_GAIN] == pytest.approx(1.002)
 
 
 def test_a_step_spanning_several_refreshes_shows_the_last_one():
-    p = torque_meter_parameters(bench_sensors({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}), room_temperature=T25)
+    p = torque_meter_parameters(bench_sensors({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}),
+                                room_temperature=T25)
     state = np.zeros(AS_SIZE)
     analog_init(state, 0.0, 0.0, p)
     analog_step(state, 25.0, 2.5e-3, p)  # ramp 0 -> 25 N*m over one 2.5 ms step; refreshes at 1 and 2 ms

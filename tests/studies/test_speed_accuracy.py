@@ -35,8 +35,11 @@ def test_closed_loop_order_on_smooth_scene(bench, smooth_scene, method, steps):
     sample instants shared by every step size, so the plant ODE is smooth between them.
     Measured slopes: RK4 4.2 (4.5 at 31 us, pre-asymptotic), semi-implicit Euler 1.01, W-method 1.98."""
     params = bench.with_values(SMOOTH)
-    reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7, fidelity=plant_fidelity(smooth_scene))
-    errs = [_final_error(twin.simulate(smooth_scene, params, integrator=method, dt=h, fidelity=plant_fidelity(smooth_scene)), reference)
+    reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7,
+                              fidelity=plant_fidelity(smooth_scene))
+    errs = [
+        _final_error(twin.simulate(smooth_scene, params, integrator=method, dt=h,
+                                   fidelity=plant_fidelity(smooth_scene)), reference)
             for h in steps]
     slope = linregress(np.log(steps), np.log(errs)).slope
     assert slope == pytest.approx(ORDER[method], abs=0.3)
@@ -65,7 +68,8 @@ def test_observed_order_on_full_scene():
 def test_guard_catches_nan_blow_up():
     """RK4 at the 125 us drive period exceeds its stability limit (~1e-4 s): without the local-error
     check the state goes to NaN, and the guard stops the run there with that reason."""
-    ds = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), local_error_guard=False, throw=False)
+    ds = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), local_error_guard=False,
+                       throw=False)
     assert ds.attrs["status"] == "diverged" and "non-finite" in ds.attrs["failure_reason"]
     guarded = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), throw=False)
     assert "finite but wrong" in guarded.attrs["failure_reason"]
@@ -76,12 +80,14 @@ def test_guard_catches_finite_but_wrong():
     """Semi-implicit Euler at 62.5 us on the loaded nominal scene is past its ~55 us limit: the run stays
     finite and ends 'ok' with a feature 5 um off (50.2 instead of 55.4 um). The step-doubling guard
     flags it."""
-    unguarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"),
+    unguarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5,
+                              fidelity=plant_fidelity("nominal"),
                               local_error_guard=False, throw=False)
     right = twin.simulate("nominal", integrator="rk4", dt=3.125e-5, fidelity=plant_fidelity("nominal"))
     assert unguarded.attrs["status"] == "ok"
     assert abs(float(unguarded.backlash_feature - right.backlash_feature)) > 1e-6
-    guarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"), throw=False)
+    guarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"),
+                            throw=False)
     assert guarded.attrs["status"] == "diverged" and "finite but wrong" in guarded.attrs["failure_reason"]
 
 

@@ -219,10 +219,12 @@ def design_loops(p: dict[str, float]) -> dict[str, LoopDesign]:
 
 def main() -> None:
     designs = design_loops(load_parameters("bench").values())
-    print(f"{'loop':10s} {'Kp':>12s} {'Ki':>12s} {'Ts [s]':>10s} {'fc [Hz]':>9s} {'BW [Hz]':>9s} {'GM [dB]':>8s} {'PM [deg]':>8s}")
+    print(f"{'loop':10s} {'Kp':>12s} {'Ki':>12s} {'Ts [s]':>10s} {'fc [Hz]':>9s} {'BW [Hz]':>9s} {'GM [dB]':>8s} "
+          f"{'PM [deg]':>8s}")
     for d in designs.values():
         row = asdict(d)
-        print(f"{row['name']:10s} {row['kp']:12.6g} {row['ki']:12.6g} {row['sample_time']:10.3g} {row['crossover_hz']:9.2f} "
+        print(f"{row['name']:10s} {row['kp']:12.6g} {row['ki']:12.6g} {row['sample_time']:10.3g} "
+              f"{row['crossover_hz']:9.2f} "
               f"{row['bandwidth_hz']:9.2f} {row['gain_margin_db']:8.2f} {row['phase_margin_deg']:8.2f}")
 
 

@@ -107,7 +107,8 @@ def instrument_levels(fidelity) -> dict[str, str]:
 
 
 def build_instruments(p: Mapping[str, float], room_temperature: float, levels: Mapping[str, str],
-                      rng: np.random.Generator, n_samples: int, dt: float, torque_meter_refresh: bool = True) -> Instruments:
+                      rng: np.random.Generator, n_samples: int, dt: float,
+                      torque_meter_refresh: bool = True) -> Instruments:
     """Pack the instruments of one run (parameters from the ``sensors`` group of ``p``).
 
     Parameters
@@ -130,7 +131,8 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     codes = np.array([LEVELS[levels[name]] for name in INSTRUMENTS], dtype=np.int64)
     rows = np.zeros((len(INSTRUMENTS), ROW))
     rows[LINEAR_ENCODER, :ENC_SIZE] = linear_encoder_parameters(p, fidelity=int(codes[LINEAR_ENCODER]))
-    rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(p, fidelity=int(codes[TORQUE_METER_ENCODER]))
+    rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(
+        p, fidelity=int(codes[TORQUE_METER_ENCODER]))
     rows[RESOLVER, :RES_SIZE] = resolver_parameters(p)
     rows[TORQUE_METER, :AN_SIZE] = torque_meter_parameters(p, room_temperature=room_temperature)
     if not torque_meter_refresh:
@@ -138,7 +140,8 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     rows[PRELOAD_CELL, :AN_SIZE] = preload_load_cell_parameters(p, room_temperature=room_temperature)
     rows[LOAD_CELL, :AN_SIZE] = load_cell_parameters(p, room_temperature=room_temperature)
     rows[CURRENT_MONITOR, :AN_SIZE] = analog_parameters(
-        full_scale=p["motor.max_current"], output_full_scale=p["sensors.current_monitor_full_scale"], gain=1.0, offset=0.0,
+        full_scale=p["motor.max_current"], output_full_scale=p["sensors.current_monitor_full_scale"], gain=1.0,
+        offset=0.0,
         tau=0.0, refresh_period=0.0, output_bits=0.0, daq_full_scale=p["sensors.daq_full_scale"],
         daq_bits=p["sensors.daq_bits"],
         noise_half_width=p["sensors.electrical_noise_half_width"] * p["sensors.current_monitor_full_scale"])

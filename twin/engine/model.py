@@ -41,7 +41,9 @@ CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}
 STIFFNESS_FIT_POINTS = 200
 STIFFNESS_FIT_DEGREE = 6
 STIFFNESS_FIT_TOLERANCE = 1e-5  # relative; far below the 2 % error of the curvature fits (Sec. 3.5.5)
-SIN_ALPHA_MAX = 0.9397  # sin(70 deg): upper validity limit of the fitted curvature formulas (Eqs. 3.20, 3.27); far beyond any load the screw can carry
+# sin(70 deg): upper validity limit of the fitted curvature formulas (Eqs. 3.20, 3.27); far beyond any load the screw
+# can carry
+SIN_ALPHA_MAX = 0.9397
 
 # Numerical choices (not physics parameters): the friction laws' sign regularisation
 # and the divergence guard's bounds. Documented in docs/model.md.
@@ -203,7 +205,8 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.NUT_ROTATION] = 1.0 if fidelity.level("nut_rotation") == "on" else 0.0
     # preload (Secs. 9.2-9.3)
     preload = scene.condition("preload")
-    c[K.PRELOAD_STIFFNESS] = series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"]) if preload > 0 else 0.0
+    c[K.PRELOAD_STIFFNESS] = (series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"])
+                              if preload > 0 else 0.0)
     c[K.PRELOAD_DAMPING] = p["preload.damping"] if preload > 0 else 0.0
     c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
     c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
@@ -363,7 +366,8 @@ def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
         If the fit misses any grid value by more than ``STIFFNESS_FIT_TOLERANCE``.
     """
     u = 2.0 * (sin_grid - sin_grid[0]) / (sin_grid[-1] - sin_grid[0]) - 1.0
-    coefficients = np.polynomial.chebyshev.cheb2poly(np.polynomial.chebyshev.chebfit(u, stiffness, STIFFNESS_FIT_DEGREE))
+    coefficients = np.polynomial.chebyshev.cheb2poly(
+        np.polynomial.chebyshev.chebfit(u, stiffness, STIFFNESS_FIT_DEGREE))
     error = np.max(np.abs(np.polynomial.polynomial.polyval(u, coefficients) / stiffness - 1.0))
     if error > STIFFNESS_FIT_TOLERANCE:
         raise RuntimeError(f"contact stiffness fit error {error:.2e} exceeds {STIFFNESS_FIT_TOLERANCE:.0e}")
@@ -429,5 +433,6 @@ def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: floa
                             (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
         x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS] if c[K.NUT_ROTATION] > 0.5 else 0.0
         x[pos] = -arm * x[ang] - contact_position_for_force(c, stiffness_poly, force)
-    c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
+    c[K.PRELOAD_COMPRESSION] = (preload / c[K.PRELOAD_STIFFNESS]
+                                + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION]))
     return x

@@ -11,4 +11,5 @@ demands, duration and requested outputs allow, by the rules of
 from twin.fidelity.levels import SUBSYSTEMS, Level, Subsystem, full_plant, requested_levels
 from twin.fidelity.rules import Fidelity, load_rules, resolve_fidelity
 
-__all__ = ["SUBSYSTEMS", "full_plant", "requested_levels", "Fidelity", "Level", "Subsystem", "load_rules", "resolve_fidelity"]
+__all__ = ["SUBSYSTEMS", "full_plant", "requested_levels", "Fidelity", "Level", "Subsystem", "load_rules",
+           "resolve_fidelity"]

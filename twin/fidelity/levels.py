@@ -95,7 +95,8 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
         Level("ideal", "true positions and angles"),
     )),
     Subsystem("analog_sensors", "torque meter, load cells and current monitor (twin.engine.instrumentation)", (
-        Level("full", "sensitivity, offset and temperature errors, electrical noise (Table 9.5), converters and filters"),
+        Level("full",
+              "sensitivity, offset and temperature errors, electrical noise (Table 9.5), converters and filters"),
         Level("quantized", "converters and filters only, no errors and no noise"),
         Level("ideal", "true forces, torque and current"),
     )),

@@ -103,7 +103,8 @@ def load_rules(path: Path = RULES_FILE) -> tuple[dict, list[dict]]:
             problems.append(f"{where}.level: {rule.get('level')!r} is not one of {', '.join(subsystem.level_names)}")
         unknown = set(rule) - RULE_KEYS - set(CONDITIONS)
         if unknown:
-            problems.append(f"{where}: unknown condition(s) {', '.join(sorted(unknown))}; allowed: {', '.join(CONDITIONS)}")
+            problems.append(
+                f"{where}: unknown condition(s) {', '.join(sorted(unknown))}; allowed: {', '.join(CONDITIONS)}")
     if problems:
         raise OptionError(problems)
     return settings, rules
@@ -209,7 +210,8 @@ def _twist_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool, s
     torsional = value("ball_screw.shear_modulus") * math.pi * value("ball_screw.screw_root_diameter") ** 4 / 32.0
     deflection = arm**2 * load * length / torsional
     return deflection <= limit, (f"twist share of the nut-to-screw difference {deflection * 1e9:.1f} nm at "
-                                 f"{load:.0f} N net axial load, {length * 1e3:.0f} mm of shaft (limit {limit * 1e9:g} nm)")
+                                 f"{load:.0f} N net axial load, {length * 1e3:.0f} mm of shaft "
+                                 f"(limit {limit * 1e9:g} nm)")
 
 
 CONDITIONS = {
@@ -225,7 +227,8 @@ CONDITIONS = {
 }
 
 
-def scene_levels(scene: Scene, requested: Mapping[str, str], fidelity, problems: list[str]) -> dict[str, tuple[str, str]]:
+def scene_levels(scene: Scene, requested: Mapping[str, str], fidelity,
+                 problems: list[str]) -> dict[str, tuple[str, str]]:
     """Levels the scene's conditions fix, whatever the request: ``{subsystem: (level, reason)}``.
 
     An attached cylinder (``conditions.cylinder``) is part of the bench and fixes nothing: the request
@@ -238,7 +241,8 @@ def scene_levels(scene: Scene, requested: Mapping[str, str], fidelity, problems:
     if explicit:
         problems.append(f"fidelity.pneumatics: {requested['pneumatics']!r} needs the cylinder the scene "
                         f"'{scene.name}' detaches (conditions.cylinder = 'detached'); use 'absent' or 'auto'")
-    return {"pneumatics": ("absent", "the scene's cylinder is detached (conditions.cylinder): no force on the master nut")}
+    return {"pneumatics": ("absent",
+                           "the scene's cylinder is detached (conditions.cylinder): no force on the master nut")}
 
 
 def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping[str, str] = "auto",
@@ -267,7 +271,8 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
     requested, problems = requested_levels(fidelity)
     wanted = frozenset(OUTPUT_NAMES if outputs is None and not scene.outputs else
                        (scene.outputs if outputs is None else outputs))
-    problems += [f"outputs: {name!r} is not a signal or feature of the bench" for name in sorted(wanted - set(OUTPUT_NAMES))]
+    problems += [f"outputs: {name!r} is not a signal or feature of the bench"
+                 for name in sorted(wanted - set(OUTPUT_NAMES))]
     if problems:
         raise OptionError(problems)
 
@@ -307,7 +312,8 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
     for name, level in levels.items():
         lost = sorted(wanted & set(SUBSYSTEMS[name].level(level).removes_signals))
         if lost and explicit:
-            problems.append(f"fidelity.{name}: level {level!r} does not produce the requested output(s) {', '.join(lost)}")
+            problems.append(
+                f"fidelity.{name}: level {level!r} does not produce the requested output(s) {', '.join(lost)}")
     if problems:
         raise OptionError(problems)
     return Fidelity(levels, reasons, needs.peak_contact_load)

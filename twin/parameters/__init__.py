@@ -139,7 +139,8 @@ class ParameterSet(Mapping[str, Parameter]):
 def _unknown(name: str, known: Mapping[str, Parameter]) -> str:
     group = name.split(".")[0]
     siblings = sorted(n for n in known if n.startswith(group + "."))
-    hint = f"; known in '{group}': {', '.join(siblings)}" if siblings else f"; known groups: {', '.join(sorted({n.split('.')[0] for n in known}))}"
+    hint = (f"; known in '{group}': {', '.join(siblings)}" if siblings
+            else f"; known groups: {', '.join(sorted({n.split('.')[0] for n in known}))}")
     return f"{name}: unknown parameter{hint}"
 
 
@@ -194,7 +195,8 @@ def load_parameters(name_or_path: str | Path = "bench") -> ParameterSet:
 def _parse_entry(name: str, entry) -> tuple[Parameter | None, list[str]]:
     if not isinstance(entry, dict):
         return None, [f"{name}: expected a table with value/unit/source, got {type(entry).__name__}"]
-    problems = [f"{name}.{k}: unknown field; allowed: {', '.join(sorted(_ALLOWED_KEYS))}" for k in entry if k not in _ALLOWED_KEYS]
+    problems = [f"{name}.{k}: unknown field; allowed: {', '.join(sorted(_ALLOWED_KEYS))}" for k in entry
+                if k not in _ALLOWED_KEYS]
     if "value" not in entry:
         problems.append(f"{name}.value: missing")
     if not isinstance(entry.get("unit"), str):

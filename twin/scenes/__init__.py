@@ -63,10 +63,12 @@ class Condition(NamedTuple):
     def problem(self, name: str, value) -> str | None:
         """What is wrong with ``value`` (naming the field and what is allowed), or None."""
         if self.choices:
-            return None if value in self.choices else f"conditions.{name}: {value!r} is not one of {', '.join(self.choices)}"
+            return (None if value in self.choices
+                    else f"conditions.{name}: {value!r} is not one of {', '.join(self.choices)}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             return f"conditions.{name}: must be a finite number [{self.unit}], got {value!r}"
-        return None if self.check(value) else f"conditions.{name}: {value:g} {self.unit} is out of range; allowed: {self.allowed}"
+        return (None if self.check(value)
+                else f"conditions.{name}: {value:g} {self.unit} is out of range; allowed: {self.allowed}")
 
 
 #: Zero procedures: how the bench is initialised at t = 0 and where the encoders are zeroed (docs/model.md).
@@ -153,7 +155,8 @@ class Scene:
     outputs: tuple[str, ...] = ()
 
     def __post_init__(self):
-        defaults = {name: c.default for name, c in CONDITIONS.items() if c.default is not None and name not in self.conditions}
+        defaults = {name: c.default for name, c in CONDITIONS.items()
+                    if c.default is not None and name not in self.conditions}
         object.__setattr__(self, "conditions", {**self.conditions, **defaults})
         problems = validate_scene(self)
         if problems:
@@ -258,7 +261,8 @@ def load_scene(name_or_path: str | Path | Scene) -> Scene:
     if not path.is_file():
         path = LIBRARY / f"{name_or_path}.toml"
         if not path.is_file():
-            raise SceneError([f"scene: '{name_or_path}' is neither a file nor a built-in scene ({', '.join(list_scenes())})"])
+            raise SceneError(
+                [f"scene: '{name_or_path}' is neither a file nor a built-in scene ({', '.join(list_scenes())})"])
     return scene_from_dict(_read_with_base(path), default_name=path.stem)
 
 
@@ -275,7 +279,8 @@ def _locate_base(path: Path, base, seen: tuple[Path, ...]) -> Path:
     if not base_path.is_file():
         base_path = LIBRARY / f"{base}.toml"
     if not base_path.is_file() or base_path.resolve() in seen:
-        raise SceneError([f"{path.name}.base: '{base}' is not a scene file or built-in scene (or the chain is circular)"])
+        raise SceneError(
+            [f"{path.name}.base: '{base}' is not a scene file or built-in scene (or the chain is circular)"])
     return base_path
 
 

@@ -30,7 +30,8 @@ _FIELDS = {
     "smooth_step": {"kind", "end", "to"},
     "sinusoid": {"kind", "end", "amplitude", "frequency", "phase"},
 }
-_REQUIRED = {"hold": {"end"}, "ramp": {"end", "to"}, "smooth_step": {"end", "to"}, "sinusoid": {"end", "amplitude", "frequency"}}
+_REQUIRED = {"hold": {"end"}, "ramp": {"end", "to"}, "smooth_step": {"end", "to"},
+             "sinusoid": {"end", "amplitude", "frequency"}}
 
 # Columns of the compiled segment table.
 COL_KIND, COL_T0, COL_T1, COL_V0, COL_V1, COL_AMP, COL_FREQ, COL_PHASE = range(8)
@@ -67,7 +68,9 @@ def compile_profile(segments: list[dict], field: str, initial: float = 0.0) -> t
             continue
         extra = set(seg) - _FIELDS[kind]
         missing = _REQUIRED[kind] - set(seg)
-        problems += [f"{where}.{f}: not a field of a '{kind}' segment; allowed: {', '.join(sorted(_FIELDS[kind] - {'kind'}))}" for f in sorted(extra)]
+        problems += [
+            f"{where}.{f}: not a field of a '{kind}' segment; allowed: {', '.join(sorted(_FIELDS[kind] - {'kind'}))}"
+            for f in sorted(extra)]
         problems += [f"{where}.{f}: missing (required for '{kind}')" for f in sorted(missing)]
         bad = [f for f in _FIELDS[kind] - {"kind"} if f in seg and not _is_finite_number(seg[f])]
         problems += [f"{where}.{f}: must be a finite number, got {seg[f]!r}" for f in bad]
@@ -80,7 +83,8 @@ def compile_profile(segments: list[dict], field: str, initial: float = 0.0) -> t
         if kind == "sinusoid" and seg["frequency"] <= 0:
             problems.append(f"{where}.frequency: must be > 0 Hz, got {seg['frequency']!r}")
             continue
-        amp, freq, phase = float(seg.get("amplitude", 0.0)), float(seg.get("frequency", 0.0)), float(seg.get("phase", 0.0))
+        amp, freq, phase = (float(seg.get("amplitude", 0.0)), float(seg.get("frequency", 0.0)),
+                            float(seg.get("phase", 0.0)))
         if kind in ("ramp", "smooth_step"):
             v1 = float(seg["to"])
         elif kind == "sinusoid":
