@@ -48,6 +48,9 @@ ROOT = Path(__file__).resolve().parent.parent
 COPIED = ("twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
 PROJECT_PACKAGES = ("twin", "sensors", "campaigns", "reports")
 
+_ANALYSIS_TESTS = ["tests/campaigns/test_analysis_known_answers.py", "tests/campaigns/test_campaign_analysis.py",
+                   "tests/campaigns/test_campaign_verdict.py", "tests/campaigns/test_campaign_sensitivity.py",
+                   "-k", "not synthetic_campaign and not cli_prints"]
 #: Module -> unit tests that exercise it without running the full compiled loop.
 TESTS = {
     "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py"],
@@ -68,13 +71,23 @@ TESTS = {
     "sensors/parameters.py": ["tests/sensors/test_sensor_parameters.py"],
     "sensors/resolver.py": ["tests/sensors/test_sensor_resolver.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/torque_meter.py": ["tests/sensors/test_sensor_force_torque.py"],
-    # its end-to-end test runs a whole synthetic campaign (minutes): the unit tests only
-    "campaigns/analysis.py": ["tests/campaigns/test_campaign_analysis.py", "-k", "not synthetic_campaign"],
+    # the statistics' unit tests; not the end-to-end synthetic campaign (a dask campaign per mutant: minutes) nor
+    # the CLI test (a subprocess imports the installed package, not the mutated copy)
+    "campaigns/analysis.py": _ANALYSIS_TESTS,
+    "campaigns/sensitivity.py": _ANALYSIS_TESTS,
+    # the verdict code of the report: known answers on in-memory analyses (no PDF, no campaign)
+    "reports/content.py": ["tests/reports/test_report_verdicts.py"],
+    "reports/inputs.py": ["tests/reports/test_report_verdicts.py", "tests/reports/test_report_inputs.py"],
+}
+#: Modules of which only some functions (or methods) are mutated: the report's verdict code, not its figures.
+SCOPE = {
+    "reports/content.py": ("_requirement", "_verdicts", "_executive", "_influences", "insufficient", "n_used"),
 }
 SETS = {
     "physics": [m for m in TESTS if m.startswith("twin/physics/")],
     "sensors": [m for m in TESTS if m.startswith("sensors/")],
-    "analysis": ["campaigns/analysis.py"],
+    "analysis": ["campaigns/analysis.py", "campaigns/sensitivity.py"],
+    "reports": ["reports/content.py", "reports/inputs.py"],
 }
 
 _ARITHMETIC = [("Add", "Sub"), ("Sub", "Add"), ("Mul", "Div"), ("Div", "Mul"), ("Pow", "Mul")]
@@ -94,13 +107,27 @@ def enumerate_mutants(module: str, source: str) -> list[tuple[str, str, int, int
 
     tree = get_ast(source)
     lines = source.splitlines()
+    scoped = _scoped_lines(source, SCOPE[module]) if module in SCOPE else None
     mutants = []
     for name in OPERATORS:
         operator = get_operator(name)()
         positions = [start for node in ast_nodes(tree) for start, _ in operator.mutation_positions(node)]
         mutants += [(module, name, occurrence, start[0]) for occurrence, start in enumerate(positions)
-                    if not lines[start[0] - 1].lstrip().startswith("@")]  # decorator arguments, e.g. cache=True
+                    if not lines[start[0] - 1].lstrip().startswith("@")  # decorator arguments, e.g. cache=True
+                    and (scoped is None or start[0] in scoped)]
     return mutants
+
+
+def _scoped_lines(source: str, functions: tuple[str, ...]) -> set[int]:
+    """Line numbers of the bodies (and signatures) of the named functions or methods of ``source``."""
+    import ast
+
+    nodes = [n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)
+             and n.name in functions]
+    missing = set(functions) - {n.name for n in nodes}
+    if missing:
+        raise SystemExit(f"SCOPE names functions that do not exist (moved or renamed?): {', '.join(sorted(missing))}")
+    return {line for n in nodes for line in range(n.lineno, n.end_lineno + 1)}
 
 
 def wilson(killed: int, n: int, z: float = 1.96) -> tuple[float, float]:
@@ -153,7 +180,8 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
     for module in modules:
         if not run_tests(copy, TESTS[module], 10 * timeout):
             raise SystemExit(f"{module}: its tests fail without any mutation; fix them first")
-    imported = Path(sys.modules["twin"].__file__).resolve()
+    package = modules[0].split("/")[0]
+    imported = Path(sys.modules[package].__file__).resolve()
     if copy.resolve() not in imported.parents:
         raise SystemExit(f"the tests imported {imported}, not the mutated copy in {copy}")
     mutants = [mutant for m in modules for mutant in enumerate_mutants(m, originals[m])]
@@ -186,7 +214,7 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
 
 
 def _changed_line(original: str, mutated: str) -> str:
-    for a, b in zip(original.splitlines(), mutated.splitlines()):
+    for a, b in zip(original.splitlines(), mutated.splitlines(), strict=False):
         if a != b:
             return f"{a.strip()}  ->  {b.strip()}"
     return "(no textual change)"
@@ -206,7 +234,7 @@ def make_copy() -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--sets", nargs="+", choices=sorted(SETS), default=["physics", "sensors", "analysis"])
+    parser.add_argument("--sets", nargs="+", choices=sorted(SETS), default=list(SETS))
     parser.add_argument("--sample", type=int, help="test a fixed-seed random sample of this many mutants per set")
     parser.add_argument("--all", action="store_true", help="test every mutant (default when --sample is absent)")
     parser.add_argument("--quick", action="store_true", help="CI mode: the physics set, a 40-mutant sample")
