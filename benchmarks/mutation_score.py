@@ -38,7 +38,6 @@ import random
 import re
 import shutil
 import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -250,7 +249,8 @@ def main(argv: list[str] | None = None) -> int:
     if os.environ.get("NUMBA_DISABLE_JIT") != "1":
         # the environment must be set before numba is imported: re-run this script with it
         env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-        return subprocess.call([sys.executable, __file__, *(argv if argv is not None else sys.argv[1:])], env=env)
+        # exec, not a child process: a signal sent to this process reaches the run itself
+        os.execve(sys.executable, [sys.executable, __file__, *(argv if argv is not None else sys.argv[1:])], env)
 
     only = None
     if args.recheck:
@@ -258,11 +258,18 @@ def main(argv: list[str] | None = None) -> int:
         only = {(m[1], m[3], int(m[4])) for m in listed}
         args.all = args.all or args.sample is None
     copy = make_copy()
-    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(1))  # so that the copy is removed
+    def stop(signum, frame):
+        # pytest would catch a SystemExit or KeyboardInterrupt raised inside a test run and count the mutant as
+        # killed: remove the copy and leave at once instead
+        shutil.rmtree(copy, ignore_errors=True)
+        os._exit(128 + signum)
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
     os.chdir(copy)
     sys.path.insert(0, str(copy))
     sys.path.insert(0, str(copy / "tests"))
-    progress = print if args.verbose else (lambda line: None)
+    progress = (lambda line: print(line, flush=True)) if args.verbose else (lambda line: None)
     failed = False
     try:
         for name in args.sets:
