@@ -64,6 +64,7 @@ TESTS = {
                                "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/analog.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/encoder.py": ["tests/sensors/test_sensor_encoder.py", "tests/sensors/test_sensor_encoder_speed.py",
+                           "tests/sensors/test_sensor_encoder_timing.py",
                            "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/hall.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/load_cell.py": ["tests/sensors/test_sensor_force_torque.py"],
@@ -143,18 +144,30 @@ class _Timeout(Exception):
     pass
 
 
+_alarm_rang = False
+
+
 def _alarm(signum, frame):
+    global _alarm_rang
+    _alarm_rang = True
     raise _Timeout()
 
 
-def run_tests(copy: Path, tests: list[str], timeout: float) -> bool:
-    """Run ``tests`` in-process on the copy's current sources; True when they all pass."""
+def run_tests(copy: Path, tests: list[str], timeout: float) -> str:
+    """Run ``tests`` in-process on the copy's current sources.
+
+    Returns ``"passed"``, ``"failed"`` (a test failed or errored, or collection did), ``"timeout"`` (still running
+    after ``timeout`` seconds; the alarm may also surface later as an error of pytest itself, e.g. when it rang
+    inside a finaliser), or ``"crashed"`` (pytest itself raised).
+    """
+    global _alarm_rang
     import pytest
 
     for name in list(sys.modules):
         top = name.split(".")[0]
         if top in PROJECT_PACKAGES or name.startswith(("test_", "conftest", "bench_helpers", "tests")):
             del sys.modules[name]
+    _alarm_rang = False
     signal.signal(signal.SIGALRM, _alarm)
     signal.setitimer(signal.ITIMER_REAL, timeout)
     try:
@@ -162,10 +175,14 @@ def run_tests(copy: Path, tests: list[str], timeout: float) -> bool:
             code = pytest.main(["-x", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy),
                                 *[str(copy / t) if t.startswith("tests/") else t for t in tests]])
     except _Timeout:
-        return False
+        return "timeout"
+    except Exception:
+        return "timeout" if _alarm_rang else "crashed"
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
-    return code == 0
+    if _alarm_rang:
+        return "timeout"
+    return "passed" if code == 0 else "failed"
 
 
 def score_set(name: str, modules: list[str], copy: Path, sample: int | None, seed: int, timeout: float,
@@ -176,9 +193,15 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
     from cosmic_ray.plugins import get_operator
 
     originals = {m: (copy / m).read_text() for m in modules}
+    budget = {}
     for module in modules:
-        if not run_tests(copy, TESTS[module], 10 * timeout):
-            raise SystemExit(f"{module}: its tests fail without any mutation; fix them first")
+        began = time.perf_counter()
+        outcome = run_tests(copy, TESTS[module], 10 * timeout)
+        if outcome != "passed":
+            raise SystemExit(f"{module}: its tests are {outcome} without any mutation; fix them first")
+        # a mutant that makes the tests run far longer than unmutated counts as killed (an infinite loop); the
+        # margin is relative, so a busy machine slows both alike and no survivor is taken for a timeout
+        budget[module] = max(timeout, 10 * (time.perf_counter() - began))
     package = modules[0].split("/")[0]
     imported = Path(sys.modules[package].__file__).resolve()
     if copy.resolve() not in imported.parents:
@@ -189,7 +212,7 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
         mutants = sorted(random.Random(seed).sample(mutants, sample), key=lambda m: (m[0], m[3]))
     if only is not None:
         mutants = [m for m in mutants if (m[0], m[1].removeprefix("core/"), m[2]) in only]
-    killed, survivors = 0, []
+    killed, survivors, timeouts = 0, [], 0
     start = time.perf_counter()
     for i, (module, operator, occurrence, line) in enumerate(mutants, 1):
         mutated = mutate_code(originals[module], get_operator(operator)(), occurrence)
@@ -198,18 +221,20 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
             continue
         (copy / module).write_text(mutated)
         try:
-            survived = run_tests(copy, TESTS[module], timeout)
+            outcome = run_tests(copy, TESTS[module], budget[module])
         finally:
             (copy / module).write_text(originals[module])
+        survived = outcome == "passed"
         if survived:
             survivors.append((module, line, operator.removeprefix("core/"), occurrence,
                               _changed_line(originals[module], mutated)))
         else:
             killed += 1
+            timeouts += outcome == "timeout"
         progress(f"[{name}] {i}/{len(mutants)} {'SURVIVED' if survived else 'killed  '} {module}:{line} "
-                 f"{operator.removeprefix('core/')} #{occurrence}")
+                 f"{operator.removeprefix('core/')} #{occurrence} ({outcome})")
     return {"set": name, "modules": modules, "mutants_total": total, "tested": len(mutants), "killed": killed,
-            "survivors": survivors, "seconds": time.perf_counter() - start}
+            "timeouts": timeouts, "survivors": survivors, "seconds": time.perf_counter() - start}
 
 
 def _changed_line(original: str, mutated: str) -> str:
@@ -238,7 +263,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--all", action="store_true", help="test every mutant (default when --sample is absent)")
     parser.add_argument("--quick", action="store_true", help="CI mode: the physics set, a 40-mutant sample")
     parser.add_argument("--seed", type=int, default=20)
-    parser.add_argument("--timeout", type=float, default=60.0, help="seconds per mutant before it counts as killed")
+    parser.add_argument("--timeout", type=float, default=60.0,
+                        help="seconds per mutant before it counts as killed, at least (10x the unmutated tests' time)")
     parser.add_argument("--min-score", type=float, default=None, help="exit 1 when a set scores below this (0-1)")
     parser.add_argument("--verbose", action="store_true", help="print every mutant's outcome")
     parser.add_argument("--recheck", type=Path, help="re-test only the survivors listed in an earlier output of "
@@ -283,7 +309,7 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             print(f"{name}: {killed}/{tested} mutants killed = {killed / tested:.1%} "
                   f"(95 % CI {low:.1%}-{high:.1%}; {sampled} mutants of {len(result['modules'])} modules; "
-                  f"{result['seconds']:.0f} s)")
+                  f"{result['seconds']:.0f} s; {result['timeouts']} killed by a timeout)")
             for module, line, operator, occurrence, change in result["survivors"]:
                 print(f"    survived {module}:{line} {operator} #{occurrence}: {change}")
             if args.min_score is not None and killed / tested < args.min_score:
