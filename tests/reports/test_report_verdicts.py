@@ -268,6 +268,11 @@ def test_the_analysis_beside_the_results_is_used_and_checked(tmp_path):
         load_inputs(path, tmp_path / "partial.nc")
     with pytest.raises(ReportError, match="is not a file"):
         load_inputs(tmp_path)
+    with pytest.raises(ReportError, match="campaign results file not found"):
+        load_inputs(tmp_path / "missing.nc")
+    (tmp_path / "garbage.nc").write_bytes(b"not netCDF" * 10)
+    with pytest.raises(ReportError, match="cannot be read as a netCDF campaign analysis file"):
+        load_inputs(path, tmp_path / "garbage.nc")
 
 
 def test_results_checks_name_each_problem(tmp_path):
