@@ -90,6 +90,29 @@ SETS = {
     "reports": ["reports/content.py", "reports/inputs.py"],
 }
 
+#: The issue's "done when" table replayed as deliberate mutations: name -> (module, text, replacement, tests).
+#: Each must make its tests fail (``--replay``); the unmutated tests must pass first.
+REPLAYS = {
+    "report verdict always 'meets'": (
+        "reports/content.py", 'verdict = str(a["requirement_verdict"].sel(feature=feature).item())', 'verdict = "met"',
+        ["tests/reports/test_report_verdicts.py"]),
+    "analysis verdict always 'met'": (
+        "campaigns/analysis.py", "    if upper <= requirement:\n", "    if True:\n",
+        ["tests/campaigns/test_campaign_verdict.py", "-k", "not cli_prints"]),
+    "curvature option ignored": (
+        "twin/engine/model.py", "contact_constants(c, p, curvature)", 'contact_constants(c, p, "thesis")',
+        ["tests/engine/test_simulate_api.py", "-k", "iso_curvature"]),
+    "torque-meter quantisation removed": (
+        "twin/engine/instrumentation.py", "    if levels[TORQUE_METER_ENCODER] == 0:\n        return x[S.SCREW_ANGLE]",
+        "    if True:\n        return x[S.SCREW_ANGLE]",
+        ["tests/engine/test_instruments_in_loop.py", "-k", "torque_meter_encoder_is_floor"]),
+    "errors() returning 0": (
+        "twin/studies/work_precision.py",
+        '    if ds.attrs["status"] != "ok":\n        return {name: np.nan for name in METRICS}',
+        "    return {name: 0.0 for name in METRICS}",
+        ["tests/studies/test_speed_accuracy.py", "-k", "error_metrics"]),
+}
+
 _ARITHMETIC = [("Add", "Sub"), ("Sub", "Add"), ("Mul", "Div"), ("Div", "Mul"), ("Pow", "Mul")]
 _COMPARISON = [("Lt", "LtE"), ("LtE", "Lt"), ("Gt", "GtE"), ("GtE", "Gt"), ("Eq", "NotEq"), ("NotEq", "Eq"),
                ("Lt", "Gt"), ("Gt", "Lt")]
@@ -237,6 +260,26 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
             "timeouts": timeouts, "survivors": survivors, "seconds": time.perf_counter() - start}
 
 
+def replay(copy: Path, timeout: float, baseline: bool) -> bool:
+    """Apply each of :data:`REPLAYS` in turn; True when the tests catch every one (and pass without it)."""
+    caught_all = True
+    for name, (module, text, replacement, tests) in REPLAYS.items():
+        original = (copy / module).read_text()
+        if original.count(text) != 1:
+            raise SystemExit(f"replay {name!r}: {module} does not contain the text to mutate exactly once (moved?)")
+        before = run_tests(copy, tests, 10 * timeout) if baseline else "not run"
+        (copy / module).write_text(original.replace(text, replacement))
+        try:
+            after = run_tests(copy, tests, 10 * timeout)
+        finally:
+            (copy / module).write_text(original)
+        caught = after in ("failed", "timeout") and before in ("passed", "not run")
+        caught_all &= caught
+        print(f"replay {name}: {module}: unmutated {before}, mutated {after} -> {'CAUGHT' if caught else 'MISSED'} "
+              f"by {' '.join(tests)}", flush=True)
+    return caught_all
+
+
 def _changed_line(original: str, mutated: str) -> str:
     for a, b in zip(original.splitlines(), mutated.splitlines(), strict=False):
         if a != b:
@@ -266,6 +309,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=60.0,
                         help="seconds per mutant before it counts as killed, at least (10x the unmutated tests' time)")
     parser.add_argument("--min-score", type=float, default=None, help="exit 1 when a set scores below this (0-1)")
+    parser.add_argument("--replay", action="store_true", help="apply the issue's deliberate mutations (REPLAYS) "
+                        "instead, each once, and check that their tests catch them")
+    parser.add_argument("--no-baseline", action="store_true", help="with --replay: skip the unmutated run of the tests")
     parser.add_argument("--verbose", action="store_true", help="print every mutant's outcome")
     parser.add_argument("--recheck", type=Path, help="re-test only the survivors listed in an earlier output of "
                                                       "this script (after adding tests that should kill them)")
@@ -298,6 +344,8 @@ def main(argv: list[str] | None = None) -> int:
     progress = (lambda line: print(line, flush=True)) if args.verbose else (lambda line: None)
     failed = False
     try:
+        if args.replay:
+            return 0 if replay(copy, args.timeout, not args.no_baseline) else 1
         for name in args.sets:
             result = score_set(name, SETS[name], copy, None if args.all else args.sample, args.seed, args.timeout,
                                progress, only)
