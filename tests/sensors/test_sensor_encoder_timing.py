@@ -103,3 +103,17 @@ def test_the_speed_method_is_chosen_from_the_window_since_the_last_sample():
     assert encoder_speed(state, t, p) == period
     # a second sample at the same instant has an empty window: no frequency estimate, no method to choose
     assert encoder_speed(state, t, p) == 0.0
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_one_edge_after_zeroing_gives_no_period_yet(direction):
+    """The period method needs two edges in the same direction: after zeroing and a single edge there is no interval,
+    and the estimate is exactly 0 in either direction (not the speed over an interval from the start of time)."""
+    p = _params()
+    state = np.zeros(ENC_STATE_SIZE)
+    x0 = 0.5 * RES  # mid-way between two edges of the ideal pattern
+    encoder_init(state, x0, T0, p)
+    encoder_step(state, x0 + direction * RES, T0 + 1e-3, p)  # exactly one edge crossed
+    assert state[ENC_S_EDGE_DIR] == direction and state[ENC_S_PREV_EDGE_DIR] == 0.0
+    speed = encoder_period_speed(state, T0 + 1e-3, p)
+    assert speed == 0.0 and math.copysign(1.0, speed) == 1.0
