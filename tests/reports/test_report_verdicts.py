@@ -141,9 +141,31 @@ def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
     assert [row[3] for row in table.rows] == ["–", "insufficient data: 12 ok run(s) < 20", "–"]
     assert table.muted == (False, True, False)
     assert "at least 20 needed, analysis.nc, min_ok_runs" in table.caption
+    # no condition shared by every data set: none stated as common; the conditions come from the spec's overrides
+    assert "all share" not in table.caption and "read from the spec's overrides" in table.caption
+
     [failures] = callouts(page, "Failures:")
     assert failures.text == "Failures: 21 of 90 runs failed (left out of every statistic)." and failures.tone == "bad"
     assert failures.link == "failures"
+
+
+def test_the_data_set_table_states_the_shared_conditions_and_their_source():
+    results = results_of()
+    spec = json.loads(results.attrs["spec_json"])
+    for entry in spec["spec"]["datasets"]:
+        entry["conditions"]["external_force"] = 0.0
+    results.attrs["spec_json"] = json.dumps(spec)
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert "'nominal' (all share external force 0); read from the spec's overrides" in table.caption
+    stored = {n: {"backlash": {"value": b, "unit": "m"}} for n, b in zip(NAMES, LEVELS, strict=True)}
+    results.attrs["dataset_conditions"] = json.dumps(stored)
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert "read from the spec's overrides" not in table.caption and [r[1] for r in table.rows] == [
+        "backlash 0 µm",
+        "backlash 0.5 µm",
+        "backlash 2 µm",
+    ]
 
 
 def test_an_older_analysis_is_judged_against_its_stated_or_the_default_minimum():
