@@ -213,15 +213,15 @@ def test_influences_rank_the_resolved_effect_sizes_with_their_data_set_and_n():
     cells = dict(feature="f", parameter="p.gain")
     analysis["effect_size"].loc[cells] = [1e-6, 3e-6, 2e-6]  # largest in b1
     analysis["effect_size"].loc[dict(feature="f", parameter="p.inert")] = [0.5e-6, 0.1e-6, 0.2e-6]
-    analysis["first_order_index"].loc[cells] = [0.1, 0.6, 0.3]
-    analysis["first_order_index_ci"].loc[cells] = [[0.05, 0.2], [0.4, 0.8], [0.1, 0.5]]
+    analysis["first_order_index"].loc[cells] = [0.1, 0.634, 0.3]
+    analysis["first_order_index_ci"].loc[cells] = [[0.05, 0.2], [0.412, 0.857], [0.1, 0.5]]
     analysis["first_order_index_ci"].loc[dict(feature="f", parameter="p.inert")] = [
         [0.01, 0.3],
         [-0.1, 0.2],
         [-0.1, 0.2],
     ]
     assert _influences(results, analysis) == (
-        "f: p.gain moves it by 3 µm in b1 (first-order index 0.6 [0.4, 0.8]), n = 30; "
+        "f: p.gain moves it by 3 µm in b1 (first-order index 0.63 [0.41, 0.86]), n = 30; "
         "p.inert moves it by 500 nm in b0 (first-order index "
         + content.number(float(analysis["first_order_index"].sel(dataset="b0", feature="f", parameter="p.inert")), 2)
         + " [0.01, 0.3]), n = 30."
