@@ -234,6 +234,38 @@ def test_bootstrap_minimum_detectable_is_the_loop_over_resampled_sweeps():
     assert expected[0] <= narrow[0] and narrow[1] <= expected[1]
 
 
+def test_the_bootstrap_bounds_move_with_the_confidence_on_a_fine_sweep():
+    """Levels every 0.25 (sigma 0.8, 25 runs): the replicates' brackets spread over several levels, so the order
+    statistics of each confidence differ (95 %: 1.25-2.75, 50 %: 1.75-2.25 around the bracket 1.75-2); each equals
+    the loop's."""
+    rng = np.random.default_rng(44)
+    levels = np.arange(17) * 0.25
+    samples = [level + rng.normal(0.0, 0.8, 25) for level in levels]
+    rng = np.random.default_rng(9)
+    draws = [rng.integers(0, 25, (100, 25)) for _ in samples]
+    brackets = np.array(
+        [
+            minimum_detectable(
+                levels,
+                [detection_probability(samples[0][draws[0][b]], s[d[b]]) for s, d in zip(samples, draws, strict=True)],
+            )
+            for b in range(100)
+        ]
+    )
+    _, lower, upper = minimum_detectable(levels, [detection_probability(samples[0], s) for s in samples])
+    found = {}
+    for confidence in (0.95, 0.5):
+        alpha = (1 - confidence) / 2
+        found[confidence] = bootstrap_minimum_detectable(levels, samples, 0, n_boot=100, seed=9, confidence=confidence)[
+            "bounds"
+        ]
+        assert found[confidence] == (
+            min(_quantile_order_statistic(brackets[:, 1], alpha), lower),
+            max(_quantile_order_statistic(brackets[:, 2], 1 - alpha), upper),
+        ), confidence
+    assert found[0.5] != found[0.95]
+
+
 # --- the verdict's sentence --------------------------------------------------------------------------
 
 
