@@ -346,6 +346,17 @@ def test_sweep_statistics_are_those_of_the_sweep_functions_against_the_zero_back
     )
 
 
+def test_observability_sweep_defaults_are_the_documented_ones():
+    """False-alarm rate 5 %, power 95 %, 95 % bounds, MIN_OK_RUNS: the same numbers as the sweep functions' defaults."""
+    levels, samples = _sweep_samples()
+    results = results_dataset({"f": np.array(samples)}, {}, levels=levels)
+    found = analysis.observability_sweep(results, "f", ["d0", "d1", "d2", "d3", "d4"], n_boot=100, seed=3)
+    expected = bootstrap_minimum_detectable(levels, samples, 1, n_boot=100, seed=3)
+    assert float(found["minimum_detectable_backlash"]) == pytest.approx(expected["estimate"])
+    assert tuple(found["minimum_detectable_backlash_ci"].values) == expected["bounds"]
+    assert "95 % bootstrap bounds" in str(found["requirement_statement"].item())
+
+
 def test_a_short_sweep_data_set_withholds_the_verdict_but_not_the_others_detection():
     levels, samples = _sweep_samples()
     status = np.full((5, 40), "ok", dtype=object)
@@ -398,15 +409,10 @@ def test_per_data_set_counts_means_and_the_separation_matrices():
         and np.isnan(a["detection_probability"].sel(reference="d2")).all()
     )
     assert a["effect_size"].attrs["units"] == "m"
-    # exactly min_ok_runs used runs is enough
-    assert (
-        int(
-            analysis_dataset(results, n_boot=20, min_ok_runs=6, sensitivity_boot=10)["data_sufficient"].sel(
-                dataset="d0", feature="f"
-            )
-        )
-        == 1
-    )
+    # exactly min_ok_runs used runs is enough: flagged sufficient, and its statistics computed
+    exact = analysis_dataset(results, n_boot=20, min_ok_runs=6, sensitivity_boot=10).sel(dataset="d0", feature="f")
+    assert int(exact["data_sufficient"]) == 1 and float(exact["feature_mean"]) == pytest.approx(used[0].mean())
+    assert np.isfinite(exact["spearman"]).all()
 
 
 def test_attributes_state_the_settings_and_a_spec_without_sweep_says_so():

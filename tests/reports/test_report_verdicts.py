@@ -244,10 +244,11 @@ def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
     # short and must not be chosen even if its |rho| is the largest
     older["data_sufficient"].loc[dict(dataset="b2", feature="f")] = 0
     older["spearman"].loc[dict(dataset="b2", feature="f")] = [0.99, -0.99]
+    older["spearman"].loc[dict(dataset="b1", feature="f", parameter="p.inert")] = np.nan  # no correlation there
     items = []
     for parameter in ("p.gain", "p.inert"):
         rho = older["spearman"].sel(feature="f", parameter=parameter, dataset=["b0", "b1"])
-        dataset = str(rho["dataset"].values[int(np.argmax(np.abs(rho.values)))])
+        dataset = str(rho["dataset"].values[int(np.nanargmax(np.abs(rho.values)))])
         lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
         items.append(
             (
