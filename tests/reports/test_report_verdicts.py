@@ -94,6 +94,13 @@ def test_the_computed_verdicts_reach_page_one():
         assert [c.tone for c in callouts(page, f"{feature}: {statement}")] == [tone]
 
 
+def test_the_question_counts_the_sampled_values_and_the_constant_ones_without_naming_them():
+    results = results_of()
+    results["p.fixed"] = (("dataset", "run"), np.ones((len(LEVELS), RUNS)), {"role": "sampled", "units": "1"})
+    question = next(p.text for p in executive(results) if isinstance(p, Paragraph))
+    assert "with f, f_true when 3 sampled value(s), of which 2 vary from run to run (1 constant) are drawn" in question
+
+
 def test_an_analysis_without_verdict_variables_gives_no_verdict():
     results = results_of()
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20).drop_vars("requirement_statement")
