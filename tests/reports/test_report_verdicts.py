@@ -247,28 +247,30 @@ def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
     results = results_of(gain_effect=0.5e-6)
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
     older = analysis.drop_vars(["effect_size", "effect_size_ci", "first_order_index", "first_order_index_ci"])
-    # written out: each parameter at its strongest data set (largest |rho|), ranked by that |rho|; one data set is
-    # short and must not be chosen even if its |rho| is the largest
+    older["spearman"].loc[dict(dataset="b1", feature="f", parameter="p.inert")] = np.nan  # no correlation there
+
+    def expected(datasets):
+        """Each parameter at its strongest data set (largest |rho|), ranked by that |rho|, written out."""
+        items = []
+        for parameter in ("p.gain", "p.inert"):
+            rho = older["spearman"].sel(feature="f", parameter=parameter, dataset=datasets)
+            dataset = str(rho["dataset"].values[int(np.nanargmax(np.abs(rho.values)))])
+            lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
+            value = float(rho.sel(dataset=dataset))
+            items.append(
+                (abs(value), f"{parameter} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 30)")
+            )
+        return (
+            "f, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
+            "effect_size): " + "; ".join(text for _, text in sorted(items, reverse=True)) + "."
+        )
+
+    older["spearman"].loc[dict(dataset="b2", feature="f", parameter="p.gain")] = 0.97  # the gain's strongest: b2
+    assert _influences(results, older) == expected(["b0", "b1", "b2"]) and "in b2" in expected(["b0", "b1", "b2"])
+    # a short data set is never chosen, even where its |rho| is the largest
     older["data_sufficient"].loc[dict(dataset="b2", feature="f")] = 0
     older["spearman"].loc[dict(dataset="b2", feature="f")] = [0.99, -0.99]
-    older["spearman"].loc[dict(dataset="b1", feature="f", parameter="p.inert")] = np.nan  # no correlation there
-    items = []
-    for parameter in ("p.gain", "p.inert"):
-        rho = older["spearman"].sel(feature="f", parameter=parameter, dataset=["b0", "b1"])
-        dataset = str(rho["dataset"].values[int(np.nanargmax(np.abs(rho.values)))])
-        lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
-        items.append(
-            (
-                abs(float(rho.sel(dataset=dataset))),
-                f"{parameter} (ρ = {float(rho.sel(dataset=dataset)):+.2f} "
-                f"[{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 30)",
-            )
-        )
-    assert _influences(results, older) == (
-        "f, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no effect_size): "
-        + "; ".join(text for _, text in sorted(items, reverse=True))
-        + "."
-    )
+    assert _influences(results, older) == expected(["b0", "b1"])
     # every data set short: nothing is ranked
     short = analysis.copy()
     short["data_sufficient"] = xr.zeros_like(short["data_sufficient"])
