@@ -209,9 +209,10 @@ def run_tests(copy: Path, tests: list[str], timeout: float) -> str:
 
 
 def score_set(name: str, modules: list[str], copy: Path, sample: int | None, seed: int, timeout: float,
-              progress, only: set | None = None) -> dict:
+              progress, only: set | None = None, offset: int = 0) -> dict:
     """Mutate every (or a sample of the) mutation point(s) of ``modules``; return the tally and survivors.
-    ``only``: test just these (module, operator, occurrence) triples (``--recheck``)."""
+    ``only``: test just these (module, operator, occurrence) triples (``--recheck``); ``offset``: start at this
+    position of the random order (to continue a run that was stopped)."""
     from cosmic_ray.mutating import mutate_code
     from cosmic_ray.plugins import get_operator
 
@@ -236,7 +237,7 @@ def score_set(name: str, modules: list[str], copy: Path, sample: int | None, see
     total = len(mutants)
     # tested in a seeded random order: a run stopped early has still tested a random sample (the running tally of
     # the --verbose lines is its score)
-    mutants = random.Random(seed).sample(mutants, total if sample is None else min(sample, total))
+    mutants = random.Random(seed).sample(mutants, total if sample is None else min(sample, total))[offset:]
     if only is not None:
         mutants = [m for m in mutants if (m[0], m[1].removeprefix("core/"), m[2]) in only]
     killed, survivors, timeouts = 0, [], 0
@@ -310,6 +311,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--all", action="store_true", help="test every mutant (default when --sample is absent)")
     parser.add_argument("--quick", action="store_true", help="CI mode: the physics set, a 40-mutant sample")
     parser.add_argument("--seed", type=int, default=20)
+    parser.add_argument("--offset", type=int, default=0, help="start at this position of the seeded random order "
+                        "(continue a stopped run)")
     parser.add_argument("--timeout", type=float, default=60.0,
                         help="seconds per mutant before it counts as killed, at least (10x the unmutated tests' time)")
     parser.add_argument("--min-score", type=float, default=None, help="exit 1 when a set scores below this (0-1)")
@@ -352,7 +355,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0 if replay(copy, args.timeout, not args.no_baseline) else 1
         for name in args.sets:
             result = score_set(name, SETS[name], copy, None if args.all else args.sample, args.seed, args.timeout,
-                               progress, only)
+                               progress, only, args.offset)
             tested, killed = result["tested"], result["killed"]
             low, high = wilson(killed, tested)
             sampled = f"a sample of {tested} of {result['mutants_total']}" if tested < result["mutants_total"] \
