@@ -234,6 +234,14 @@ def test_bootstrap_minimum_detectable_is_the_loop_over_resampled_sweeps():
     assert expected[0] <= narrow[0] and narrow[1] <= expected[1]
 
 
+def test_replicates_that_never_reach_the_power_are_infinite():
+    rng = np.random.default_rng(43)
+    samples = [level + rng.normal(0.0, 5.0, 30) for level in (0.0, 1.0)]  # 1 is far below 3.29 sigma
+    found = bootstrap_minimum_detectable([0.0, 1.0], samples, 0, n_boot=50, seed=2)
+    assert math.isnan(found["estimate"]) and found["bounds"][1] == math.inf
+    assert (found["replicates"] == math.inf).all()
+
+
 def test_the_bootstrap_bounds_move_with_the_confidence_on_a_fine_sweep():
     """Levels every 0.25 (sigma 0.8, 25 runs): the replicates' brackets spread over several levels, so the order
     statistics of each confidence differ (95 %: 1.25-2.75, 50 %: 1.75-2.25 around the bracket 1.75-2); each equals
