@@ -538,3 +538,26 @@ def test_first_order_interval_is_the_loop_over_resampled_runs_and_the_effect_siz
     )
     # |x0| carries most of the variance; x1's small share is lost in the noise: a negative index, a zero effect
     assert found["index"][0] > 0.3 and found["index"][1] < 0.0 and found["effect_size"][1] == 0.0
+
+
+def test_defaults_of_the_analysis_and_of_the_sentence():
+    """1000 correlation resamples and 200 for the first-order index by default; the data_sufficient flag in CF form;
+    the not-reached sentence at the default power of 95 %; exactly min_ok_runs ok runs per sweep data set is a
+    verdict, and no warning."""
+    rng = np.random.default_rng(44)
+    results = results_dataset({"f": rng.normal(size=(2, 25))}, {"p": rng.normal(size=(2, 25))})
+    a = analysis_dataset(results)
+    assert json.loads(a.attrs["bootstrap"])["n_boot"] == 1000 and a["first_order_index_ci"].attrs["n_boot"] == 200
+    assert a["data_sufficient"].attrs["flag_values"].tolist() == [0, 1]
+    assert requirement_statement("not met", math.nan, (2e-6, math.inf), {"a": 30}, largest_level=5e-6).startswith(
+        "not met: minimum detectable backlash not reached up to 5 µm: detection probability below 95 % ("
+    )
+    levels, samples = _sweep_samples()
+    status = np.full((5, 40), "ok", dtype=object)
+    status[:, 20:] = "error"  # exactly MIN_OK_RUNS = 20 in every sweep data set
+    results = results_dataset(
+        {"f": np.array(samples)}, {}, levels=levels, status=status, sweep=["d0", "d1", "d2", "d3", "d4"]
+    )
+    a = analysis_dataset(results, n_boot=50, sensitivity_boot=10)
+    assert str(a["requirement_verdict"].sel(feature="f").item()) != "insufficient data"
+    assert summary(a)[1] == []
