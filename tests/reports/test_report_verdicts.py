@@ -1,0 +1,356 @@
+"""The report's verdict code on in-memory analyses: page 1 (the executive summary) states each feature's verdict
+verbatim with the tone of that verdict, the requirement the analysis states, the runs each data set used, the
+failures and the fidelity audit; the influences it lists are the resolved ones. And the input checks of
+reports.inputs name what is wrong. No campaign, no PDF: each test runs in milliseconds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from campaigns.analysis import analysis_dataset
+from reports import ReportError
+from reports.builder import Builder
+from reports.inputs import Inputs, load_inputs
+from reports.model import Callout, Paragraph, Table
+from reports.sections import executive
+from reports.units import number
+
+LEVELS = (0.0, 0.5e-6, 2e-6)
+NAMES = ("b0", "b1", "b2")
+RUNS = 30
+
+
+def results_of(sigma=(0.1e-6, 0.1e-6), *, status=None, gain_effect=0.0, seed=0) -> xr.Dataset:
+    """A backlash sweep with a measured feature ``f`` and its true counterpart ``f_true`` (noise ``sigma`` each)."""
+    rng = np.random.default_rng(seed)
+    gain = rng.uniform(-1, 1, (len(LEVELS), RUNS))
+    inert = rng.uniform(-1, 1, (len(LEVELS), RUNS))
+    base = np.asarray(LEVELS)[:, None] + gain_effect * gain
+    features = {name: base + rng.normal(0, s, base.shape) for name, s in zip(("f", "f_true"), sigma, strict=True)}
+    spec = {
+        "name": "verdicts",
+        "description": "verdict test",
+        "base": {"scene": "nominal"},
+        "datasets": [{"name": n, "conditions": {"backlash": b}} for n, b in zip(NAMES, LEVELS, strict=True)],
+        "observability": {"sweep": list(NAMES)},
+    }
+    status = np.full(base.shape, "ok", dtype=object) if status is None else status
+    for name in features:
+        features[name][status != "ok"] = math.nan
+    return xr.Dataset(
+        {
+            **{name: (("dataset", "run"), v, {"role": "feature", "units": "m"}) for name, v in features.items()},
+            "p.gain": (("dataset", "run"), gain, {"role": "sampled", "units": "1"}),
+            "p.inert": (("dataset", "run"), inert, {"role": "sampled", "units": "1"}),
+            "status": (("dataset", "run"), status),
+            "failure_reason": (("dataset", "run"), np.where(status == "ok", "", "injected").astype(object)),
+            "wall_time": (("dataset", "run"), np.ones(base.shape)),
+            "condition_backlash": ("dataset", np.asarray(LEVELS), {"units": "m"}),
+        },
+        coords={"dataset": list(NAMES), "run": np.arange(RUNS)},
+        attrs={"spec_json": json.dumps({"spec": spec}), "spec_hash": "ab" * 32},
+    )
+
+
+def executive(results: xr.Dataset, analysis: xr.Dataset | None = None) -> list:
+    """Page 1 of the report of these results (their analysis computed when not given)."""
+    if analysis is None:
+        analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    inputs = Inputs(results, analysis, None, json.loads(results.attrs["spec_json"]), (), False)
+    return list(executive.build(Builder(inputs)))
+
+
+def callouts(items, start: str = "") -> list[Callout]:
+    return [c for c in items if isinstance(c, Callout) and c.text.startswith(start)]
+
+
+@pytest.mark.parametrize(
+    ("verdict", "tone"), [("met", "good"), ("not met", "bad"), ("undetermined", "info"), ("insufficient data", "muted")]
+)
+def test_each_verdict_is_printed_verbatim_with_its_own_tone(verdict, tone):
+    """The replay of the old bug (a report that said "meets" whatever the analysis found): the callout carries the
+    analysis's sentence and the tone of the analysis's verdict, for each of the four verdicts."""
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    statements = {"f": f"{verdict}: the sentence of f", "f_true": "met: the sentence of f_true"}
+    analysis["requirement_verdict"] = ("feature", np.array([verdict, "met"], dtype=object))
+    analysis["requirement_statement"] = ("feature", np.array(list(statements.values()), dtype=object))
+    found = {c.text: (c.tone, c.link) for c in callouts(executive(results, analysis))}
+    assert found["f: " + statements["f"]] == (tone, "observability")
+    assert found["f_true: " + statements["f_true"]] == ("good", "observability")
+
+
+def test_the_computed_verdicts_reach_page_one():
+    """Noise 0.1 µm: the 0.5 µm level is detected (met); noise 3 µm on the true signal: never detected (not met)."""
+    results = results_of(sigma=(0.1e-6, 3e-6))
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    assert list(analysis["requirement_verdict"].values) == ["met", "not met"]
+    page = executive(results, analysis)
+    for feature, tone in (("f", "good"), ("f_true", "bad")):
+        statement = str(analysis["requirement_statement"].sel(feature=feature).item())
+        assert [c.tone for c in callouts(page, f"{feature}: {statement}")] == [tone]
+
+
+def test_the_question_counts_the_sampled_values_and_the_constant_ones_without_naming_them():
+    results = results_of()
+    results["p.fixed"] = (("dataset", "run"), np.ones((len(LEVELS), RUNS)), {"role": "sampled", "units": "1"})
+    question = next(p.text for p in executive(results) if isinstance(p, Paragraph))
+    assert "with f, f_true when 3 sampled value(s), of which 2 vary from run to run (1 constant) are drawn" in question
+
+
+def test_an_analysis_without_verdict_variables_gives_no_verdict():
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20).drop_vars("requirement_statement")
+    page = executive(results, analysis)
+    [note] = callouts(page, "Requirement verdict: not available")
+    assert note.tone == "info" and [c for c in callouts(page) if c.link == "observability"] == [note]
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20).drop_vars("requirement_verdict")
+    assert callouts(executive(results, analysis), "Requirement verdict: not available")
+
+
+def test_the_question_states_the_requirement_the_analysis_states():
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
+    assert question.startswith(
+        "Question. verdict test. Can the bench tell the data sets' conditions apart with f, f_true"
+    )
+    assert (
+        "within the 1 µm requirement (Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm)?" in question
+    )
+    analysis.attrs.update(requirement=2e-6, requirement_source="a tighter rig")
+    question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
+    assert "within the 2 µm requirement (a tighter rig)?" in question
+    # an older analysis: the requirement stated on the minimum detectable backlash, else Table 9.3's
+    del analysis.attrs["requirement"]
+    analysis["minimum_detectable_backlash"].attrs.update(requirement=3e-6, requirement_source="the variable's own")
+    question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
+    assert "within the 3 µm requirement (the variable's own)?" in question
+    older = analysis.drop_vars(["minimum_detectable_backlash"])
+    question = next(p.text for p in executive(results, older) if isinstance(p, Paragraph))
+    assert "within the 1 µm requirement (Table 9.3)?" in question
+    for unswept in (older.drop_dims("sweep_point"), older.isel(sweep_point=slice(0, 0))):  # no sweep, or an empty one
+        question = next(p.text for p in executive(results, unswept) if isinstance(p, Paragraph))
+        assert question.endswith("? (No observability sweep in the spec: no requirement verdict is sought.)")
+
+
+def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
+    status = np.full((3, RUNS), "ok", dtype=object)
+    status[1, 12:] = "error"  # b1: 12 ok runs, below MIN_OK_RUNS = 20
+    status[2, :3] = "timeout"  # b2: 27 ok runs
+    results = results_of(status=status)
+    page = executive(results)
+    [table] = [t for t in page if isinstance(t, Table)]
+    assert [row[2] for row in table.rows] == ["30 of 30", "12 of 30", "27 of 30"]
+    assert [row[3] for row in table.rows] == ["–", "insufficient data: 12 ok run(s) < 20", "–"]
+    assert table.muted == (False, True, False)
+    assert "at least 20 needed, analysis.nc, min_ok_runs" in table.caption
+    # no condition shared by every data set: none stated as common; the conditions come from the spec's overrides
+    assert "all share" not in table.caption and "read from the spec's overrides" in table.caption
+
+    [failures] = callouts(page, "Failures:")
+    assert failures.text == "Failures: 21 of 90 runs failed (left out of every statistic)." and failures.tone == "bad"
+    assert failures.link == "failures"
+
+
+def test_the_data_set_table_states_the_shared_conditions_and_their_source():
+    results = results_of()
+    spec = json.loads(results.attrs["spec_json"])
+    for entry in spec["spec"]["datasets"]:
+        entry["conditions"]["external_force"] = 0.0
+    results.attrs["spec_json"] = json.dumps(spec)
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert "'nominal' (all share external force 0); read from the spec's overrides" in table.caption
+    stored = {n: {"backlash": {"value": b, "unit": "m"}} for n, b in zip(NAMES, LEVELS, strict=True)}
+    results.attrs["dataset_conditions"] = json.dumps(stored)
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert "read from the spec's overrides" not in table.caption and [r[1] for r in table.rows] == [
+        "backlash 0 µm",
+        "backlash 0.5 µm",
+        "backlash 2 µm",
+    ]
+
+
+def test_an_older_analysis_is_judged_against_its_stated_or_the_default_minimum():
+    """Without data_sufficient the report compares n_used with min_ok_runs, or with its own stated default (10)."""
+    status = np.full((3, RUNS), "ok", dtype=object)
+    status[1, 10:] = "error"  # b1: exactly 10 ok runs
+    status[2, 9:] = "error"  # b2: 9
+    results = results_of(status=status)
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20, min_ok_runs=3).drop_vars("data_sufficient")
+    del analysis.attrs["min_ok_runs"]
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert table.muted == (False, False, True) and table.rows[2][3] == "insufficient data: 9 ok run(s) < 10"
+    assert "at least 10 needed, the report's default; this analysis.nc states no minimum" in table.caption
+    analysis.attrs["min_ok_runs"] = 11
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    assert table.muted == (False, True, True)
+
+
+def test_every_run_ok_is_a_good_failures_callout_and_the_audit_sets_its_tone():
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    [failures] = callouts(executive(results, analysis), "Failures:")
+    assert (failures.text, failures.tone) == ("Failures: 0 of 90 runs failed.", "good")
+    for audit, tone in (
+        ("passed: mean shift 0.01 µm", "good"),
+        ("FLAGGED: short/f 0.2 µm", "bad"),
+        ("skipped", "info"),
+    ):
+        results.attrs["fidelity_audit"] = audit
+        [found] = callouts(executive(results, analysis), "Fidelity audit")
+        assert found.text.endswith(f": {audit}.") and found.tone == tone and found.link == "fidelity"
+    del results.attrs["fidelity_audit"]
+    [found] = callouts(executive(results, analysis), "Fidelity audit")
+    assert found.text.endswith("not recorded in results.nc.") and found.tone == "info"
+
+
+def _influences(results, analysis) -> str:
+    [text] = [c.text for c in callouts(executive(results, analysis)) if c.link == "correlations"]
+    return text
+
+
+def test_influences_rank_the_resolved_effect_sizes_with_their_data_set_and_n():
+    results = results_of(gain_effect=0.5e-6)
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    cells = dict(feature="f", parameter="p.gain")
+    analysis["effect_size"].loc[cells] = [1e-6, 3e-6, 2e-6]  # largest in b1
+    analysis["effect_size"].loc[dict(feature="f", parameter="p.inert")] = [0.5e-6, 0.1e-6, 0.2e-6]
+    analysis["first_order_index"].loc[cells] = [0.1, 0.634, 0.3]
+    analysis["first_order_index_ci"].loc[cells] = [[0.05, 0.2], [0.412, 0.857], [0.1, 0.5]]
+    analysis["first_order_index_ci"].loc[dict(feature="f", parameter="p.inert")] = [
+        [0.01, 0.3],
+        [-0.1, 0.2],
+        [-0.1, 0.2],
+    ]
+    assert _influences(results, analysis) == (
+        "f: p.gain moves it by 3 µm in b1 (first-order index 0.63 [0.41, 0.86]), n = 30; "
+        "p.inert moves it by 500 nm in b0 (first-order index "
+        + number(float(analysis["first_order_index"].sel(dataset="b0", feature="f", parameter="p.inert")), 2)
+        + " [0.01, 0.3]), n = 30."
+    )
+    # an index whose interval reaches 0 is not an influence; none resolved: said so, nothing ranked
+    analysis["first_order_index_ci"].loc[dict(feature="f", parameter="p.inert", dataset="b0", bound="lower")] = 0.0
+    assert " p.inert " not in _influences(results, analysis) + " "
+    analysis["first_order_index_ci"].loc[dict(feature="f", bound="lower")] = -0.01
+    assert _influences(results, analysis) == (
+        "f: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) in any data set: the "
+        "spread is not explained by a sampled tolerance at this sample size."
+    )
+
+
+def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
+    results = results_of(gain_effect=0.5e-6)
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    older = analysis.drop_vars(["effect_size", "effect_size_ci", "first_order_index", "first_order_index_ci"])
+    older["spearman"].loc[dict(dataset="b1", feature="f", parameter="p.inert")] = np.nan  # no correlation there
+
+    def expected(datasets):
+        """Each parameter at its strongest data set (largest |rho|), ranked by that |rho|, written out."""
+        items = []
+        for parameter in ("p.gain", "p.inert"):
+            rho = older["spearman"].sel(feature="f", parameter=parameter, dataset=datasets)
+            dataset = str(rho["dataset"].values[int(np.nanargmax(np.abs(rho.values)))])
+            lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
+            value = float(rho.sel(dataset=dataset))
+            items.append(
+                (abs(value), f"{parameter} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 30)")
+            )
+        return (
+            "f, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
+            "effect_size): " + "; ".join(text for _, text in sorted(items, reverse=True)) + "."
+        )
+
+    older["spearman"].loc[dict(dataset="b2", feature="f", parameter="p.gain")] = 0.97  # the gain's strongest: b2
+    assert _influences(results, older) == expected(["b0", "b1", "b2"]) and "in b2" in expected(["b0", "b1", "b2"])
+    # a short data set is never chosen, even where its |rho| is the largest
+    older["data_sufficient"].loc[dict(dataset="b2", feature="f")] = 0
+    older["spearman"].loc[dict(dataset="b2", feature="f")] = [0.99, -0.99]
+    assert _influences(results, older) == expected(["b0", "b1"])
+    # every data set short: nothing is ranked
+    short = analysis.copy()
+    short["data_sufficient"] = xr.zeros_like(short["data_sufficient"])
+    assert _influences(results, short) == (
+        "f: insufficient data in every data set (fewer than 20 ok runs); no influence is ranked."
+    )
+
+
+# --- reports.inputs ----------------------------------------------------------------------------------
+
+
+def _write(results: xr.Dataset, folder, analysis: xr.Dataset | None = None):
+    results.to_netcdf(folder / "results.nc", engine="netcdf4")
+    if analysis is not None:
+        analysis.to_netcdf(folder / "analysis.nc", engine="netcdf4")
+    return folder / "results.nc"
+
+
+def test_the_analysis_beside_the_results_is_used_and_checked(tmp_path):
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    path = _write(results, tmp_path, analysis)
+    inputs = load_inputs(path)
+    assert not inputs.analysis_computed and [f.role for f in inputs.files] == ["results", "analysis"]
+    assert [f.name for f in inputs.files] == ["results.nc", "analysis.nc"] and len(inputs.files[1].sha256) == 64
+    assert inputs.spec["spec"]["name"] == "verdicts"
+    # an analysis that states no source hash is accepted; one of another campaign is not
+    analysis.attrs["source_spec_hash"] = ""
+    analysis.to_netcdf(tmp_path / "unhashed.nc", engine="netcdf4")
+    assert load_inputs(path, tmp_path / "unhashed.nc").files[1].name == "unhashed.nc"
+    analysis.attrs["source_spec_hash"] = "cd" * 32
+    analysis.to_netcdf(tmp_path / "other.nc", engine="netcdf4")
+    with pytest.raises(
+        ReportError, match=r"analysis of another campaign \(spec hash cdcdcdcdcdcdcdcd, results abababababababab\)"
+    ):
+        load_inputs(path, tmp_path / "other.nc")
+    analysis.drop_vars(["overlap", "prcc"]).to_netcdf(tmp_path / "partial.nc", engine="netcdf4")
+    with pytest.raises(ReportError, match="variable\\(s\\) prcc, overlap missing"):
+        load_inputs(path, tmp_path / "partial.nc")
+    with pytest.raises(ReportError, match="is not a file"):
+        load_inputs(tmp_path)
+    with pytest.raises(ReportError, match="campaign results file not found"):
+        load_inputs(tmp_path / "missing.nc")
+    (tmp_path / "garbage.nc").write_bytes(b"not netCDF" * 10)
+    with pytest.raises(ReportError, match="cannot be read as a netCDF campaign analysis file"):
+        load_inputs(path, tmp_path / "garbage.nc")
+
+
+def test_results_checks_name_each_problem(tmp_path):
+    results = results_of()
+    broken = results.drop_vars(["wall_time"])
+    broken.attrs["spec_json"] = "{not json"
+    with pytest.raises(ReportError, match="variable 'wall_time' missing; spec_json attribute is not valid JSON"):
+        load_inputs(_write(broken, tmp_path))
+    broken = results.copy()
+    broken.attrs["spec_json"] = json.dumps({"spec": {}})
+    with pytest.raises(ReportError, match="spec_json attribute missing or incomplete \\(no 'datasets'\\)"):
+        load_inputs(_write(broken, tmp_path))
+    broken = results.copy()
+    for name in ("f", "f_true"):
+        broken[name].attrs["role"] = "sampled"
+    with pytest.raises(ReportError, match="no feature variable"):
+        load_inputs(_write(broken, tmp_path))
+
+
+def test_an_accuracy_study_along_another_dimension_is_refused(tmp_path):
+    path = _write(results_of(), tmp_path, analysis_dataset(results_of(), n_boot=20, sensitivity_boot=10))
+    accuracy = xr.Dataset(
+        {name: (("run",), np.zeros(2)) for name in ("wall_time", "feature_error", "status", "method")}
+    )
+    accuracy.to_netcdf(tmp_path / "good.nc")
+    assert [f.role for f in load_inputs(path, accuracy_path=tmp_path / "good.nc").files] == [
+        "results",
+        "analysis",
+        "accuracy",
+    ]
+    accuracy["feature_error"] = (("run", "feature"), np.zeros((2, 1)))
+    accuracy.to_netcdf(tmp_path / "bad.nc")
+    with pytest.raises(ReportError, match="must all lie along the dimension 'run'"):
+        load_inputs(path, accuracy_path=tmp_path / "bad.nc")
