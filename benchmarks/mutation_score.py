@@ -96,7 +96,8 @@ SETS = {
 #: Each must make its tests fail (``--replay``); the unmutated tests must pass first.
 REPLAYS = {
     "report verdict always 'meets'": (
-        "reports/sections/executive.py", 'verdict = str(a["requirement_verdict"].sel(feature=feature).item())', 'verdict = "met"',
+        "reports/sections/executive.py",
+        'verdict = str(a["requirement_verdict"].sel(feature=feature).item())', 'verdict = "met"',
         ["tests/reports/test_report_verdicts.py"]),
     "analysis verdict always 'met'": (
         "campaigns/analysis.py", "    if upper <= requirement:\n", "    if True:\n",

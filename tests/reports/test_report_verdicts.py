@@ -18,7 +18,7 @@ from reports import ReportError
 from reports.builder import Builder
 from reports.inputs import Inputs, load_inputs
 from reports.model import Callout, Paragraph, Table
-from reports.sections import executive
+from reports.sections import executive as executive_section
 from reports.units import number
 
 LEVELS = (0.0, 0.5e-6, 2e-6)
@@ -63,7 +63,7 @@ def executive(results: xr.Dataset, analysis: xr.Dataset | None = None) -> list:
     if analysis is None:
         analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
     inputs = Inputs(results, analysis, None, json.loads(results.attrs["spec_json"]), (), False)
-    return list(executive.build(Builder(inputs)))
+    return list(executive_section.build(Builder(inputs)))
 
 
 def callouts(items, start: str = "") -> list[Callout]:
