@@ -29,6 +29,13 @@ def um(value: float, digits: int = 2) -> str:
     return "–" if not math.isfinite(value) else f"{value * 1e6:.{digits}f}"
 
 
+def in_units(value: float, units: str, digits: int = 2) -> str:
+    """A feature value: in µm for a length (units "m"), else in the feature's own units, e.g. N m."""
+    if units == "m":
+        return um(value, digits)
+    return "–" if not math.isfinite(value) else f"{value:.{digits + 2}g} {units}"
+
+
 def mean_interval(mean: float, std: float, n: int, confidence: float = 0.95) -> tuple[float, float]:
     """Student-t confidence interval of the mean of ``n`` runs."""
     if n < 2 or not math.isfinite(std):
@@ -52,11 +59,13 @@ def feature_table(results: xr.Dataset, analysis: xr.Dataset) -> None:
             row = analysis.sel(dataset=name, feature=feature)
             n, mean, std = int(row.n_used), float(row.feature_mean), float(row.feature_std)
             low, high = mean_interval(mean, std, n)
-            print(f"| {name} | {label} | {feature} | {n} | {um(mean)} ({um(low)} – {um(high)}) | {um(std, 3)} |")
+            units = str(results[feature].attrs.get("units", "m")) if feature in results else "m"
+            print(f"| {name} | {label} | {feature} | {n} | {in_units(mean, units)} ({in_units(low, units)} – "
+                  f"{in_units(high, units)}) | {in_units(std, units, 3)} |")
             label = ""
 
 
-def tolerance_table(analysis: xr.Dataset) -> None:
+def tolerance_table(results: xr.Dataset, analysis: xr.Dataset) -> None:
     if "first_order_index" not in analysis:
         print("(no first-order indices in this analysis)")
         return
@@ -70,12 +79,13 @@ def tolerance_table(analysis: xr.Dataset) -> None:
             if not np.isfinite(index).any():
                 print(f"| {name} | {feature} | (insufficient data) | | | | |")
                 continue
+            units = str(results[feature].attrs.get("units", "m")) if feature in results else "m"
             for k in np.argsort(-np.nan_to_num(index, nan=-1.0))[:TOP_TOLERANCES]:
                 p = row.isel(parameter=k)
                 low, high = (float(v) for v in p.first_order_index_ci.values)
+                effect = in_units(float(p.effect_size), units, 3)
                 print(f"| {name} | {feature} | {str(p.parameter.values)} | {float(p.first_order_index):.2f} "
-                      f"({low:.2f} – {high:.2f}) | {um(float(p.effect_size), 3)} | {float(p.spearman):+.2f} | "
-                      f"{float(p.prcc):+.2f} |")
+                      f"({low:.2f} – {high:.2f}) | {effect} | {float(p.spearman):+.2f} | {float(p.prcc):+.2f} |")
 
 
 def separation_table(analysis: xr.Dataset) -> None:
@@ -96,9 +106,15 @@ def observability(analysis: xr.Dataset) -> None:
         return
     if "sweep_point" in analysis.dims:
         points = [str(s) for s in analysis.sweep_point.values]
-        print("| feature | "
-              + " | ".join(f"{p} ({um(float(b), 1)} µm)"
-                           for p, b in zip(points, analysis.sweep_backlash.values, strict=False)) + " |")
+        if "sweep_backlash" in analysis:
+            levels = [f"{um(float(b), 1)} µm" for b in analysis.sweep_backlash.values]
+        else:  # another swept quantity, e.g. the preload loss of preload_loss.toml
+            swept = next(v for v in analysis.data_vars
+                         if str(v).startswith("sweep_") and "sweep_point" in analysis[v].dims
+                         and str(v) != "sweep_detection_probability")
+            levels = [f"{float(b):g} {analysis.attrs.get('requirement_units', '')}".strip()
+                      for b in analysis[swept].values]
+        print("| feature | " + " | ".join(f"{p} ({level})" for p, level in zip(points, levels, strict=False)) + " |")
         print("|---|" + "---|" * len(points))
         for feature in (str(f) for f in analysis.feature.values):
             probability = analysis.sweep_detection_probability.sel(feature=feature).values
@@ -120,7 +136,7 @@ def main() -> None:
     print("### Feature per data set\n")
     feature_table(results, analysis)
     print("\n### Dominant tolerances\n")
-    tolerance_table(analysis)
+    tolerance_table(results, analysis)
     print("\n### Separation\n")
     separation_table(analysis)
     print("\n### Observability\n")
