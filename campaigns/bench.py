@@ -237,7 +237,8 @@ def simulate_run(request: RunRequest) -> dict:
 def _warm_up(request: RunRequest) -> None:
     """Load (or compile) the compiled loop with a 10 ms run of the request's configuration, before the
     run's clock starts (:func:`campaigns.runs.warm_up`)."""
-    options = {k: v for k, v in request.solver.items() if v is not None}
+    # the warm-up lasts 10 ms whatever the run's own duration (a request may carry one in its solver options)
+    options = {k: v for k, v in request.solver.items() if v is not None and k != "duration"}
     twin.simulate(_scene(request.scene), _parameters(request.parameters), throw=False, duration=0.01,
                   outputs=list(request.outputs) or None, **options)
 

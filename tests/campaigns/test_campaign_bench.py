@@ -100,3 +100,19 @@ def test_spec_fidelity_is_validated(tmp_path):
     with pytest.raises(campaigns.SpecError) as info:
         campaigns.load_spec(path)
     assert "unknown subsystem 'gearbox'" in str(info.value) and "contact: level 'rigid'" in str(info.value)
+
+
+def test_warm_up_of_a_request_with_its_own_duration():
+    """A request whose solver options carry a duration (benchmarks/loop_margins.py shortens runs so) is warmed
+    up with the 10 ms warm-up run, not refused for a duplicate keyword, and then runs for its own duration."""
+    from campaigns.bench import simulate_run
+    from campaigns.execution import build_request
+    from campaigns.sampling import sample
+
+    spec = campaigns.load_spec("campaigns/specs/thesis_backlash.toml").model_copy(update={"runs_per_dataset": 1})
+    request = build_request(spec, sample(spec), 0, 0)
+    request = request.__class__(**{**request.__dict__, "solver": {**request.solver, "duration": 0.05}})
+    simulate_run.warm_up(request)
+    record = simulate_run(request)
+    assert record["status"] == "ok"
+    assert record["t_reached"] == pytest.approx(0.05)
