@@ -44,8 +44,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-COPIED = ("twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
-PROJECT_PACKAGES = ("twin", "sensors", "campaigns", "reports")
+COPIED = ("app", "twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
+PROJECT_PACKAGES = ("app", "twin", "sensors", "campaigns", "reports")
 
 _ANALYSIS_TESTS = ["tests/campaigns/test_analysis_known_answers.py", "tests/campaigns/test_campaign_analysis.py",
                    "tests/campaigns/test_campaign_verdict.py", "tests/campaigns/test_campaign_sensitivity.py",
