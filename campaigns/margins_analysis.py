@@ -77,9 +77,10 @@ def _fraction_interval(k: int, n: int, confidence: float) -> tuple[float, float]
 
 
 def _value(value: float, unit: str) -> str:
-    """A margin with its unit (``inf``/``nan`` as words)."""
+    """A margin with its unit; an infinite gain margin says why it is infinite, ``nan`` reads "nan"."""
     if not math.isfinite(value):
-        return "inf" if value > 0 else str(value)
+        # only a gain margin is infinite: the loop's phase never reaches -180 deg (e.g. the analog current loop)
+        return "∞ dB, no phase crossover" if value > 0 else str(value)
     return f"{value:.3g}{_UNIT_TEXT.get(unit, ' ' + unit)}"
 
 

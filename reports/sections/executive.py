@@ -37,6 +37,32 @@ def verdicts(b: Builder, link: str):
         yield Callout(f"{feature}: {statement}", VERDICT_TONES.get(verdict, "info"), link)
 
 
+#: Control-limit statements quoted on page 1 before "and N more"; the section lists all of them.
+QUOTED_LIMITS = 3
+
+
+def control_robustness(analysis) -> Callout:
+    """One callout on the loop margins: how many design-limit checks have each verdict, and the statements
+    of those that are not met (or, when none is "not met", of those left undetermined), verbatim."""
+    if "margin_limit_verdict" not in analysis:
+        return Callout("Control robustness: this campaign's runs carry no loop margins (no bench loops were "
+                       "linearised), so no design limit is checked.", "info", "control_robustness")
+    verdict = [str(v) for v in analysis["margin_limit_verdict"].values]
+    statement = [str(s) for s in analysis["margin_limit_statement"].values]
+    counts = ", ".join(f"{verdict.count(v)} {v}" for v in ("met", "not met", "undetermined", "insufficient data")
+                       if verdict.count(v))
+    worst = "not met" if "not met" in verdict else "undetermined" if "undetermined" in verdict else None
+    text = (f"Control robustness (loop margins of every run against the design limits): {len(verdict)} checks: "
+            f"{counts}.")
+    if worst:
+        quoted = [s for v, s in zip(verdict, statement, strict=True) if v == worst]
+        text += " " + " ".join(f"{s}." for s in quoted[:QUOTED_LIMITS])
+        if len(quoted) > QUOTED_LIMITS:
+            text += f" And {len(quoted) - QUOTED_LIMITS} more {worst}."
+    tone = "bad" if worst == "not met" else "good" if set(verdict) == {"met"} else "info"
+    return Callout(text, tone, "control_robustness")
+
+
 def _influences(b: Builder, feature: str) -> str:
     """The strongest influences on a feature: effect sizes when the analysis has them, else |Spearman ρ| (labelled)."""
     a = b.analysis
@@ -121,6 +147,7 @@ def build(b: Builder):
     yield Callout(f"Failures: {n_failed} of {status.size} runs failed"
                   + (" (left out of every statistic)." if n_failed else "."),
                   "bad" if n_failed else "good", "failures")
+    yield control_robustness(a)
     audit = str(results.attrs.get("fidelity_audit", "not recorded in results.nc"))
     tone = "good" if audit.startswith("passed") else "bad" if audit.startswith("FLAGGED") else "info"
     yield Callout(f"Fidelity audit (automatic model simplification against full fidelity): {audit}.", tone, "fidelity")

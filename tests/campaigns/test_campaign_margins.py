@@ -134,6 +134,16 @@ def test_worst_case_flags_and_correlation():
     assert float(q.sel(margin_probability=0.0)) == 20.0 and float(q.sel(margin_probability=1.0)) == phase.max()
 
 
+def test_an_infinite_gain_margin_says_why():
+    """A loop whose phase never reaches -180 deg (the analog current loop) has GM = inf: the statement says "no
+    phase crossover" rather than a bare "inf", and no run is beyond the GM limit."""
+    results = _synthetic_results(400, 0)
+    results["speed_loop_gain_margin"] = results["speed_loop_gain_margin"].copy(data=np.full((1, 400), np.inf))
+    statement = str(_robustness(results)["margin_limit_statement"].sel(limit_check="speed_loop_gain_margin").values)
+    assert statement.startswith("met: speed loop GM ≥ 6 dB: 0 of 400 runs beyond the limit")
+    assert statement.endswith("worst ∞ dB, no phase crossover (ds run 0)")
+
+
 def test_spec_limits_override_the_defaults():
     results = _synthetic_results(400, 0, limits={"phase_margin_min": 65.0})
     a = _robustness(results)

@@ -111,3 +111,32 @@ def test_an_unresolved_index_is_not_listed_as_an_influence(campaign, generated_a
     summary = _executive_html(paths["html"])
     assert "first-order index is resolved above zero (95 % bootstrap interval) in any data set" in summary
     assert " moves it by " not in summary
+
+
+def test_page_one_counts_the_control_limit_verdicts_and_quotes_the_not_met(campaign, generated_at, tmp_path):
+    """Page 1 states the loop-margin checks of analysis.nc: how many have each verdict, and the statements of the
+    ones not met, verbatim (the control-robustness section lists them all)."""
+    shutil.copyfile(campaign, tmp_path / "results.nc")
+    with xr.open_dataset(campaign.with_name("analysis.nc")) as stored:
+        analysis = _contract_analysis(stored.load())
+    verdicts = ["met", "not met", "undetermined", "met"]
+    statements = [f"{v}: speed loop PM ≥ 30°: {k} of 400 runs beyond the limit (95 % exact bounds on the fraction: "
+                  f"0–{k + 1} %, allowed 1 %); worst {25 + k}° (ds1 run {k})" for k, v in enumerate(verdicts)]
+    checks = [f"check_{k}" for k in range(len(verdicts))]
+    analysis = analysis.assign(
+        margin_limit_verdict=("limit_check", np.array(verdicts, dtype=object)),
+        margin_limit_statement=("limit_check", np.array(statements, dtype=object)),
+    ).assign_coords(limit_check=("limit_check", np.array(checks, dtype=object)))
+    analysis.to_netcdf(tmp_path / "analysis.nc")
+    paths = reports.build_report(tmp_path / "results.nc", out_dir=tmp_path / "report", generated_at=generated_at)
+    for text in (_page_one(paths["pdf"]), _executive_html(paths["html"])):
+        assert "4 checks: 2 met, 1 not met, 1 undetermined." in text
+        assert statements[1] in text  # the one not met, verbatim
+        assert statements[2] not in text  # an undetermined one is not quoted while one is not met
+    section = re.search(r'<section id="executive".*?</section>', paths["html"].read_text(encoding="utf-8"), re.S)
+    assert 'href="#control_robustness"' in section.group(0)
+
+
+def test_page_one_says_when_a_campaign_has_no_loop_margins(report):
+    """The synthetic campaign runs no bench loops: page 1 says no design limit is checked, not a verdict."""
+    assert "carry no loop margins" in _executive_html(report["html"]).replace("<wbr>", "")
