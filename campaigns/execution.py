@@ -186,7 +186,7 @@ def run_campaign(
         (:mod:`campaigns.provenance`); ``results.nc`` then lists every provenance it mixes.
     announce : callable, optional
         ``announce(stage, message)`` is called as each stage starts (compile, cluster start,
-        runs, fidelity audit), with its expected duration in the message; default silent.
+        runs, margins, assembly, fidelity audit), with its expected duration in the message; default silent.
 
     Returns
     -------
@@ -249,6 +249,7 @@ def run_campaign(
                 margins = bench_adapter.margin_variables(
                     spec, lambda d, i: build_request(spec, samples, d, i),
                     map_chunks=(lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
+            announce("assembly", f"{spec.name}: writing results.nc")
             results = store.assemble(samples,
                                      {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
                                       "workers": scheduler or workers}, attrs, margins)
