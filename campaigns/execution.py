@@ -185,8 +185,9 @@ def run_campaign(
         On resume, accept finished chunks computed by other package versions or model code
         (:mod:`campaigns.provenance`); ``results.nc`` then lists every provenance it mixes.
     announce : callable, optional
-        ``announce(stage, message)`` is called as each stage starts (compile, cluster start,
-        runs, margins, assembly, fidelity audit), with its expected duration in the message; default silent.
+        ``announce(stage, message)`` is called as each stage starts (compile, cluster start, runs,
+        margins, assembly, fidelity audit, cluster stop), with its expected duration in the message;
+        default silent.
 
     Returns
     -------
@@ -264,6 +265,8 @@ def run_campaign(
                            scheduler=client.scheduler.address if client else scheduler, resume=resume,
                            progress=progress, run_function=None if bench else run_function,
                            allow_version_mix=allow_version_mix, announce=announce)
+            if client is not None and scheduler is None:
+                announce("cluster stop", f"{spec.name}: stopping the {workers} worker processes")
     return results
 
 
