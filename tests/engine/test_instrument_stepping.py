@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sensors.analog import AN_REFRESH_PERIOD, AS_SIZE, analog_init, analog_read, analog_step
+from sensors.analog import AN_REFRESH_PERIOD, AN_TAU, AS_NEXT_REFRESH, AS_SIZE, analog_init, analog_read, analog_step
 from twin.engine.instrumentation import (
     CURRENT_MONITOR,
     INSTRUMENTS,
@@ -12,7 +12,6 @@ from twin.engine.instrumentation import (
     STATE_ROW,
     TORQUE_METER,
     _lookback,
-    analog_channel_step,
     analog_due,
     build_instruments,
 )
@@ -71,8 +70,9 @@ def test_channels_stepped_only_when_due_read_like_the_lookback_window(bench, cha
         steps_to_sample = (sample_every - k % sample_every) % sample_every
         if steps_to_sample < lookback[channel]:
             analog_step(window[channel], signal[k], t, rows[channel])
-        if analog_due(due, rows, levels, lookback, steps_to_sample, channel, t, dt):
-            analog_channel_step(due, rows, channel, signal[k], t)
+        if analog_due(levels[channel], lookback[channel], steps_to_sample, rows[channel, AN_TAU],
+                      rows[channel, AN_REFRESH_PERIOD], due[channel, AS_NEXT_REFRESH], t, dt):
+            analog_step(due[channel], signal[k], t, rows[channel])
             stepped += 1
         if k % sample_every == 0:
             assert analog_read(due[channel], 0.0, rows[channel]) == analog_read(window[channel], 0.0, rows[channel])

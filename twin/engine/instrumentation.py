@@ -43,17 +43,14 @@ from sensors.analog import (
     AN_REFRESH_PERIOD,
     AN_SIZE,
     AN_TAU,
-    AS_NEXT_REFRESH,
     AS_SIZE,
     analog_init,
     analog_parameters,
     analog_read,
-    analog_step,
 )
 from sensors.encoder import (
     ENC_SIZE,
     ENC_STATE_SIZE,
-    encoder_advance,
     encoder_init,
     encoder_reading,
     encoder_speed,
@@ -201,37 +198,23 @@ def instruments_init(state, rows, x, c, t, torque, preload, external):
     analog_init(state[CURRENT_MONITOR], sensed_current(x, c), t, rows[CURRENT_MONITOR])
 
 
-@numba.njit(cache=True, inline="always")
-def encoders_step(state, rows, levels, x, c, t):
-    """Advance both encoders to the end of an integration step (the steps without an edge cost a comparison)."""
-    if levels[LINEAR_ENCODER] > 0:
-        encoder_advance(state[LINEAR_ENCODER], sled_measurand(x, c), t, rows[LINEAR_ENCODER])
-    if levels[TORQUE_METER_ENCODER] > 0:
-        encoder_advance(state[TORQUE_METER_ENCODER], screw_angle_measurand(x, c), t, rows[TORQUE_METER_ENCODER])
-
-
-@numba.njit(cache=True, inline="always")
-def analog_due(state, rows, levels, lookback, steps_to_sample, channel, t, dt):
-    """Whether analog ``channel`` must be stepped at the end ``t`` of a step of ``dt``, ``steps_to_sample``
-    steps before the next acquisition instant (0 at the instant itself).
+@numba.njit(cache=True)
+def analog_due(level, lookback, steps_to_sample, tau, refresh_period, next_refresh, t, dt):
+    """Whether an analog channel (its ``level``, :func:`_lookback` entry, ``AN_TAU``, ``AN_REFRESH_PERIOD`` and
+    ``AS_NEXT_REFRESH``) must be stepped at the end ``t`` of a step of ``dt``, ``steps_to_sample`` steps
+    before the next acquisition instant (0 at the instant itself).
 
     Dense stepping gives the same readings as: the steps in the channel's look-back window
     (:func:`_lookback`) and, for a channel with a sample-and-hold output and no filter, of those only
     the step that contains a refresh instant and the step before it (which gives the
     interpolation its start value); between refreshes the output is held whatever the input.
     """
-    if levels[channel] == 0 or steps_to_sample >= lookback[channel]:
+    if level == 0 or steps_to_sample >= lookback:
         return False
-    if rows[channel, AN_TAU] > 0.0 or rows[channel, AN_REFRESH_PERIOD] == 0.0:
+    if tau > 0.0 or refresh_period == 0.0:
         return True
     # The next step ends at about t + dt: half a step of margin absorbs the rounding of both clocks.
-    return t + 1.5 * dt >= state[channel, AS_NEXT_REFRESH]
-
-
-@numba.njit(cache=True, inline="always")
-def analog_channel_step(state, rows, channel, measurand, t):
-    """Advance analog ``channel`` to ``t``, where its true measurand is ``measurand``."""
-    analog_step(state[channel], measurand, t, rows[channel])
+    return t + 1.5 * dt >= next_refresh
 
 
 @numba.njit(cache=True)

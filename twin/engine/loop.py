@@ -11,6 +11,8 @@ import numba
 import numpy as np
 
 from sensors.acquisition import convert
+from sensors.analog import AN_REFRESH_PERIOD, AN_TAU, AS_NEXT_REFRESH, analog_step
+from sensors.encoder import encoder_advance
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.integrators import WORK_VECTORS, step
@@ -210,20 +212,28 @@ def speed_sample(x, c, u, memory, rows, levels, sample_time):
 def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, steps_to_sample, force_table):
     """Advance the instruments to time ``t``, the end of an integration step of ``dt``.
 
-    Each analog channel's measurand is computed only when the channel is stepped
-    (:func:`twin.engine.instrumentation.analog_due`); the encoders skip the steps in which
-    no edge can occur (:func:`sensors.encoder.encoder_advance`).
+    The encoders skip the steps in which no edge can occur (:func:`sensors.encoder.encoder_advance`);
+    an analog channel is stepped, and its measurand computed, only when a reading depends on the step
+    (:func:`twin.engine.instrumentation.analog_due`). One flat function: this runs after every step,
+    and every call that passes arrays costs more than the tests it would save.
     """
-    ins.encoders_step(instrument_state, rows, levels, x, c, t)
-    # the analog channels need only these forces, not the ball-groove contacts
-    if ins.analog_due(instrument_state, rows, levels, lookback, steps_to_sample, ins.TORQUE_METER, t, dt):
-        ins.analog_channel_step(instrument_state, rows, ins.TORQUE_METER, transmitted_torque(x, c), t)
-    if ins.analog_due(instrument_state, rows, levels, lookback, steps_to_sample, ins.PRELOAD_CELL, t, dt):
-        ins.analog_channel_step(instrument_state, rows, ins.PRELOAD_CELL, preload_between_nuts(x, c), t)
-    if ins.analog_due(instrument_state, rows, levels, lookback, steps_to_sample, ins.LOAD_CELL, t, dt):
-        ins.analog_channel_step(instrument_state, rows, ins.LOAD_CELL, external_force(t, x, c, force_table), t)
-    if ins.analog_due(instrument_state, rows, levels, lookback, steps_to_sample, ins.CURRENT_MONITOR, t, dt):
-        ins.analog_channel_step(instrument_state, rows, ins.CURRENT_MONITOR, sensed_current(x, c), t)
+    for encoder in (ins.LINEAR_ENCODER, ins.TORQUE_METER_ENCODER):
+        if levels[encoder] > 0:
+            measurand = ins.sled_measurand(x, c) if encoder == ins.LINEAR_ENCODER else ins.screw_angle_measurand(x, c)
+            encoder_advance(instrument_state[encoder], measurand, t, rows[encoder])
+    for channel in ins.ANALOG:
+        if ins.analog_due(levels[channel], lookback[channel], steps_to_sample, rows[channel, AN_TAU],
+                          rows[channel, AN_REFRESH_PERIOD], instrument_state[channel, AS_NEXT_REFRESH], t, dt):
+            # the analog channels need only these forces, not the ball-groove contacts
+            if channel == ins.TORQUE_METER:
+                measurand = transmitted_torque(x, c)
+            elif channel == ins.PRELOAD_CELL:
+                measurand = preload_between_nuts(x, c)
+            elif channel == ins.LOAD_CELL:
+                measurand = external_force(t, x, c, force_table)
+            else:
+                measurand = sensed_current(x, c)
+            analog_step(instrument_state[channel], measurand, t, rows[channel])
 
 
 LOCAL_ERROR_EVERY = 4        # acquisition instants between local-error checks (4 ms: ~5 % of the run's cost)
