@@ -110,23 +110,35 @@ def run_margins(request: RunRequest) -> tuple[dict[str, float], str]:
     return values, "; ".join(notes)
 
 
-def margin_variables(spec, request_of) -> dict:
+#: Runs per margin task when the margins are computed on a cluster (a few ms each: tens of ms per task).
+MARGIN_CHUNK = 50
+
+
+def margin_chunk(requests: list[RunRequest]) -> list[tuple[dict[str, float], str]]:
+    """:func:`run_margins` of several runs, in order (one task on a cluster)."""
+    return [run_margins(request) for request in requests]
+
+
+def margin_variables(spec, request_of, map_chunks=None) -> dict:
     """``results.nc`` variables ``(dataset, run)`` of the loop margins of every run.
 
     ``request_of(d, i)`` is the run's :class:`campaigns.runs.RunRequest`
     (:func:`campaigns.execution.build_request`). Variables carry CF ``units``, ``long_name`` and
     ``role = "margin"`` (not features: the feature machinery skips them); :data:`MARGIN_NOTE` holds
-    why a margin is NaN.
+    why a margin is NaN. ``map_chunks(margin_chunk, chunks)`` returns each chunk's result in order,
+    e.g. computed in parallel on the campaign's cluster (a run's margins do not depend on where
+    they are computed); default: here, one chunk after the other.
     """
-
     shape = (len(spec.datasets), spec.runs_per_dataset)
+    keys = [(d, i) for d in range(shape[0]) for i in range(shape[1])]
+    chunks = [[request_of(d, i) for d, i in keys[k:k + MARGIN_CHUNK]] for k in range(0, len(keys), MARGIN_CHUNK)]
+    results = map_chunks(margin_chunk, chunks) if map_chunks else [margin_chunk(chunk) for chunk in chunks]
     arrays = {name: np.full(shape, math.nan) for name in MARGIN_VARIABLES}
     notes = np.full(shape, "", dtype=object)
-    for d in range(shape[0]):
-        for i in range(shape[1]):
-            values, notes[d, i] = run_margins(request_of(d, i))
-            for name, value in values.items():
-                arrays[name][d, i] = value
+    for (d, i), (values, note) in zip(keys, (result for chunk in results for result in chunk), strict=True):
+        notes[d, i] = note
+        for name, value in values.items():
+            arrays[name][d, i] = value
     dims = ("dataset", "run")
     out = {}
     for name, (loop, metric) in MARGIN_VARIABLES.items():
@@ -218,18 +230,20 @@ def simulate_run(request: RunRequest) -> dict:
     scene = _scene(request.scene).with_conditions(request.conditions)
     params = _parameters(request.parameters).with_values(request.parameter_values)
     options = {k: v for k, v in request.solver.items() if v is not None}
-    ds = twin.simulate(scene, params, throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None,
-                       **options)
-    trace = None
-    if request.trace_variables:
-        kept = [v for v in request.trace_variables if v in ds]
-        trace = ds[kept].isel(time=slice(None, None, request.trace_decimation))
+    options.update(throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None)
+    if not request.trace_variables:  # scalars only: no Dataset to build (twin.simulate_features, same numbers)
+        summary = twin.simulate_features(scene, params, **options)
+        return {"status": summary.status, "failure_reason": summary.failure_reason, "t_reached": summary.t_reached,
+                "features": {f: float(summary.features[f]) for f in request.features if f in summary.features},
+                "trace": None, "fidelity": summary.fidelity}
+    ds = twin.simulate(scene, params, **options)
+    kept = [v for v in request.trace_variables if v in ds]
     return {
         "status": ds.attrs.get("status", "ok"),
         "failure_reason": ds.attrs.get("failure_reason", ""),
         "t_reached": float(ds.attrs.get("t_reached", math.nan)),
         "features": {f: float(ds[f]) for f in request.features if f in ds},
-        "trace": trace,
+        "trace": ds[kept].isel(time=slice(None, None, request.trace_decimation)),
         "fidelity": ds.attrs.get("fidelity", ""),
     }
 

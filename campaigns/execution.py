@@ -185,8 +185,9 @@ def run_campaign(
         On resume, accept finished chunks computed by other package versions or model code
         (:mod:`campaigns.provenance`); ``results.nc`` then lists every provenance it mixes.
     announce : callable, optional
-        ``announce(stage, message)`` is called as each stage starts (compile, cluster start,
-        runs, fidelity audit), with its expected duration in the message; default silent.
+        ``announce(stage, message)`` is called as each stage starts (compile, cluster start, runs,
+        margins, assembly, fidelity audit, cluster stop), with its expected duration in the message;
+        default silent.
 
     Returns
     -------
@@ -225,35 +226,47 @@ def run_campaign(
             announce("compile",
                      f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
             per_run = bench_adapter.warm_up(spec)
-        if pending:
-            slots = 1 if scheduler else workers
-            announce("cluster start",
-                     f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
-                     "(about 10-20 s)")
-            with _client(workers, scheduler) as client:
+        # One cluster for the runs, the margins and the fidelity audit: started when first needed, closed at the end.
+        with contextlib.ExitStack() as cluster:
+            client = None
+            if pending:
+                slots = 1 if scheduler else workers
+                announce("cluster start",
+                         f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
+                         "(about 10-20 s)")
+                client = cluster.enter_context(_client(workers, scheduler))
                 expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
                             else "see the bar")
                 announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
                 with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
                     _execute(client, spec, samples, pending, run_function, store, bar)
-        attrs = {"run_function": run_function_name(run_function)}
-        margins = {}
-        if bench:
-            conditions, base = bench_adapter.dataset_conditions(spec)
-            attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
-            margins = bench_adapter.margin_variables(spec, lambda d, i: build_request(spec, samples, d, i))
-        results = store.assemble(samples,
-                                 {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                           "workers": scheduler or workers}, attrs, margins)
-        if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
-            runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
-            announce("fidelity audit",
-                     f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
-                     + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)" if per_run
-                        else ""))
-        audit_campaign(results, spec, run_campaign, workers=workers, scheduler=scheduler, resume=resume,
-                       progress=progress, run_function=None if bench else run_function,
-                       allow_version_mix=allow_version_mix, announce=announce)
+            attrs = {"run_function": run_function_name(run_function)}
+            margins = {}
+            if bench:
+                conditions, base = bench_adapter.dataset_conditions(spec)
+                attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
+                announce("margins", f"{spec.name}: loop margins of {len(spec.datasets) * spec.runs_per_dataset} runs"
+                         + (" on the cluster" if client else ""))
+                margins = bench_adapter.margin_variables(
+                    spec, lambda d, i: build_request(spec, samples, d, i),
+                    map_chunks=(lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
+            announce("assembly", f"{spec.name}: writing results.nc")
+            results = store.assemble(samples,
+                                     {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                                      "workers": scheduler or workers}, attrs, margins)
+            if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
+                runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
+                announce("fidelity audit",
+                         f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
+                         + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)"
+                            if per_run else ""))
+            # the audit's runs go to the cluster already started (its workers are warm), else it starts one
+            audit_campaign(results, spec, run_campaign, workers=workers,
+                           scheduler=client.scheduler.address if client else scheduler, resume=resume,
+                           progress=progress, run_function=None if bench else run_function,
+                           allow_version_mix=allow_version_mix, announce=announce)
+            if client is not None and scheduler is None:
+                announce("cluster stop", f"{spec.name}: stopping the {workers} worker processes")
     return results
 
 

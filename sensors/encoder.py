@@ -63,6 +63,10 @@ State array (float64, length ``ENC_STATE_SIZE``), from :func:`encoder_init`:
 ``ENC_S_SAMPLE_T``             time of the last speed sample [s]
 ``ENC_S_SAMPLE_COUNT``         count at the last speed sample
 ``ENC_S_PEAK_FREQUENCY``       highest signal frequency seen [Hz]
+``ENC_S_X``                    true position at the last step (:func:`encoder_advance`)
+``ENC_S_U_STALE``              1 if ``ENC_S_U`` lags ``ENC_S_X`` (steps skipped)
+``ENC_S_QUIET_CENTRE``         position about which no edge can be crossed ...
+``ENC_S_QUIET_RADIUS``         ... within this distance (negative: none)
 =============================  =================================================
 """
 
@@ -98,7 +102,16 @@ ENC_S_PREV_EDGE_DIR = 9
 ENC_S_SAMPLE_T = 10
 ENC_S_SAMPLE_COUNT = 11
 ENC_S_PEAK_FREQUENCY = 12
-ENC_STATE_SIZE = 13
+ENC_S_X = 13
+ENC_S_U_STALE = 14
+ENC_S_QUIET_CENTRE = 15
+ENC_S_QUIET_RADIUS = 16
+ENC_STATE_SIZE = 17
+
+#: Margin kept from an edge by :func:`encoder_advance`'s skip, in counts: far above the rounding of
+#: ``_count_at`` (a few ulps of ``u / P``) while ``|u| < _QUIET_RANGE`` signal periods.
+_QUIET_MARGIN = 1e-6
+_QUIET_RANGE = 1e7
 
 #: Nominal edge angles (A rise, B rise, A fall, B fall) within a signal period [rad].
 _NOMINAL_EDGE_ANGLES = np.array([0.0, 0.5, 1.0, 1.5]) * math.pi
@@ -251,9 +264,11 @@ def torque_meter_encoder_parameters(params: Mapping[str, float], *, fidelity: in
 @numba.njit(cache=True)
 def scale_position(x, p):
     """Scale position ``u(x)`` at which the edge pattern is read (precision error at fidelity 2)."""
-    if p[ENC_FIDELITY] < 2.0:
+    amplitude = p[ENC_PRECISION_AMPLITUDE]
+    # x + 0 * sin(...) is x for finite x != 0 (at -0.0 the sign of the sine's zero decides, at inf it is NaN)
+    if p[ENC_FIDELITY] < 2.0 or (amplitude == 0.0 and 0.0 < abs(x) < math.inf):
         return x
-    return x + p[ENC_PRECISION_AMPLITUDE] * math.sin(p[ENC_PRECISION_WAVENUMBER] * x)
+    return x + amplitude * math.sin(p[ENC_PRECISION_WAVENUMBER] * x)
 
 
 @numba.njit(cache=True)
@@ -322,6 +337,9 @@ def encoder_init(state, x0, t0, p):
     state[ENC_S_SAMPLE_T] = t0
     state[ENC_S_SAMPLE_COUNT] = count
     state[ENC_S_PEAK_FREQUENCY] = 0.0
+    state[ENC_S_X] = x0
+    state[ENC_S_U_STALE] = 0.0
+    _set_quiet_region(state, x0, p)
 
 
 @numba.njit(cache=True)
@@ -385,6 +403,57 @@ def encoder_step(state, x, t, p):
     state[ENC_S_T] = t
     state[ENC_S_U] = u1
     state[ENC_S_COUNT] = count
+
+
+@numba.njit(cache=True, inline="always")
+def _set_quiet_region(state, x, p):
+    """Store the interval of true positions about ``x`` in which the count equals ``state[ENC_S_COUNT]``.
+
+    The count is ``n`` for ``u`` between the edges ``n`` and ``n + 1`` (module docstring), and
+    ``|du/dx| <= 1 + |e_p| 2 pi / lambda_p``, so a true position closer to ``x`` than the scale
+    distance to the nearer edge, less a margin, over that bound cannot change the count.
+    Fidelity 0 (a continuous count) has no such region.
+    """
+    u = state[ENC_S_U]
+    fidelity = p[ENC_FIDELITY]
+    radius = -1.0
+    if fidelity > 0.0 and abs(u) < _QUIET_RANGE * p[ENC_PERIOD]:
+        count = state[ENC_S_COUNT]
+        room = min(u - _edge_position(count, p), _edge_position(count + 1.0, p) - u) - _QUIET_MARGIN * p[ENC_RESOLUTION]
+        slope = 1.0
+        if fidelity == 2.0:
+            slope += abs(p[ENC_PRECISION_AMPLITUDE]) * p[ENC_PRECISION_WAVENUMBER]
+        radius = room / slope
+    state[ENC_S_QUIET_CENTRE] = x
+    state[ENC_S_QUIET_RADIUS] = radius
+
+
+@numba.njit(cache=True, inline="always")
+def encoder_advance(state, x, t, p):
+    """:func:`encoder_step` for a caller that steps at every integration step: a step that cannot
+    cross an edge costs a comparison.
+
+    Such a step changes neither the count nor the edge times; only its end (time, position) is kept,
+    and the scale position ``u`` is computed from it when the next step needs it as a start value,
+    so every reading equals that of :func:`encoder_step` at every step. The peak signal frequency
+    (``ENC_S_PEAK_FREQUENCY``) is taken over the other steps only: a skipped step moves less than one
+    count, so its frequency is below ``1 / (4 dt)``, far from any datasheet limit at loop steps.
+    """
+    if abs(x - state[ENC_S_QUIET_CENTRE]) < state[ENC_S_QUIET_RADIUS]:
+        state[ENC_S_T] = t
+        state[ENC_S_X] = x
+        state[ENC_S_U_STALE] = 1.0
+        return
+    if state[ENC_S_U_STALE] != 0.0:
+        state[ENC_S_U] = scale_position(state[ENC_S_X], p)
+        state[ENC_S_U_STALE] = 0.0
+    count = state[ENC_S_COUNT]
+    encoder_step(state, x, t, p)
+    state[ENC_S_X] = x
+    if state[ENC_S_COUNT] == count:
+        _set_quiet_region(state, x, p)
+    else:  # moving: the next step most likely crosses an edge too, the region would go unused
+        state[ENC_S_QUIET_RADIUS] = -1.0
 
 
 @numba.njit(cache=True)

@@ -112,6 +112,53 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     OptionError, SceneError, ParameterError
         On invalid input, before anything runs.
     """
+    return _package(_simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature,
+                               rtol, local_error_guard, throw))
+
+
+def simulate_features(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
+                      integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT,
+                      output_dt: float = DEFAULT_OUTPUT_DT, duration: float | None = None,
+                      fidelity: str | Mapping[str, str] = "auto", outputs: Sequence[str] | None = None,
+                      rng: np.random.Generator | int | None = None, curvature: str = "thesis", rtol: float = 1e-10,
+                      local_error_guard: bool = True, throw: bool = True) -> RunSummary:
+    """:func:`simulate` without the Dataset: the run's scalar features and status, for callers that
+    need nothing else (a Monte Carlo campaign's runs). Same options, same numbers as ``simulate``."""
+    return _summary(_simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature,
+                               rtol, local_error_guard, throw))
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What :func:`simulate_features` returns: the ``attrs`` and scalar features of :func:`simulate`'s Dataset."""
+
+    status: str             # attrs["status"]
+    failure_reason: str     # attrs["failure_reason"]
+    t_reached: float        # attrs["t_reached"] [s]
+    fidelity: str           # attrs["fidelity"]
+    features: dict[str, float]  # every feature of twin.features.FEATURES (NaN unless the run is ok)
+
+
+@dataclass(frozen=True)
+class _Simulated:
+    """A finished run before packaging: the request, the model and the loop's buffers."""
+
+    run: _Run
+    model: object
+    x: np.ndarray
+    output: np.ndarray
+    memory: np.ndarray
+    status: int
+    reason: str
+    t_reached: float
+    solver_stats: dict
+    wall_time: float
+    rng: object
+
+
+def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol,
+               local_error_guard, throw) -> _Simulated:
+    """Validate, build, solve (the steps :func:`simulate` and :func:`simulate_features` share)."""
     run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
     model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
     generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
@@ -130,7 +177,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     wall_time = time.perf_counter() - start
     if status != STATUS_OK and throw:
         raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
-    return _package(run, model, x, output[:rows], memory, status, reason, t_reached, solver_stats, wall_time, rng)
+    return _Simulated(run, model, x, output[:rows], memory, status, reason, t_reached, solver_stats, wall_time, rng)
 
 
 @dataclass(frozen=True)
@@ -207,10 +254,28 @@ def _solve(run: _Run, model, instruments, n_steps: int, x: np.ndarray, output: n
     return status, steps_done * run.dt, rows, BOUND_REASONS[bound], {}
 
 
-def _package(run: _Run, model, x: np.ndarray, output: np.ndarray, memory: np.ndarray, status: int, reason: str,
-             t_reached: float, solver_stats: dict, wall_time: float, rng) -> xr.Dataset:
+def _features(done: _Simulated) -> dict[str, float]:
+    """Every feature of :data:`twin.features.FEATURES` from the loop's accumulators (NaN unless the run is ok)."""
+    memory = done.memory
+    ok = done.status == STATUS_OK and memory[M.SAMPLES] > 0
+    values = {}
+    for suffix, block in (("", M.FEATURES_MEASURED), ("_true", M.FEATURES_TRUE)):
+        for base, value in finish(memory[block:block + N_ACCUMULATORS], memory[M.SAMPLES]).items():
+            values[base + suffix] = value if ok else np.nan
+    return values
+
+
+def _summary(done: _Simulated) -> RunSummary:
+    return RunSummary(STATUS_TEXT[done.status], done.reason, done.t_reached, done.run.fidelity.summary(),
+                      _features(done))
+
+
+def _package(done: _Simulated) -> xr.Dataset:
     """The run as an xarray Dataset: signals on the output grid, the features (:mod:`twin.features`), the final
     state and the attributes that say how it was computed."""
+    run, model, x, output, memory = done.run, done.model, done.x, done.output, done.memory
+    status, reason, t_reached, solver_stats, wall_time, rng = (done.status, done.reason, done.t_reached,
+                                                               done.solver_stats, done.wall_time, done.rng)
     scene, params, resolved, dt = run.scene, run.params, run.fidelity, run.dt
     time_axis = np.arange(output.shape[0]) * run.output_every * dt
     removed = set(resolved.removed_signals)
@@ -220,13 +285,10 @@ def _package(run: _Run, model, x: np.ndarray, output: np.ndarray, memory: np.nda
         for signal in Signal
         if signal.name.lower() not in removed
     }
-    ok = status == STATUS_OK and memory[M.SAMPLES] > 0
-    for suffix, block in (("", M.FEATURES_MEASURED), ("_true", M.FEATURES_TRUE)):
-        values = finish(memory[block:block + N_ACCUMULATORS], memory[M.SAMPLES])
-        for base, value in values.items():
-            feature = FEATURES[base + suffix]
-            data_vars[base + suffix] = ((), value if ok else np.nan, {
-                "units": feature.unit, "long_name": feature.long_name, "description": feature.description})
+    for name, value in _features(done).items():
+        feature = FEATURES[name]
+        data_vars[name] = ((), value, {"units": feature.unit, "long_name": feature.long_name,
+                                       "description": feature.description})
     data_vars["final_state"] = ("state", x[model.active], {
         "long_name": "integrated states at t_reached (SI units, layout twin.layout.S)"})
     return xr.Dataset(

@@ -97,3 +97,18 @@ def test_iso_curvature_selectable(bench):
     contact_only = expected_ratio ** (-2.0 / 3.0) - 1.0
     assert change != 0.0
     assert np.sign(change) == np.sign(contact_only) and abs(change) <= abs(contact_only)
+
+
+@pytest.mark.parametrize(("scene", "options"), [
+    ("ds2", {"duration": 0.3, "rng": 3}),
+    ("nominal", {"duration": 0.3, "dt": 1.25e-4}),  # diverges: NaN features, status and reason as data
+])
+def test_features_without_the_dataset_are_the_datasets(scene, options):
+    """``simulate_features`` returns exactly the scalars ``simulate`` puts in its Dataset, bit for bit."""
+    ds = twin.simulate(scene, throw=False, **options)
+    summary = twin.simulate_features(scene, throw=False, **options)
+    assert (summary.status, summary.failure_reason, summary.t_reached, summary.fidelity) == (
+        ds.attrs["status"], ds.attrs["failure_reason"], ds.attrs["t_reached"], ds.attrs["fidelity"])
+    assert set(summary.features) == {name for name in ds.data_vars if not ds[name].dims}
+    for name, value in summary.features.items():
+        assert np.array_equal(value, ds[name].values, equal_nan=True), name

@@ -1,9 +1,12 @@
 """Automatic fidelity selection: rules as data, each decision explained, bad input refused."""
 
+import os
+
 import pytest
 
 import twin
 from twin.fidelity import SUBSYSTEMS, load_rules, resolve_fidelity
+from twin.fidelity.rules import RULES_FILE
 from twin.layout import N_STATES, S
 
 
@@ -127,3 +130,17 @@ def test_force_demand_condition_as_data(tmp_path, bench):
     loaded = resolve_fidelity(twin.load_scene("ds3"), bench, rules_file=rules)
     assert free.level("pneumatics") == "absent" and "force demand none" in free.reasons["pneumatics"]
     assert loaded.level("pneumatics") == "full" and "force demand present" in loaded.reasons["pneumatics"]
+
+
+def test_rules_file_parsed_once_and_again_when_it_changes(tmp_path):
+    """The parse is cached per file version: the same objects while the file is unchanged, the new rules as soon
+    as it is rewritten (another size and modification time)."""
+    path = tmp_path / "rules.toml"
+    original = RULES_FILE.read_text()
+    path.write_text(original)
+    settings, rules = load_rules(path)
+    assert load_rules(path)[1] is rules
+    path.write_text(original + '\n[[rules]]\nsubsystem = "motor_thermal"\nlevel = "frozen"\nbecause = "test"\n')
+    os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10**9))
+    changed = load_rules(path)[1]
+    assert len(changed) == len(rules) + 1 and changed[-1]["because"] == "test"

@@ -47,7 +47,6 @@ from sensors.analog import (
     analog_init,
     analog_parameters,
     analog_read,
-    analog_step,
 )
 from sensors.encoder import (
     ENC_SIZE,
@@ -55,7 +54,6 @@ from sensors.encoder import (
     encoder_init,
     encoder_reading,
     encoder_speed,
-    encoder_step,
     linear_encoder_parameters,
     torque_meter_encoder_parameters,
 )
@@ -178,45 +176,45 @@ def _lookback(rows: np.ndarray, dt: float) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def measurands(x, c, torque, preload, external):
-    """True values seen by the instruments, in ``INSTRUMENTS`` order."""
-    return (c[K.ENCODER_SCALE_ORIGIN] + x[S.NUT1_POSITION] - c[K.NUT1_ZERO], x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO],
-            c[K.RATIO] * x[S.REDUCER_ANGLE], torque, preload, external, sensed_current(x, c))
+def sled_measurand(x, c):
+    """Position on the linear encoder's scale [m]."""
+    return c[K.ENCODER_SCALE_ORIGIN] + x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
+
+
+@numba.njit(cache=True)
+def screw_angle_measurand(x, c):
+    """Screw angle seen by the torque meter's encoder [rad]."""
+    return x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]
 
 
 @numba.njit(cache=True)
 def instruments_init(state, rows, x, c, t, torque, preload, external):
     """Zero the encoders and settle the analog channels on the initial state."""
-    m = measurands(x, c, torque, preload, external)
-    encoder_init(state[LINEAR_ENCODER], m[0], t, rows[LINEAR_ENCODER])
-    encoder_init(state[TORQUE_METER_ENCODER], m[1], t, rows[TORQUE_METER_ENCODER])
-    analog_init(state[TORQUE_METER], m[3], t, rows[TORQUE_METER])
-    analog_init(state[PRELOAD_CELL], m[4], t, rows[PRELOAD_CELL])
-    analog_init(state[LOAD_CELL], m[5], t, rows[LOAD_CELL])
-    analog_init(state[CURRENT_MONITOR], m[6], t, rows[CURRENT_MONITOR])
+    encoder_init(state[LINEAR_ENCODER], sled_measurand(x, c), t, rows[LINEAR_ENCODER])
+    encoder_init(state[TORQUE_METER_ENCODER], screw_angle_measurand(x, c), t, rows[TORQUE_METER_ENCODER])
+    analog_init(state[TORQUE_METER], torque, t, rows[TORQUE_METER])
+    analog_init(state[PRELOAD_CELL], preload, t, rows[PRELOAD_CELL])
+    analog_init(state[LOAD_CELL], external, t, rows[LOAD_CELL])
+    analog_init(state[CURRENT_MONITOR], sensed_current(x, c), t, rows[CURRENT_MONITOR])
 
 
 @numba.njit(cache=True)
-def analog_active(levels, lookback, steps_to_sample):
-    """Whether any analog channel must be stepped now (see :func:`_lookback`)."""
-    for channel in (TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR):
-        if levels[channel] > 0 and steps_to_sample < lookback[channel]:
-            return True
-    return False
+def analog_due(level, lookback, steps_to_sample, tau, refresh_period, next_refresh, t, dt):
+    """Whether an analog channel (its ``level``, :func:`_lookback` entry, ``AN_TAU``, ``AN_REFRESH_PERIOD`` and
+    ``AS_NEXT_REFRESH``) must be stepped at the end ``t`` of a step of ``dt``, ``steps_to_sample`` steps
+    before the next acquisition instant (0 at the instant itself).
 
-
-@numba.njit(cache=True)
-def instruments_step(state, rows, levels, lookback, steps_to_sample, x, c, t, torque, preload, external):
-    """Advance the instruments to the end of an integration step, ``steps_to_sample`` steps before the
-    next acquisition instant (0 at the instant itself)."""
-    m = measurands(x, c, torque, preload, external)
-    if levels[LINEAR_ENCODER] > 0:
-        encoder_step(state[LINEAR_ENCODER], m[0], t, rows[LINEAR_ENCODER])
-    if levels[TORQUE_METER_ENCODER] > 0:
-        encoder_step(state[TORQUE_METER_ENCODER], m[1], t, rows[TORQUE_METER_ENCODER])
-    for channel in (TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR):
-        if levels[channel] > 0 and steps_to_sample < lookback[channel]:
-            analog_step(state[channel], m[channel], t, rows[channel])
+    Dense stepping gives the same readings as: the steps in the channel's look-back window
+    (:func:`_lookback`) and, for a channel with a sample-and-hold output and no filter, of those only
+    the step that contains a refresh instant and the step before it (which gives the
+    interpolation its start value); between refreshes the output is held whatever the input.
+    """
+    if level == 0 or steps_to_sample >= lookback:
+        return False
+    if tau > 0.0 or refresh_period == 0.0:
+        return True
+    # The next step ends at about t + dt: half a step of margin absorbs the rounding of both clocks.
+    return t + 1.5 * dt >= next_refresh
 
 
 @numba.njit(cache=True)

@@ -11,6 +11,8 @@ import numba
 import numpy as np
 
 from sensors.acquisition import convert
+from sensors.analog import AN_REFRESH_PERIOD, AN_TAU, AS_NEXT_REFRESH, analog_step
+from sensors.encoder import encoder_advance
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.integrators import WORK_VECTORS, step
@@ -41,14 +43,36 @@ from twin.physics.ball_screw import contact_geometry
 from twin.physics.pneumatics import hysteresis_play
 from twin.scenes.profiles import profile_value
 
+#: Largest biased binary exponent of a state below which the sum in :func:`guard` cannot overflow
+#: (|x_j| < 2**977, so even 2**40 such terms sum to a finite number).
+_SAFE_EXPONENT = 2000
+#: Relative margin under the approach limit within which :func:`guard` evaluates the exact contact geometry.
+_APPROACH_MARGIN = 1e-9
+
+
+@numba.njit(cache=True)
+def _sum_is_finite(x):
+    """``math.isfinite(sum(x))``, the sum taken only when an element is large or not finite.
+
+    The exponent fields are compared as integers, which vectorise (a float sum does not:
+    its order is fixed), so the common case costs a fraction of the serial sum.
+    """
+    bits = x.view(np.int64)
+    largest = 0
+    for j in range(bits.shape[0]):
+        largest = max(largest, (bits[j] >> 52) & 0x7FF)
+    if largest < _SAFE_EXPONENT:
+        return True
+    total = 0.0
+    for j in range(x.shape[0]):
+        total += x[j]
+    return math.isfinite(total)
+
 
 @numba.njit(cache=True)
 def guard(x, c):
     """Divergence guard: 0 if the state is finite and physical, else a bound code (layout.BOUND_REASONS)."""
-    total = 0.0
-    for j in range(x.shape[0]):
-        total += x[j]
-    if not math.isfinite(total):
+    if not _sum_is_finite(x):
         return 1
     if abs(x[S.NUT1_POSITION]) > c[K.STROKE_LIMIT]:
         return 2
@@ -60,7 +84,9 @@ def guard(x, c):
         return 5
     for nut in (0, 1):
         gap = abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
-        if gap > 0.0:
+        # The normal approach never exceeds the axial interference (the triangle inequality on
+        # Eq. 9.4's exact form), so the geometry is needed only near the limit.
+        if gap > 0.0 and gap * c[K.COS_HELIX] > (1.0 - _APPROACH_MARGIN) * c[K.MAX_NORMAL_APPROACH]:
             approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
             if approach > c[K.MAX_NORMAL_APPROACH]:
                 return 6
@@ -182,15 +208,32 @@ def speed_sample(x, c, u, memory, rows, levels, sample_time):
                                                             c[K.SPEED_KI], sample_time, c[K.MAX_CURRENT])
 
 
-@numba.njit(cache=True)
-def instruments_advance(t, x, c, instrument_state, rows, levels, lookback, steps_to_sample, force_table):
-    """Advance the instruments to time ``t`` (after an integration step)."""
-    if ins.analog_active(levels, lookback, steps_to_sample):
-        # the analog channels need only these three forces, not the ball-groove contacts
-        ins.instruments_step(instrument_state, rows, levels, lookback, steps_to_sample, x, c, t,
-                             transmitted_torque(x, c), preload_between_nuts(x, c), external_force(t, x, c, force_table))
-    else:
-        ins.instruments_step(instrument_state, rows, levels, lookback, steps_to_sample, x, c, t, 0.0, 0.0, 0.0)
+@numba.njit(cache=True, inline="always")
+def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, steps_to_sample, force_table):
+    """Advance the instruments to time ``t``, the end of an integration step of ``dt``.
+
+    The encoders skip the steps in which no edge can occur (:func:`sensors.encoder.encoder_advance`);
+    an analog channel is stepped, and its measurand computed, only when a reading depends on the step
+    (:func:`twin.engine.instrumentation.analog_due`). One flat function: this runs after every step,
+    and every call that passes arrays costs more than the tests it would save.
+    """
+    for encoder in (ins.LINEAR_ENCODER, ins.TORQUE_METER_ENCODER):
+        if levels[encoder] > 0:
+            measurand = ins.sled_measurand(x, c) if encoder == ins.LINEAR_ENCODER else ins.screw_angle_measurand(x, c)
+            encoder_advance(instrument_state[encoder], measurand, t, rows[encoder])
+    for channel in ins.ANALOG:
+        if ins.analog_due(levels[channel], lookback[channel], steps_to_sample, rows[channel, AN_TAU],
+                          rows[channel, AN_REFRESH_PERIOD], instrument_state[channel, AS_NEXT_REFRESH], t, dt):
+            # the analog channels need only these forces, not the ball-groove contacts
+            if channel == ins.TORQUE_METER:
+                measurand = transmitted_torque(x, c)
+            elif channel == ins.PRELOAD_CELL:
+                measurand = preload_between_nuts(x, c)
+            elif channel == ins.LOAD_CELL:
+                measurand = external_force(t, x, c, force_table)
+            else:
+                measurand = sensed_current(x, c)
+            analog_step(instrument_state[channel], measurand, t, rows[channel])
 
 
 LOCAL_ERROR_EVERY = 4        # acquisition instants between local-error checks (4 ms: ~5 % of the run's cost)
@@ -258,21 +301,31 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly)
     scratch = np.zeros((2, x.shape[0]))
     written = 0
+    # Steps to the next acquisition, speed-loop and output instant: counters, not ``k % every`` (an integer
+    # division per test and step).
+    to_acquisition = to_speed = to_output = 0
+    acquisitions = 0
     for k in range(n_steps + 1):
         t = k * dt
-        if k % position_every == 0:
+        check_error = False
+        if to_acquisition == 0:
             acquisition_sample(t, x, c, u, memory, instrument_state, rows, levels, noise, position_table,
                                force_table, stiffness_poly, position_every * dt)
-        if k % speed_every == 0:
+            check_error = acquisitions % LOCAL_ERROR_EVERY == 0
+            acquisitions += 1
+            to_acquisition = position_every
+        if to_speed == 0:
             speed_sample(x, c, u, memory, rows, levels, speed_every * dt)
-        if k % output_every == 0:
+            to_speed = speed_every
+        if to_output == 0:
             record(output[written], t, x, c, u, memory, force_table, stiffness_poly)
             written += 1
+            to_output = output_every
         if k == n_steps:
             break
         step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0, active, pairs)
         code = guard(x, c)
-        if code == 0 and k % (LOCAL_ERROR_EVERY * position_every) == 0:
+        if code == 0 and check_error:
             estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance,
                                    active, pairs)
             memory[M.LOCAL_ERROR] = max(memory[M.LOCAL_ERROR], estimate)
@@ -284,6 +337,8 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
             return status, code, k + 1, written
-        instruments_advance(t + dt, x, c, instrument_state, rows, levels, lookback,
-                            (position_every - (k + 1) % position_every) % position_every, force_table)
+        to_acquisition -= 1
+        to_speed -= 1
+        to_output -= 1
+        instruments_advance(t + dt, dt, x, c, instrument_state, rows, levels, lookback, to_acquisition, force_table)
     return STATUS_OK, 0, n_steps, written

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Protocol
 
 import numpy as np
@@ -248,19 +249,28 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.CENTRE_DISTANCE] = groove_centre_distance(ball_radius, p["ball_screw.conformity"])
     c[K.CONTACT_ANGLE_0] = alpha_0
     sin_min = math.sin(alpha_0)
-    sin_grid = np.linspace(sin_min, SIN_ALPHA_MAX, STIFFNESS_FIT_POINTS)
-    groove_radius = 2.0 * p["ball_screw.conformity"] * ball_radius
-    e_star = hertz.equivalent_modulus(p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"],
-                                      p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"])
-    stiffness = hertz.stiffness_table(
-        np.arcsin(sin_grid), pitch_radius, ball_radius, groove_radius, groove_radius, alpha_e,
-        p["ball_screw.ogival_offset"], e_star, CURVATURE_FORMULAS[curvature])
-    stiffness_poly = fit_stiffness(sin_grid, stiffness)
+    stiffness_poly = _hertz_stiffness_fit(ball_radius, pitch_radius, alpha_e, sin_min, p["ball_screw.conformity"],
+                                          p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"],
+                                          p["ball_screw.ogival_offset"], curvature).copy()
     c[K.SIN_ALPHA_MIN] = sin_min
     c[K.SIN_ALPHA_SPAN] = SIN_ALPHA_MAX - sin_min
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
     return stiffness_poly
+
+
+@lru_cache(maxsize=64)
+def _hertz_stiffness_fit(ball_radius: float, pitch_radius: float, alpha_e: float, sin_min: float, conformity: float,
+                         elastic_modulus: float, poisson_ratio: float, ogival_offset: float,
+                         curvature: str) -> np.ndarray:
+    """:func:`fit_stiffness` of the Hertz stiffness table of one screw geometry (Sec. 7.3), computed once per
+    process and geometry: every run of a campaign shares it (copy before modifying)."""
+    sin_grid = np.linspace(sin_min, SIN_ALPHA_MAX, STIFFNESS_FIT_POINTS)
+    groove_radius = 2.0 * conformity * ball_radius
+    e_star = hertz.equivalent_modulus(elastic_modulus, poisson_ratio, elastic_modulus, poisson_ratio)
+    stiffness = hertz.stiffness_table(np.arcsin(sin_grid), pitch_radius, ball_radius, groove_radius, groove_radius,
+                                      alpha_e, ogival_offset, e_star, CURVATURE_FORMULAS[curvature])
+    return fit_stiffness(sin_grid, stiffness)
 
 
 def ball_groove_friction_constants(c: np.ndarray, p: dict[str, float], fidelity: Levels) -> None:

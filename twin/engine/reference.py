@@ -102,7 +102,7 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
             return status, code, t + speed_ts, rows, "", stats
-        instruments_advance(t + speed_ts, x, c, state, instruments.parameters, instruments.levels,
+        instruments_advance(t + speed_ts, speed_ts, x, c, state, instruments.parameters, instruments.levels,
                             instruments.lookback, (position_ratio - (j + 1) % position_ratio) % position_ratio,
                             force_table)
     return STATUS_OK, 0, n_speed_samples * speed_ts, rows, "", stats

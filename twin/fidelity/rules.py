@@ -14,7 +14,7 @@ import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -82,13 +82,23 @@ class Fidelity:
 
 
 def load_rules(path: Path = RULES_FILE) -> tuple[dict, list[dict]]:
-    """Parse and check a rules file: ``(settings, rules)``.
+    """Parse and check a rules file: ``(settings, rules)``, shared between calls (do not modify them).
+
+    Parsed once per process and file version (path, modification time and size), since every run
+    resolves its fidelity against the same file.
 
     Raises
     ------
     OptionError
         A missing setting, or an unknown subsystem, level or condition in a rule (all listed).
     """
+    stat = Path(path).stat()
+    return _parsed_rules(Path(path), stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=8)
+def _parsed_rules(path: Path, mtime_ns: int, size: int) -> tuple[dict, list[dict]]:
+    """:func:`load_rules` of one version of the file (the stat fields are the cache key)."""
     data = tomllib.loads(path.read_text())
     rules = data.get("rules", [])
     settings = data.get("settings", {})
