@@ -16,10 +16,11 @@ from twin.engine.plant import (
     N_DOFS,
     current_loop_jacobian,
     dof_active,
+    held_input_propagators,
     rhs,
     stiff_velocity_system,
 )
-from twin.layout import K, U
+from twin.layout import PNEUMATICS_FULL, K, S, U
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
@@ -175,20 +176,29 @@ def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
         (M + h D + h^2 K) dv = h (F - h K v),   v+ = v + dv,   q+ = q + h v+,
 
     i.e. implicit Euler on the linearised stiff forces at the new positions ``q + h v+`` and velocities
-    ``v+``, and the symplectic Euler of :func:`semi_implicit_euler_step` on everything else. The full current
-    loop (winding, Hall filter, analog PI: a linear block with a -2.3e4 1/s mode) takes one linearly
-    implicit Euler step ``(I - h J) dy = h f`` with its exact Jacobian
-    (:func:`twin.engine.plant.current_loop_jacobian`); the other first-order states (ideal current lag,
-    pressures, valve spool, winding temperature) explicit Euler. This is a W-method: first order for any
-    ``K``, ``D``, ``J`` (Hairer & Wanner, *Solving ODEs II*, Sec. IV.7, the linearly implicit Euler of
-    Eq. IV.7.1 with ``W`` in place of the Jacobian, and Sec. IV.9 for its use on second-order mechanical
-    systems); the matrices only decide stability. For a linear spring-mass-damper it is implicit Euler on
-    the velocity with the symplectic position update: stable for any ``h`` and never adding energy
-    (tests/engine/test_imex_euler.py). The linear systems are 8 x 8 and 3 x 3, solved in place.
+    ``v+``, and the symplectic Euler of :func:`semi_implicit_euler_step` on everything else. The other
+    blocks:
 
-    ``work``: rows 0-2 scratch vectors, the matrices from row ``WORK_VECTORS`` on (:func:`work_array`).
+    * the full current loop (winding, Hall filter, analog PI: linear, with a -2.3e4 1/s mode) takes one
+      linearly implicit Euler step ``(I - h J) dy = h f`` with its exact Jacobian
+      (:func:`twin.engine.plant.current_loop_jacobian`);
+    * the ideal current loop's lag and the valve spool are linear with a held input: exact propagators
+      (:func:`twin.engine.plant.held_input_propagators`);
+    * the chamber pressures and the winding temperature: explicit Euler.
+
+    The whole is a W-method: first order for any ``K``, ``D``, ``J`` (Hairer & Wanner, *Solving ODEs II*,
+    Sec. IV.7: the linearly implicit Euler with an approximate Jacobian; Sec. IV.9 for mechanical
+    systems); the matrices decide only stability. On a linear spring-mass-damper it is implicit Euler on
+    the velocity with the symplectic position update: stable for any ``h``, never adding energy
+    (tests/engine/test_imex_euler.py). The price is numerical damping of the resolved oscillations,
+    about ``h w^2 / 2`` [1/s] on a mode ``w``: at 125 us it damps a self-excited ball-groove chatter that
+    the model has on some data sets (docs/accuracy.md).
+
+    ``work``: rows 0-3 scratch vectors, row 5 the propagators' cache, the 8 x 8 and 3 x 3 matrices from
+    row ``WORK_VECTORS`` on (:func:`work_array`).
     """
-    f, b, velocity = work[0], work[1], work[2]
+    f, b, velocity, cache = work[0], work[1], work[2], work[5]
+    held_input_propagators(c, h, cache)
     matrix = work[WORK_VECTORS:WORK_VECTORS + N_DOFS, :N_DOFS]
     rhs(t, x, c, u, force_table, stiffness_poly, f)
     stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity)
@@ -214,6 +224,16 @@ def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
     if full_loop:
         for i in range(3):
             x[CURRENT_LOOP_STATES[i]] += current[i] - h * f[CURRENT_LOOP_STATES[i]]
+    else:
+        # dx/dt = (demand - x) / tau: the exact step moves the fraction cache[8] of the way to the demand
+        x[S.CURRENT] += f[S.CURRENT] * c[K.CURRENT_LOOP_TAU] * cache[8] - h * f[S.CURRENT]
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        # spool: y = (x - s, v) with the held target s = x + (a + 2 zeta w v) / w^2 follows y+ = Phi y
+        omega, zeta = cache[1], cache[2]
+        position, speed = x[S.SPOOL_POSITION] - h * f[S.SPOOL_POSITION], x[S.SPOOL_SPEED] - h * f[S.SPOOL_SPEED]
+        offset = -(f[S.SPOOL_SPEED] + 2.0 * zeta * omega * speed) / (omega * omega)
+        x[S.SPOOL_POSITION] = position + (cache[4] - 1.0) * offset + cache[5] * speed
+        x[S.SPOOL_SPEED] = cache[6] * offset + cache[7] * speed
 
 
 @numba.njit(cache=True)

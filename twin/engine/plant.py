@@ -4,6 +4,7 @@ The digital controllers are outside: the speed loop's current demand enters as
 a held input (zero-order hold between drive samples).
 """
 
+import cmath
 import math
 
 import numba
@@ -510,3 +511,38 @@ def current_loop_jacobian(x, c, current_demand, jacobian):
     jacobian[2, 0] = 0.0
     jacobian[2, 1] = -c[K.CURRENT_KI] + (c[K.CURRENT_KP] / c[K.CURRENT_AW_TIME] if saturated else 0.0)
     jacobian[2, 2] = -1.0 / c[K.CURRENT_AW_TIME] if saturated else 0.0
+
+
+@numba.njit(cache=True)
+def held_input_propagators(c, h, cache):
+    """Exact one-step propagators of the two linear blocks driven by a held input: the valve spool
+    (second order, Table B.12: ``x'' = w^2 (s - x) - 2 zeta w x'``) and the ideal current loop's lag.
+
+    ``cache[:8]`` holds ``(h, w, zeta, tau, Phi00, Phi01, Phi10, Phi11)`` and is refreshed only when a key
+    changes: the matrix exponential ``Phi = exp(A h)`` of the spool (Moler & Van Loan, SIAM Review 45, 2003,
+    Method 1 (Lagrange/Sylvester form) for a 2 x 2 matrix, with the double-eigenvalue limit at ``zeta = 1``)
+    and ``cache[8] = 1 - exp(-h / tau)``. Exact under the zero-order hold because the steps divide both
+    controllers' periods; the exponential Euler of Hochbruck & Ostermann (Acta Numerica 19, 2010, Sec. 2.1).
+    """
+    omega = 2.0 * math.pi * c[K.VALVE_FREQUENCY]
+    zeta = c[K.VALVE_DAMPING]
+    tau = c[K.CURRENT_LOOP_TAU]
+    if cache[0] == h and cache[1] == omega and cache[2] == zeta and cache[3] == tau:
+        return
+    cache[0], cache[1], cache[2], cache[3] = h, omega, zeta, tau
+    root = cmath.sqrt(complex(zeta * zeta - 1.0, 0.0)) * omega
+    first, second = -zeta * omega + root, -zeta * omega - root
+    if abs(first - second) > 1e-9 * omega:
+        e1, e2 = cmath.exp(first * h), cmath.exp(second * h)
+        identity_part = ((first * e2 - second * e1) / (first - second)).real
+        a_part = ((e1 - e2) / (first - second)).real
+    else:
+        decay = math.exp(-omega * h)
+        identity_part = decay * (1.0 + omega * h)
+        a_part = decay * h
+    # Phi = identity_part I + a_part A, A = [[0, 1], [-w^2, -2 zeta w]]
+    cache[4] = identity_part
+    cache[5] = a_part
+    cache[6] = -a_part * omega * omega
+    cache[7] = identity_part - 2.0 * zeta * omega * a_part
+    cache[8] = -math.expm1(-h / tau)

@@ -161,10 +161,10 @@ def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix,
     """Tangent stiffness ``dF/d(dx)`` [N/m] and damping ``dF/d(dx')`` [N s/m] of :func:`nut_axial_force`.
 
     Same arguments as :func:`nut_axial_force`, but the design contact angle as ``radial_0 = A0 cos(alpha_0)``
-    and ``axial_0 = A0 sin(alpha_0)`` (computed once for both nuts). The linearly implicit integrators need these only for
-    stability (a W-method is consistent for any matrix: Hairer & Wanner, *Solving ODEs II*, Sec. IV.7), so
-    the variation of ``K(alpha)`` with the angle is left out. With ``F = Z P sin(alpha) cos(alpha_e)`` and
-    ``delta_a = (|dx| - b/2) cos(alpha_e)``:
+    and ``axial_0 = A0 sin(alpha_0)`` (computed once for both nuts). The linearly implicit integrators
+    need these only for stability (a W-method is consistent for any matrix: Hairer & Wanner, *Solving
+    ODEs II*, Sec. IV.7), so the variation of ``K(alpha)`` with the angle is left out. With
+    ``F = Z P sin(alpha) cos(alpha_e)`` and ``delta_a = (|dx| - b/2) cos(alpha_e)``:
 
         dF/d(dx) = Z cos(alpha_e)^2 [dP/d(delta_a) sin(alpha) + P d(sin alpha)/d(delta_a)],
 
