@@ -190,9 +190,9 @@ def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
     Sec. IV.7: the linearly implicit Euler with an approximate Jacobian; Sec. IV.9 for mechanical
     systems); the matrices decide only stability. On a linear spring-mass-damper it is implicit Euler on
     the velocity with the symplectic position update: stable for any ``h``, never adding energy
-    (tests/engine/test_imex_euler.py). The price is numerical damping of the resolved oscillations,
-    about ``h w^2 / 2`` [1/s] on a mode ``w``: at 125 us it damps a self-excited ball-groove chatter that
-    the model has on some data sets (docs/accuracy.md).
+    (tests/engine/test_imex_euler.py). The price is numerical damping, about ``h w^2 / 2`` [1/s] on a
+    mode ``w``: on the contact mode at 125 us it suppresses a self-excited 255 Hz oscillation that the
+    model has on some data sets (docs/accuracy.md).
 
     ``work``: rows 0-3 scratch vectors, row 5 the propagators' cache, the 8 x 8 and 3 x 3 matrices from
     row ``WORK_VECTORS`` on (:func:`work_array`).
