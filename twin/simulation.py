@@ -62,8 +62,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "scipy_radau", "scipy_lsoda", "scipy_bdf",
-                  "scipy_rk45"}
+    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau", "scipy_lsoda",
+                  "scipy_bdf", "scipy_rk45"}
         Fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of
         the reference path (:mod:`twin.engine.reference`), which ignores ``dt``.
     dt : float

@@ -72,7 +72,8 @@ def test_convergence_order_on_smooth_chain(bench, scene_factory, method):
     # order 4; the L-stable W-method has a large phase error on the undamped 2.4e4 rad/s screw-axial
     # mode (its error is not monotone in h) until h * omega < 0.03, i.e. h < ~1.2e-6 s.
     steps = {"rk4": np.array([1e-5, 5e-6, 2.5e-6]), "rosenbrock_w2": np.array([1.25e-6, 6.25e-7, 3.125e-7]),
-             "semi_implicit_euler": np.array([4e-6, 2e-6, 1e-6, 5e-7])}[method]
+             "semi_implicit_euler": np.array([4e-6, 2e-6, 1e-6, 5e-7]),
+             "imex_euler": np.array([4e-6, 2e-6, 1e-6, 5e-7])}[method]
     reference, _, _ = _free_motion(bench, scene_factory, "rk4", 1.5625e-7)
     scale = np.abs(reference) + 1e-3 * np.max(np.abs(reference))
     errors = [np.max(np.abs(_free_motion(bench, scene_factory, method, h)[0] - reference) / scale) for h in steps]

@@ -10,13 +10,25 @@ of ``x`` holds fixed values the right-hand side reads.
 import numba
 import numpy as np
 
-from twin.engine.plant import rhs
+from twin.engine.plant import (
+    CURRENT_LOOP_STATES,
+    DOF_POSITIONS,
+    N_DOFS,
+    current_loop_jacobian,
+    dof_active,
+    held_input_propagators,
+    rhs,
+    stiff_velocity_system,
+)
+from twin.layout import PNEUMATICS_FULL, K, S, U
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
 ROSENBROCK_W2 = 2
-INTEGRATORS = {"rk4": RK4, "semi_implicit_euler": SEMI_IMPLICIT_EULER, "rosenbrock_w2": ROSENBROCK_W2}
-ORDER = {"rk4": 4, "semi_implicit_euler": 1, "rosenbrock_w2": 2}
+IMEX_EULER = 3
+INTEGRATORS = {"rk4": RK4, "semi_implicit_euler": SEMI_IMPLICIT_EULER, "rosenbrock_w2": ROSENBROCK_W2,
+               "imex_euler": IMEX_EULER}
+ORDER = {"rk4": 4, "semi_implicit_euler": 1, "rosenbrock_w2": 2, "imex_euler": 1}
 EXPLICIT = ("rk4", "semi_implicit_euler")
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 WORK_VECTORS = 6  # scratch vectors in front of the W-method's matrix in the work array
@@ -133,6 +145,98 @@ def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
 
 
 @numba.njit(cache=True)
+def solve_in_place(matrix, b, n):
+    """Solve ``matrix[:n, :n] y = b[:n]`` by Gaussian elimination without pivoting; ``y`` replaces ``b``
+    and ``matrix`` is overwritten. For the small systems of :func:`imex_euler_step`: symmetric positive
+    definite (mechanics) or ``I - h J`` of the current loop, both safe without pivoting (Golub & Van Loan,
+    *Matrix Computations*, 4th ed., Sec. 4.2), and no allocation inside the compiled loop."""
+    for k in range(n):
+        pivot = matrix[k, k]
+        for i in range(k + 1, n):
+            factor = matrix[i, k] / pivot
+            if factor != 0.0:
+                for j in range(k + 1, n):
+                    matrix[i, j] -= factor * matrix[k, j]
+                b[i] -= factor * b[k]
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= matrix[i, j] * b[j]
+        b[i] = acc / matrix[i, i]
+
+
+@numba.njit(cache=True)
+def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
+    """Linearly implicit (IMEX) symplectic Euler: one right-hand side per step, the stiff springs implicit.
+
+    With ``F`` the mechanical generalised forces at the current state and ``K``, ``D`` the analytic
+    tangent stiffness and damping of the stiff elements only (:func:`twin.engine.plant.stiff_velocity_system`:
+    ball-groove contacts, springs, friction slopes), the velocities of the mechanical DOFs take
+
+        (M + h D + h^2 K) dv = h (F - h K v),   v+ = v + dv,   q+ = q + h v+,
+
+    i.e. implicit Euler on the linearised stiff forces at the new positions ``q + h v+`` and velocities
+    ``v+``, and the symplectic Euler of :func:`semi_implicit_euler_step` on everything else. The other
+    blocks:
+
+    * the full current loop (winding, Hall filter, analog PI: linear, with a -2.3e4 1/s mode) takes one
+      linearly implicit Euler step ``(I - h J) dy = h f`` with its exact Jacobian
+      (:func:`twin.engine.plant.current_loop_jacobian`);
+    * the ideal current loop's lag and the valve spool are linear with a held input: exact propagators
+      (:func:`twin.engine.plant.held_input_propagators`);
+    * the chamber pressures and the winding temperature: explicit Euler.
+
+    The whole is a W-method: first order for any ``K``, ``D``, ``J`` (Hairer & Wanner, *Solving ODEs II*,
+    Sec. IV.7: the linearly implicit Euler with an approximate Jacobian; Sec. IV.9 for mechanical
+    systems); the matrices decide only stability. On a linear spring-mass-damper it is implicit Euler on
+    the velocity with the symplectic position update: stable for any ``h``, never adding energy
+    (tests/engine/test_imex_euler.py). The price is numerical damping, about ``h w^2 / 2`` [1/s] on a
+    mode ``w``: on the contact mode at 125 us it suppresses a self-excited 255 Hz oscillation that the
+    model has on some data sets (docs/accuracy.md).
+
+    ``work``: rows 0-3 scratch vectors, row 5 the propagators' cache, the 8 x 8 and 3 x 3 matrices from
+    row ``WORK_VECTORS`` on (:func:`work_array`).
+    """
+    f, b, velocity, cache = work[0], work[1], work[2], work[5]
+    held_input_propagators(c, h, cache)
+    matrix = work[WORK_VECTORS:WORK_VECTORS + N_DOFS, :N_DOFS]
+    rhs(t, x, c, u, force_table, stiffness_poly, f)
+    stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity)
+    solve_in_place(matrix, b, N_DOFS)
+    loop = work[WORK_VECTORS + N_DOFS:WORK_VECTORS + N_DOFS + 3, :3]
+    current = work[3]
+    full_loop = c[K.CURRENT_LOOP_FULL] > 0.5
+    if full_loop:
+        current_loop_jacobian(x, c, u[U.CURRENT_DEMAND], loop)
+        for i in range(3):
+            for j in range(3):
+                loop[i, j] = (1.0 if i == j else 0.0) - h * loop[i, j]
+            current[i] = h * f[CURRENT_LOOP_STATES[i]]
+        solve_in_place(loop, current, 3)
+    for j in active:
+        x[j] += h * f[j]
+    # replace the explicit update of the implicit states; f still holds the old velocities for the positions
+    for i in range(N_DOFS):
+        if dof_active(c, i):
+            p = DOF_POSITIONS[i]
+            x[p + 1] += b[i] - h * f[p + 1]
+            x[p] += h * (x[p + 1] - f[p])
+    if full_loop:
+        for i in range(3):
+            x[CURRENT_LOOP_STATES[i]] += current[i] - h * f[CURRENT_LOOP_STATES[i]]
+    else:
+        # dx/dt = (demand - x) / tau: the exact step moves the fraction cache[8] of the way to the demand
+        x[S.CURRENT] += f[S.CURRENT] * c[K.CURRENT_LOOP_TAU] * cache[8] - h * f[S.CURRENT]
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        # spool: y = (x - s, v) with the held target s = x + (a + 2 zeta w v) / w^2 follows y+ = Phi y
+        omega, zeta = cache[1], cache[2]
+        position, speed = x[S.SPOOL_POSITION] - h * f[S.SPOOL_POSITION], x[S.SPOOL_SPEED] - h * f[S.SPOOL_SPEED]
+        offset = -(f[S.SPOOL_SPEED] + 2.0 * zeta * omega * speed) / (omega * omega)
+        x[S.SPOOL_POSITION] = position + (cache[4] - 1.0) * offset + cache[5] * speed
+        x[S.SPOOL_SPEED] = cache[6] * offset + cache[7] * speed
+
+
+@numba.njit(cache=True)
 def step(method, t, x, h, c, u, force_table, stiffness_poly, work, refresh, active, pairs):
     """Advance the ``active`` states of ``x`` by one step ``h``; ``refresh`` asks the W-method to
     rebuild its matrix; ``pairs`` are the (position, velocity) pairs of the semi-implicit Euler step."""
@@ -140,6 +244,8 @@ def step(method, t, x, h, c, u, force_table, stiffness_poly, work, refresh, acti
         rk4_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
     elif method == SEMI_IMPLICIT_EULER:
         semi_implicit_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active, pairs)
+    elif method == IMEX_EULER:
+        imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
     else:
         if refresh:
             w_matrix(t, x, h, c, u, force_table, stiffness_poly, work, active)

@@ -4,14 +4,30 @@ The digital controllers are outside: the speed loop's current demand enters as
 a held input (zero-order hold between drive samples).
 """
 
-import numba
+import cmath
+import math
 
-from twin.layout import BALL_GROOVE_FRICTION_CHAPTER5, PNEUMATICS_FULL, PNEUMATICS_IDEAL, K, S, U
+import numba
+import numpy as np
+
+from twin.layout import (
+    BALL_GROOVE_FRICTION_CHAPTER5,
+    PNEUMATICS_FULL,
+    PNEUMATICS_IDEAL,
+    K,
+    S,
+    U,
+)
 from twin.physics import pneumatics as pn
-from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
-from twin.physics.ball_screw import nut_axial_force
+from twin.physics.ball_groove_friction import (
+    friction_generalised_forces,
+    nut_friction_force,
+    nut_friction_slope,
+    tangential_speed,
+)
+from twin.physics.ball_screw import nut_axial_force, nut_axial_tangent
 from twin.physics.coupling import elasto_backlash
-from twin.physics.friction import stribeck_friction
+from twin.physics.friction import stribeck_friction, stribeck_slope
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.physics.preload import preload_force
 from twin.scenes.profiles import profile_value
@@ -329,3 +345,204 @@ def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
         pneumatics_rhs(x, c, u[U.VALVE_COMMAND], external, dxdt)
 
+
+
+# Mechanical degrees of freedom of the linearly implicit integrator. The DOFs coupled to one other only
+# (reducer, piston, nut rolls) come first, so Gaussian elimination in this order creates no fill-in
+# beyond the screw-axial-nuts block, which the contacts make dense anyway.
+DOF_REDUCER, DOF_PISTON, DOF_NUT1_ROLL, DOF_NUT2_ROLL, DOF_NUT1, DOF_NUT2, DOF_AXIAL, DOF_SCREW = range(8)
+N_DOFS = 8
+#: Position state of each DOF; its velocity is the next state (twin.layout.POSITION_VELOCITY_PAIRS).
+DOF_POSITIONS = np.array([S.REDUCER_ANGLE, S.PISTON_POSITION, S.NUT1_ANGLE, S.NUT2_ANGLE, S.NUT1_POSITION,
+                          S.NUT2_POSITION, S.SCREW_AXIAL, S.SCREW_ANGLE], dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def dof_active(c, dof):
+    """Whether mechanical DOF ``dof`` is integrated at the model's fidelity (the others are held)."""
+    if dof == DOF_NUT1_ROLL or dof == DOF_NUT2_ROLL:
+        return c[K.NUT_ROTATION] > 0.5
+    if dof == DOF_PISTON:
+        return int(c[K.PNEUMATICS]) == PNEUMATICS_FULL
+    return True
+
+
+@numba.njit(cache=True)
+def _mass_diagonal(c, matrix):
+    """``M`` on the diagonal of ``matrix`` (inertias of Eqs. 9.3, 9.7, 9.8 and the piston of Eq. 9.11)."""
+    for i in range(N_DOFS):
+        for j in range(N_DOFS):
+            matrix[i, j] = 0.0
+    matrix[DOF_REDUCER, DOF_REDUCER] = c[K.J_MOTOR_SIDE]
+    matrix[DOF_SCREW, DOF_SCREW] = c[K.J_SCREW_SIDE]
+    matrix[DOF_AXIAL, DOF_AXIAL] = c[K.SCREW_MASS]
+    matrix[DOF_NUT1, DOF_NUT1] = c[K.MASS_NUT1]
+    matrix[DOF_NUT1_ROLL, DOF_NUT1_ROLL] = c[K.J_NUT]
+    matrix[DOF_NUT2, DOF_NUT2] = c[K.MASS_NUT2]
+    matrix[DOF_NUT2_ROLL, DOF_NUT2_ROLL] = c[K.J_NUT]
+    matrix[DOF_PISTON, DOF_PISTON] = c[K.PISTON_MASS] if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL else 1.0
+
+
+@numba.njit(cache=True)
+def _add_element(matrix, b, velocity, h, stiffness, damping, i0, g0, i1, g1, i2, g2, i3, g3):
+    """Add one spring-damper along ``g . q`` (up to four DOFs; unused ones with coefficient 0) to the
+    velocity system of :func:`stiff_velocity_system`: ``(h d + h^2 k) g g^T`` and ``-h^2 k (g . v) g``."""
+    weight = h * damping + h * h * stiffness
+    rate = h * h * stiffness * (g0 * velocity[i0] + g1 * velocity[i1] + g2 * velocity[i2] + g3 * velocity[i3])
+    index = (i0, i1, i2, i3)
+    grad = (g0, g1, g2, g3)
+    for a in range(4):
+        b[index[a]] -= rate * grad[a]
+        for e in range(4):
+            matrix[index[a], index[e]] += weight * grad[a] * grad[e]
+
+
+@numba.njit(cache=True)
+def stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity):
+    """The velocity increment system ``(M + h D + h^2 K) dv = h (M a - h K v)`` of one linearly implicit
+    step (:func:`twin.engine.integrators.imex_euler_step`) over the mechanical DOFs (``DOF_*``).
+
+    ``K`` and ``D`` are the analytic tangent stiffness and damping of the stiff elements only, each a
+    rank-one spring-damper ``k g g^T`` along the coordinate ``g . q`` it deforms: the two ball-groove
+    contacts along ``dx_i`` (Eq. 9.5; :func:`twin.physics.ball_screw.nut_axial_tangent`), their
+    helix friction along ``v_t`` (reduced Ch. 5), the screw's axial bearing and shaft (Sec. 9.3), the
+    torsional elasto-backlash, the preload springs, the guides' roll springs, the load cell (Sec. 9.3.1),
+    and on the diagonal the viscous and regularised Coulomb slopes of the Stribeck laws (Eqs. 7.63-7.64).
+    The rest of the model (pneumatic chambers, the varying shaft length, the nuts' friction torques) is
+    explicit. ``f`` holds ``dx/dt`` at ``x`` (:func:`rhs`); ``velocity`` receives the DOF velocities.
+    """
+    _mass_diagonal(c, matrix)
+    for i in range(N_DOFS):
+        position = DOF_POSITIONS[i]
+        if dof_active(c, i):
+            velocity[i] = x[position + 1]
+            b[i] = h * matrix[i, i] * f[position + 1]
+        else:
+            velocity[i] = 0.0
+            b[i] = 0.0
+    rotation = c[K.NUT_ROTATION] > 0.5
+    arm = c[K.LEAD_ARM]
+    roll_arm = arm if rotation else 0.0
+    # ball-groove contacts and their helix friction
+    tangent_arm = c[K.PITCH_RADIUS] * c[K.COS_HELIX]
+    radial_0 = c[K.CENTRE_DISTANCE] * math.cos(c[K.CONTACT_ANGLE_0])
+    axial_0 = c[K.CENTRE_DISTANCE] * math.sin(c[K.CONTACT_ANGLE_0])
+    for nut in range(2):
+        position, roll = (DOF_NUT1, DOF_NUT1_ROLL) if nut == 0 else (DOF_NUT2, DOF_NUT2_ROLL)
+        stiffness, damping, load = nut_axial_tangent(
+            nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
+            c[K.CENTRE_DISTANCE], radial_0, axial_0, stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+            c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
+        if stiffness > 0.0:
+            _add_element(matrix, b, velocity, h, stiffness, damping, DOF_AXIAL, 1.0, DOF_SCREW, arm, roll,
+                         -roll_arm, position, -1.0)
+            if int(c[K.BALL_GROOVE_FRICTION]) == BALL_GROOVE_FRICTION_CHAPTER5:
+                slope = nut_friction_slope(
+                    load, nut_groove_speed(x, c, nut), c[K.LOADED_BALLS], c[K.BALL_RADIUS], c[K.FRICTION_G1],
+                    c[K.FRICTION_G2], c[K.FRICTION_G3], c[K.FRICTION_G4], c[K.FRICTION_G5], c[K.FRICTION_G6],
+                    c[K.ROLLING_K_GC], c[K.ROLLING_K_RF], c[K.ROLLING_F_V1], c[K.ROLLING_THRESHOLD])
+                if slope > 0.0:
+                    _add_element(matrix, b, velocity, h, 0.0, slope, DOF_SCREW, tangent_arm, roll,
+                                 -tangent_arm if rotation else 0.0, DOF_AXIAL, -c[K.SIN_HELIX], position,
+                                 c[K.SIN_HELIX])
+    # torsional elasto-backlash between reducer and screw
+    deflection = x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE]
+    if abs(deflection) > 0.5 * c[K.REDUCER_BACKLASH]:
+        elastic = c[K.TORSION_STIFFNESS] * (abs(deflection) - 0.5 * c[K.REDUCER_BACKLASH])
+        rate = x[S.REDUCER_SPEED] - x[S.SCREW_SPEED]
+        damping = c[K.TORSION_DAMPING] if c[K.TORSION_DAMPING] * abs(rate) < elastic else 0.0
+        _add_element(matrix, b, velocity, h, c[K.TORSION_STIFFNESS], damping, DOF_REDUCER, 1.0, DOF_SCREW, -1.0,
+                     DOF_REDUCER, 0.0, DOF_REDUCER, 0.0)
+    # preload springs between the nuts
+    orientation = c[K.PRELOAD_ORIENTATION]
+    compression = c[K.PRELOAD_COMPRESSION] - orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
+    if compression > 0.0:
+        rate = x[S.NUT2_SPEED] - x[S.NUT1_SPEED]
+        damping = c[K.PRELOAD_DAMPING] if c[K.PRELOAD_DAMPING] * abs(rate) < c[K.PRELOAD_STIFFNESS] * compression \
+            else 0.0
+        _add_element(matrix, b, velocity, h, c[K.PRELOAD_STIFFNESS], damping, DOF_NUT2, 1.0, DOF_NUT1, -1.0,
+                     DOF_NUT1, 0.0, DOF_NUT1, 0.0)
+    # screw axial bearing + shaft; guides' roll springs; load cell
+    axial_stiffness, _ = screw_axial_stiffness(x, c)
+    _add_element(matrix, b, velocity, h, axial_stiffness, c[K.SCREW_AXIAL_DAMPING], DOF_AXIAL, 1.0, DOF_AXIAL, 0.0,
+                 DOF_AXIAL, 0.0, DOF_AXIAL, 0.0)
+    if rotation:
+        for roll in (DOF_NUT1_ROLL, DOF_NUT2_ROLL):
+            _add_element(matrix, b, velocity, h, c[K.GUIDE_ROLL_STIFFNESS], c[K.GUIDE_ROLL_DAMPING], roll, 1.0,
+                         roll, 0.0, roll, 0.0, roll, 0.0)
+    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
+        _add_element(matrix, b, velocity, h, c[K.LOAD_CELL_STIFFNESS], c[K.LOAD_CELL_DAMPING], DOF_PISTON, 1.0,
+                     DOF_NUT1, -1.0, DOF_PISTON, 0.0, DOF_PISTON, 0.0)
+        matrix[DOF_PISTON, DOF_PISTON] += h * (c[K.PISTON_DAMPING] + stribeck_slope(
+            x[S.PISTON_SPEED], c[K.CYLINDER_FRICTION_STATIC], c[K.CYLINDER_FRICTION_DYNAMIC],
+            c[K.CYLINDER_FRICTION_VISCOUS], c[K.CYLINDER_V_THRESHOLD]))
+    # viscous and regularised Coulomb slopes of the supports' friction
+    ratio = c[K.RATIO]
+    matrix[DOF_REDUCER, DOF_REDUCER] += h * (c[K.MOTOR_VISCOUS] * ratio * ratio + stribeck_slope(
+        x[S.REDUCER_SPEED], c[K.MR_FRICTION_STATIC], c[K.MR_FRICTION_DYNAMIC], 0.0, c[K.ANGULAR_V_THRESHOLD]))
+    matrix[DOF_SCREW, DOF_SCREW] += h * (c[K.SCREW_DAMPING] + stribeck_slope(
+        x[S.SCREW_SPEED], c[K.SCREW_FRICTION_STATIC], c[K.SCREW_FRICTION_DYNAMIC], c[K.SCREW_FRICTION_VISCOUS],
+        c[K.ANGULAR_V_THRESHOLD]))
+    guide = (c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC], c[K.GUIDE_FRICTION_VISCOUS])
+    matrix[DOF_NUT1, DOF_NUT1] += h * stribeck_slope(x[S.NUT1_SPEED], guide[0], guide[1], guide[2],
+                                                     c[K.LINEAR_V_THRESHOLD])
+    matrix[DOF_NUT2, DOF_NUT2] += h * c[K.SLAVE_FRICTION_FRACTION] * stribeck_slope(
+        x[S.NUT2_SPEED], guide[0], guide[1], guide[2], c[K.LINEAR_V_THRESHOLD])
+
+
+CURRENT_LOOP_STATES = (S.CURRENT, S.HALL_CURRENT, S.CURRENT_PI)
+
+
+@numba.njit(cache=True)
+def current_loop_jacobian(x, c, current_demand, jacobian):
+    """Jacobian of :func:`drive_electronics_rhs` over ``CURRENT_LOOP_STATES`` (winding current, Hall output,
+    PI integrator) into ``jacobian[:3, :3]``: the loop is linear (Eq. 9.1, the Hall sensor's first-order
+    lag, the analog PI) between the DC-bus limits; on the limit the voltage is constant and only the
+    anti-windup feedback remains. The back-EMF and temperature couplings are left explicit."""
+    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
+    inductance = c[K.INDUCTANCE]
+    saturated = voltage != demand_voltage
+    jacobian[0, 0] = -winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF]) / inductance
+    jacobian[0, 1] = 0.0 if saturated else -c[K.CURRENT_KP] / inductance
+    jacobian[0, 2] = 0.0 if saturated else 1.0 / inductance
+    jacobian[1, 0] = 1.0 / c[K.HALL_TAU]
+    jacobian[1, 1] = -1.0 / c[K.HALL_TAU]
+    jacobian[1, 2] = 0.0
+    jacobian[2, 0] = 0.0
+    jacobian[2, 1] = -c[K.CURRENT_KI] + (c[K.CURRENT_KP] / c[K.CURRENT_AW_TIME] if saturated else 0.0)
+    jacobian[2, 2] = -1.0 / c[K.CURRENT_AW_TIME] if saturated else 0.0
+
+
+@numba.njit(cache=True)
+def held_input_propagators(c, h, cache):
+    """Exact one-step propagators of the two linear blocks driven by a held input: the valve spool
+    (second order, Table B.12: ``x'' = w^2 (s - x) - 2 zeta w x'``) and the ideal current loop's lag.
+
+    ``cache[:8]`` holds ``(h, w, zeta, tau, Phi00, Phi01, Phi10, Phi11)`` and is refreshed only when a key
+    changes: the matrix exponential ``Phi = exp(A h)`` of the spool (Moler & Van Loan, SIAM Review 45, 2003,
+    Method 1 (Lagrange/Sylvester form) for a 2 x 2 matrix, with the double-eigenvalue limit at ``zeta = 1``)
+    and ``cache[8] = 1 - exp(-h / tau)``. Exact under the zero-order hold because the steps divide both
+    controllers' periods; the exponential Euler of Hochbruck & Ostermann (Acta Numerica 19, 2010, Sec. 2.1).
+    """
+    omega = 2.0 * math.pi * c[K.VALVE_FREQUENCY]
+    zeta = c[K.VALVE_DAMPING]
+    tau = c[K.CURRENT_LOOP_TAU]
+    if cache[0] == h and cache[1] == omega and cache[2] == zeta and cache[3] == tau:
+        return
+    cache[0], cache[1], cache[2], cache[3] = h, omega, zeta, tau
+    root = cmath.sqrt(complex(zeta * zeta - 1.0, 0.0)) * omega
+    first, second = -zeta * omega + root, -zeta * omega - root
+    if abs(first - second) > 1e-9 * omega:
+        e1, e2 = cmath.exp(first * h), cmath.exp(second * h)
+        identity_part = ((first * e2 - second * e1) / (first - second)).real
+        a_part = ((e1 - e2) / (first - second)).real
+    else:
+        decay = math.exp(-omega * h)
+        identity_part = decay * (1.0 + omega * h)
+        a_part = decay * h
+    # Phi = identity_part I + a_part A, A = [[0, 1], [-w^2, -2 zeta w]]
+    cache[4] = identity_part
+    cache[5] = a_part
+    cache[6] = -a_part * omega * omega
+    cache[7] = identity_part - 2.0 * zeta * omega * a_part
+    cache[8] = -math.expm1(-h / tau)

@@ -43,6 +43,8 @@ import math
 
 import numba
 
+from twin.physics.friction import sech_squared
+
 #: Exponent of the load dependence of the rolling friction (Eqs. 5.20, 5.22): "an average exponent
 #: ... equal to 0.26" between the low-load ``P^0.2`` and the Gerstner-Coriolis ``P^(1/3)`` laws.
 ROLLING_LOAD_EXPONENT = 0.26
@@ -163,3 +165,24 @@ def catalogue_drag_torque(lead: float, preload: float, helix_angle: float) -> fl
     ``T_drag0 = 0.05 p F_pr / (2 pi sqrt(tan(alpha_e)))``; linear in the preload.
     """
     return 0.05 * lead * preload / (2.0 * math.pi * math.sqrt(math.tan(helix_angle)))
+
+
+@numba.njit(cache=True)
+def nut_friction_slope(normal_load, tangential_speed, loaded_balls, ball_radius, g1, g2, g3, g4, g5, g6,
+                       k_gc, k_rf, f_v1, rolling_threshold):
+    """Stiff part of ``dF_t/dv_t`` of :func:`nut_friction_force` [N s/m], load held, floored at zero (same
+    arguments): the slopes of the ``tanh`` terms, exactly zero away from a reversal.
+
+    The viscous ``g6`` and the speed dependence of the rolling coefficient are left out (not stiff) and the
+    Stribeck decay may make the exact slope negative: the linearly implicit integrators use this only for the stability
+    of sticking (a W-method is consistent for any matrix; Hairer & Wanner, *Solving ODEs II*, Sec. IV.7).
+    """
+    if normal_load <= 0.0:
+        return 0.0
+    v = tangential_speed
+    slope = g1 * (g2 * sech_squared(g2 * v) - g3 * sech_squared(g3 * v)) + g4 * g5 * sech_squared(g5 * v)
+    rolling_direction = sech_squared(v / rolling_threshold)
+    if rolling_direction > 0.0:  # the load's power law only near a reversal
+        slope += (rolling_coefficient(normal_load, 0.5 * v / ball_radius, k_gc, k_rf, f_v1, ball_radius)
+                  * rolling_direction / rolling_threshold)
+    return max(2.0 * loaded_balls * normal_load * slope, 0.0)

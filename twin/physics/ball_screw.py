@@ -152,3 +152,59 @@ def groove_centre_distance(ball_radius: float, conformity: float) -> float:
 def helix_angle(lead: float, pitch_radius: float) -> float:
     """Helix angle ``alpha_e = atan(p / (2 pi r_m))`` [rad] (5.68 deg for Table 7.5, as listed there)."""
     return math.atan(lead / (2.0 * math.pi * pitch_radius))
+
+
+@numba.njit(cache=True)
+def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix, centre_distance, radial_0, axial_0,
+                      stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h, loaded_balls, contact_model,
+                      linear_stiffness):
+    """Tangent stiffness ``dF/d(dx)`` [N/m] and damping ``dF/d(dx')`` [N s/m] of :func:`nut_axial_force`.
+
+    Same arguments as :func:`nut_axial_force`, but the design contact angle as ``radial_0 = A0 cos(alpha_0)``
+    and ``axial_0 = A0 sin(alpha_0)`` (computed once for both nuts). The linearly implicit integrators
+    need these only for stability (a W-method is consistent for any matrix: Hairer & Wanner, *Solving
+    ODEs II*, Sec. IV.7), so the variation of ``K(alpha)`` with the angle is left out. With
+    ``F = Z P sin(alpha) cos(alpha_e)`` and ``delta_a = (|dx| - b/2) cos(alpha_e)``:
+
+        dF/d(dx) = Z cos(alpha_e)^2 [dP/d(delta_a) sin(alpha) + P d(sin alpha)/d(delta_a)],
+
+    with ``dP/d(delta_a) = 1.5 K sqrt(delta_n) sin(alpha)`` (Hertz, Eq. 7.28, and
+    ``d(delta_n)/d(delta_a) = sin(alpha)``, module docstring) and, for the variable angle of Eq. 9.4,
+    ``d(sin alpha)/d(delta_a) = cos(alpha)^2 / A`` where ``A`` is the current distance of the curvature
+    centres (the geometric stiffening of the contact). The damping of Eq. 7.29 adds
+    ``Z cos(alpha_e)^2 sin(alpha)^2 C_H`` while it is not saturated.
+
+    Returns
+    -------
+    (stiffness, damping, elastic_load)
+        All zero in the backlash gap; ``elastic_load`` is the elastic part of the per-sphere normal load ``P``.
+    """
+    gap = abs(relative_position) - 0.5 * backlash
+    if gap <= 0.0:
+        return 0.0, 0.0, 0.0
+    delta_a = gap * cos_helix
+    geometric = 0.0
+    if contact_model == 1:
+        axial = axial_0 + delta_a
+        distance = math.sqrt(radial_0 * radial_0 + axial * axial)
+        delta_n = distance - centre_distance
+        sin_alpha = axial / distance
+        geometric = radial_0 * radial_0 / (distance * distance * distance)
+    else:
+        sin_alpha = axial_0 / centre_distance
+        delta_n = delta_a * sin_alpha
+    stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
+    if contact_model == 2:
+        elastic = linear_stiffness * delta_n
+        normal_stiffness = linear_stiffness
+    else:
+        root = math.sqrt(delta_n)
+        elastic = stiffness * delta_n * root
+        normal_stiffness = 1.5 * stiffness * root
+    scale = loaded_balls * cos_helix * cos_helix
+    damping_coefficient_h = damping_coefficient(damping_b_h, stiffness)
+    approach_rate = relative_velocity * cos_helix * sin_alpha
+    damping = 0.0
+    if damping_coefficient_h * abs(approach_rate) < elastic:
+        damping = scale * sin_alpha * sin_alpha * damping_coefficient_h
+    return scale * (normal_stiffness * sin_alpha * sin_alpha + elastic * geometric), damping, elastic

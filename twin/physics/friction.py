@@ -35,3 +35,28 @@ def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
     """
     coulomb = dynamic + (static - dynamic) * math.exp(-stribeck_rate * abs(v))
     return coulomb * math.tanh(v / v_threshold) + viscous * v
+
+
+@numba.njit(cache=True)
+def stribeck_slope(v, static, dynamic, viscous, v_threshold):
+    """Dissipative part of ``d/dv`` of :func:`stribeck_friction` [N s/m or N m s/rad], >= 0.
+
+    ``F_c(v) (1 - tanh^2(v / v_th)) / v_th + b`` with ``F_c`` the Stribeck level ``F_s`` at rest, taken
+    here as ``max(F_s, F_d)``: the regularised Coulomb slope, the stiffest term near a velocity reversal.
+    The Stribeck decay (a negative slope) is left out: the linearly implicit integrators use this only
+    to keep sticking friction stable (a W-method is consistent for any matrix, Hairer & Wanner,
+    *Solving ODEs II*, Sec. IV.7), and a negative damping would weaken that.
+    """
+    return max(static, dynamic) * sech_squared(v / v_threshold) / v_threshold + viscous
+
+
+SECH_SQUARED_CUTOFF = 20.0  # |z| beyond which 1 - tanh(z)^2 < 1.7e-17: zero, without calling tanh
+
+
+@numba.njit(cache=True)
+def sech_squared(z):
+    """``1 - tanh(z)^2``, the slope of the ``tanh`` regularisation; exactly 0 for ``|z| > SECH_SQUARED_CUTOFF``
+    (the sliding speeds of most steps), which saves the ``tanh`` call."""
+    if abs(z) > SECH_SQUARED_CUTOFF:
+        return 0.0
+    return 1.0 - math.tanh(z) ** 2
