@@ -14,10 +14,26 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-from scipy.stats import ks_2samp, t
+from scipy.stats import chi2, ks_2samp, t
 
 #: Fewest paired runs for a verdict on a mean shift: a sample standard deviation needs two.
 MIN_PAIRS = 2
+
+
+def _paired_figures(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
+    """The figures of one data set's paired runs; NaN where too few runs define them (no run: all; one: the spreads)."""
+    nan = math.nan
+    n = a.size
+    ks = ks_2samp(a, b) if n else None
+    return {
+        "n": n,
+        "mean_shift": float(np.mean(a) - np.mean(b)) if n else nan,
+        "sigma_shift": float(np.std(a, ddof=1) - np.std(b, ddof=1)) if n > 1 else nan,
+        "max_paired_difference": float(np.max(np.abs(a - b))) if n else nan,
+        "ks_distance": float(ks.statistic) if n else nan,
+        "ks_pvalue": float(ks.pvalue) if n else nan,
+        "sampling_error": float(1.96 * np.std(b, ddof=1) / np.sqrt(n)) if n > 1 else nan,
+    }
 
 
 def compare_features(candidate: xr.Dataset, reference: xr.Dataset, feature: str = "backlash_feature") -> xr.Dataset:
@@ -27,16 +43,7 @@ def compare_features(candidate: xr.Dataset, reference: xr.Dataset, feature: str 
         both = (candidate.status.sel(dataset=name) == "ok") & (reference.status.sel(dataset=name) == "ok")
         a = candidate[feature].sel(dataset=name).where(both, drop=True).values
         b = reference[feature].sel(dataset=name).where(both, drop=True).values
-        ks = ks_2samp(a, b)
-        rows.append({
-            "n": a.size,
-            "mean_shift": float(np.mean(a) - np.mean(b)),
-            "sigma_shift": float(np.std(a, ddof=1) - np.std(b, ddof=1)),
-            "max_paired_difference": float(np.max(np.abs(a - b))),
-            "ks_distance": float(ks.statistic),
-            "ks_pvalue": float(ks.pvalue),
-            "sampling_error": float(1.96 * np.std(b, ddof=1) / np.sqrt(b.size)),
-        })
+        rows.append(_paired_figures(a, b))
     data = {key: ("dataset", [r[key] for r in rows]) for key in rows[0]}
     ds = xr.Dataset(data, coords={"dataset": candidate.dataset.values})
     for key in ("mean_shift", "sigma_shift", "max_paired_difference", "sampling_error"):
@@ -46,6 +53,34 @@ def compare_features(candidate: xr.Dataset, reference: xr.Dataset, feature: str 
 
 #: The verdicts of :func:`reference_verdict` and :func:`paired_shift_verdict`.
 VERDICTS = ("met", "not met", "undetermined", "insufficient data")
+
+
+def ensemble_spread(values, confidence: float = 0.95) -> dict[str, float]:
+    """Spread of an ensemble of runs that should agree: ``n``, ``mean``, ``min``, ``max``, ``range`` (max - min),
+    the sample standard deviation ``std`` and its chi-square interval ``std_lower``/``std_upper`` at
+    ``confidence`` (exact for normal members; the range is the distribution-free figure). Non-finite values
+    (failed runs) are left out."""
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    n = int(x.size)
+    if n < 2:
+        nan = math.nan
+        return {"n": n, "mean": float(x.mean()) if n else nan, "min": float(x.min()) if n else nan,
+                "max": float(x.max()) if n else nan, "range": nan, "std": nan, "std_lower": nan, "std_upper": nan}
+    std = float(x.std(ddof=1))
+    alpha = 1 - confidence
+    return {"n": n, "mean": float(x.mean()), "min": float(x.min()), "max": float(x.max()),
+            "range": float(x.max() - x.min()), "std": std,
+            "std_lower": std * math.sqrt((n - 1) / chi2.ppf(1 - alpha / 2, n - 1)),
+            "std_upper": std * math.sqrt((n - 1) / chi2.ppf(alpha / 2, n - 1))}
+
+
+def worst_verdict(verdicts) -> str:
+    """The verdict of several together: ``not met`` if any is, then ``undetermined``, then ``insufficient data``;
+    ``met`` only if every one is (and there is at least one)."""
+    found = set(verdicts)
+    return next((v for v in ("not met", "undetermined", "insufficient data") if v in found),
+                "met" if found else "insufficient data")
 
 
 @dataclass(frozen=True)
@@ -61,7 +96,7 @@ class Verdict:
 
 
 def _um(value: float) -> str:
-    return f"{value * 1e6:.4f} um"
+    return f"{value * 1e6:.4f} µm"
 
 
 def reference_verdict(candidate: float, references, target: float) -> Verdict:
@@ -140,6 +175,6 @@ def paired_shift_verdict(differences, tolerance: float, floor: float = 0.0, *, c
         verdict = "undetermined"
     floor_text = f"numerical floor {_um(floor)}" if floor > 0 else "numerical floor not measured"
     return Verdict(verdict, mean, lower, upper, n,
-                   f"{verdict}: mean shift {mean * 1e6:+.4f} um ({confidence * 100:g} % t interval "
-                   f"{lower * 1e6:+.4f} to {upper * 1e6:+.4f} um, n = {n}); tolerance {_um(tolerance)}, "
+                   f"{verdict}: mean shift {mean * 1e6:+.4f} µm ({confidence * 100:g} % t interval "
+                   f"{lower * 1e6:+.4f} to {upper * 1e6:+.4f} µm, n = {n}); tolerance {_um(tolerance)}, "
                    f"{floor_text}")

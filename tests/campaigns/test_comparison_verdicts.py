@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from campaigns.comparison import paired_shift_verdict, reference_verdict
+from campaigns.comparison import ensemble_spread, paired_shift_verdict, reference_verdict, worst_verdict
 
 UM = 1e-6
 TARGET = 0.1 * UM
@@ -69,7 +69,7 @@ def test_paired_shift_interval_is_students_t():
 def test_paired_shift_known_answers(mean, sd, n, floor, verdict):
     found = paired_shift_verdict(_shifts(mean, sd, n), TARGET, floor)
     assert found.verdict == verdict
-    assert found.statement.startswith(f"{verdict}: mean shift {mean * 1e6:+.4f} um") and f"n = {n}" in found.statement
+    assert found.statement.startswith(f"{verdict}: mean shift {mean * 1e6:+.4f} µm") and f"n = {n}" in found.statement
     assert ("numerical floor not measured" in found.statement) == (floor == 0)
 
 
@@ -83,3 +83,27 @@ def test_paired_shift_with_too_few_pairs_is_insufficient_data(differences):
 def test_identical_runs_meet_the_tolerance():
     """auto bit-identical to full on every run: a zero-width interval at 0."""
     assert paired_shift_verdict(np.zeros(5), TARGET).verdict == "met"
+
+
+@pytest.mark.parametrize(("verdicts", "worst"), [
+    (["met", "met"], "met"),
+    (["met", "undetermined", "insufficient data"], "undetermined"),
+    (["met", "insufficient data"], "insufficient data"),
+    (["undetermined", "not met", "met"], "not met"),
+    ([], "insufficient data"),
+])
+def test_worst_verdict(verdicts, worst):
+    assert worst_verdict(verdicts) == worst
+
+
+def test_ensemble_spread_chi_square_interval_covers_the_true_sigma():
+    """Known answer: 10 members, interval sigma * sqrt(9 / chi2 quantiles); over many normal ensembles the 95 %
+    interval holds the true sigma in 95 % of them (binomial 3-sigma band for 2000 trials: 0.935-0.965)."""
+    spread = ensemble_spread([1.0, 2.0, 3.0, 4.0, math.nan])
+    assert spread["n"] == 4 and spread["range"] == 3.0 and spread["std"] == pytest.approx(np.std([1, 2, 3, 4], ddof=1))
+    assert spread["std_upper"] == pytest.approx(spread["std"] * math.sqrt(3 / stats.chi2.ppf(0.025, 3)))
+    rng = np.random.default_rng(11)
+    covered = [s["std_lower"] <= 0.1 <= s["std_upper"]
+               for s in (ensemble_spread(rng.normal(0, 0.1, 10)) for _ in range(2000))]
+    assert 0.935 <= np.mean(covered) <= 0.965
+    assert math.isnan(ensemble_spread([1.0])["std"])
