@@ -26,9 +26,6 @@ from campaigns.comparison import ensemble_spread, reference_verdict
 from campaigns.reference_ensemble import REFERENCE_STEPS, reference_ensemble
 
 FEATURES = ("backlash_feature", "backlash_feature_true", "backlash_hysteresis", "backlash_hysteresis_true")
-#: Backlash changes [m] of the perturbed members; only upward where the scene's backlash is 0 (it cannot be negative).
-PERTURBATIONS = (1e-12, -1e-12, 3e-12, -3e-12)
-PERTURBATIONS_AT_ZERO = (1e-12, 2e-12, 3e-12, 4e-12)
 
 
 def main() -> None:
@@ -45,9 +42,7 @@ def main() -> None:
     toml = []
     for name in datasets:
         scene = twin.load_scene(name)
-        perturbations = () if args.quick else PERTURBATIONS if scene.condition("backlash") > 0 else \
-            PERTURBATIONS_AT_ZERO
-        ensemble, _ = reference_ensemble(scene, params, steps=steps, gap_perturbations=perturbations,
+        ensemble, _ = reference_ensemble(scene, params, steps=steps, gap_perturbations=() if args.quick else None,
                                          features=FEATURES, outputs=THESIS_OUTPUTS, duration=duration)
         default = twin.simulate(scene, params, outputs=THESIS_OUTPUTS, duration=duration, throw=False)
         print(f"\n{name} (load average {os.getloadavg()[0]:.1f}); members: {', '.join(ensemble.member.values)}")

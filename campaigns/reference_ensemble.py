@@ -21,13 +21,15 @@ import twin
 #: RK4 steps [s] that divide the 125 us drive period and lie on the converged side of the step study
 #: (RK4 converges at order ~5 down to 16 us, docs/accuracy.md); 7.8125 us is the historical single reference.
 REFERENCE_STEPS = (3.90625e-6, 5.0e-6, 6.25e-6, 7.8125e-6, 12.5e-6, 15.625e-6)
-#: The ensemble of the benchmark (benchmarks/single_run.py): the four cheapest of REFERENCE_STEPS.
-BENCHMARK_STEPS = (6.25e-6, 7.8125e-6, 12.5e-6, 15.625e-6)
+#: Backlash changes [m] of the perturbed members: picometres, far below any tolerance or physical effect.
+GAP_PERTURBATIONS = (1e-12, -1e-12, 3e-12, -3e-12)
+#: The same where the scene's backlash is 0: upward only (a backlash cannot be negative).
+GAP_PERTURBATIONS_AT_ZERO = (1e-12, 2e-12, 3e-12, 4e-12)
 FEATURES = ("backlash_feature", "backlash_feature_true")
 
 
 def reference_ensemble(scene: str | twin.Scene, params: twin.ParameterSet | None = None, *,
-                       steps: Sequence[float] = REFERENCE_STEPS, gap_perturbations: Sequence[float] = (),
+                       steps: Sequence[float] = REFERENCE_STEPS, gap_perturbations: Sequence[float] | None = None,
                        perturbed_step: float = 7.8125e-6, features: Sequence[str] = FEATURES,
                        keep_runs: bool = False, **options) -> tuple[xr.Dataset, list[xr.Dataset]]:
     """Run the ensemble of one scene.
@@ -39,7 +41,8 @@ def reference_ensemble(scene: str | twin.Scene, params: twin.ParameterSet | None
     steps
         RK4 steps [s], one member each.
     gap_perturbations
-        Changes of the scene's ``backlash`` condition [m] (e.g. 1e-12), one member each, at ``perturbed_step``.
+        Changes of the scene's ``backlash`` condition [m], one member each, at ``perturbed_step``; None:
+        :data:`GAP_PERTURBATIONS` (:data:`GAP_PERTURBATIONS_AT_ZERO` where the backlash is 0).
     features
         Scalar features to collect.
     keep_runs
@@ -54,6 +57,8 @@ def reference_ensemble(scene: str | twin.Scene, params: twin.ParameterSet | None
         and ``wall_time`` (the solver loop alone)), and the members' results if ``keep_runs`` (else an empty list).
     """
     scene = twin.load_scene(scene)
+    if gap_perturbations is None:
+        gap_perturbations = GAP_PERTURBATIONS if scene.condition("backlash") > 0 else GAP_PERTURBATIONS_AT_ZERO
     members = [(dt, 0.0) for dt in steps] + [(perturbed_step, delta) for delta in gap_perturbations]
     values = np.full((len(members), len(features)), np.nan)
     status, wall, runs = [], [], []
