@@ -7,7 +7,7 @@ same noise (run ``i`` of data set ``d`` has the same seeds in both), and judges,
 and feature, the paired mean shift auto - full (:func:`campaigns.comparison.paired_shift_verdict`):
 ``met`` when its 95 % Student-t interval lies within :data:`MEAN_SHIFT_TOLERANCE`, ``not met`` when
 it lies beyond the tolerance plus the scene's numerical sensitivity floor (a shift that tight runs
-differing only in their step also show is not attributable to the fidelity reduction;
+differing only in their step or by picometres also show is not attributable to the fidelity reduction;
 ``campaigns/numerical_floor.toml``), ``undetermined`` otherwise, ``insufficient data`` below two
 paired runs. The largest paired difference, the Monte Carlo error of the mean
 (``1.96 sigma / sqrt(N)``) and the KS p-value are reported beside it (the KS test is no part of the
@@ -33,7 +33,7 @@ from campaigns.storage import atomic_write
 from twin.scenes import list_scenes, load_scene
 
 MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the bench must detect (Table 9.3)
-#: Per built-in scene and feature, the spread of tight runs that differ only in their step [m]
+#: Per built-in scene and feature, the spread of tight runs that differ only in their step or by picometres [m]
 #: (benchmarks/numerical_floor.py; docs/accuracy.md, "What the tight reference can and cannot tell").
 NUMERICAL_FLOOR_FILE = Path(__file__).with_name("numerical_floor.toml")
 
@@ -128,8 +128,8 @@ def summary_attrs(audit: xr.Dataset) -> dict[str, str]:
         for feature in audit.feature.values:
             row = audit.sel(dataset=name, feature=feature)
             lines.append(f"{feature}: {row.statement.item()}; max paired "
-                         f"{float(row.max_paired_difference) * 1e6:.4f} um, MC error "
-                         f"{float(row.sampling_error) * 1e6:.4f} um, KS p {float(row.ks_pvalue):.2f}")
+                         f"{float(row.max_paired_difference) * 1e6:.4f} µm, MC error "
+                         f"{float(row.sampling_error) * 1e6:.4f} µm, KS p {float(row.ks_pvalue):.2f}")
         speedup = float(audit.speedup.sel(dataset=name))
         attrs[f"fidelity_audit_{name}"] = f"speedup x{speedup:.2f}; " + " | ".join(lines)
     attrs["fidelity_audit"] = audit.attrs["verdict"]

@@ -10,7 +10,7 @@ from reports.model import Callout, Paragraph
 #: One feature's part of a ``fidelity_audit_<data set>`` attribute (campaigns.fidelity_audit.summary_attrs; the
 #: features are separated by " | "): its verdict statement, shown verbatim, then the descriptive figures.
 _AUDIT_LINE = re.compile(r"^(?P<feature>\w+): (?P<statement>(met|not met|undetermined|insufficient data): .+); "
-                         r"max paired (?P<paired>[-+0-9.e]+|nan) um, MC error (?P<error>[-+0-9.e]+|nan) um, "
+                         r"max paired (?P<paired>[-+0-9.e]+|nan) µm, MC error (?P<error>[-+0-9.e]+|nan) µm, "
                          r"KS p (?P<p>[-+0-9.e]+|nan)$")
 
 
@@ -34,8 +34,8 @@ def build(b: Builder):
         + "runs of every data set at full fidelity with the same parameters and noise and judges each feature's "
         "paired mean shift (automatic minus full) by its 95 % Student-t interval: met when the interval lies within "
         "the tolerance, not met when it lies beyond the tolerance plus the scene's numerical floor (the spread of "
-        "tight runs that differ only in their step, which no fidelity reduction can be blamed for), undetermined "
-        "otherwise, insufficient data below two paired runs."
+        "tight runs that differ only in their step or by picometres of backlash, which no fidelity reduction can be "
+        "blamed for), undetermined otherwise, insufficient data below two paired runs."
     )
     yield Callout(f"Audit result: {audit}.", statement_tone(audit))
     configured = [(d, attrs.pop(f"fidelity_{d}")) for d in b.datasets if f"fidelity_{d}" in attrs]

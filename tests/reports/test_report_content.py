@@ -87,8 +87,8 @@ def extended(campaign, tmp_path_factory):
               for name, (unit, values) in BENCH_TRACES.items()}
     results = results.assign(traces).assign_attrs(
         fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="met",
-        fidelity_audit_ds2=f"speedup x0.73; backlash_feature: {_MET}; max paired 0.0257 um, MC error 0.0862 um, KS p "
-                           f"1.00 | backlash_feature_true: {_UNDETERMINED}; max paired 0.3 um, MC error 0.1 um, KS p "
+        fidelity_audit_ds2=f"speedup x0.73; backlash_feature: {_MET}; max paired 0.0257 µm, MC error 0.0862 µm, KS p "
+                           f"1.00 | backlash_feature_true: {_UNDETERMINED}; max paired 0.3 µm, MC error 0.1 µm, KS p "
                            "0.50",  # the format of campaigns.fidelity_audit.summary_attrs
     )
     return build(dataclasses.replace(inputs, results=results), "T")
