@@ -5,6 +5,11 @@ the automatic fidelity against the full model, :mod:`campaigns.fidelity_audit`) 
 so run i of a data set has the same parameters and the same noise under both. The shift of the mean and of
 the standard deviation, the largest paired difference and the Kolmogorov-Smirnov distance are set against
 the Monte Carlo sampling error of the mean, ``1.96 sigma / sqrt(N)``.
+
+The verdicts (met / not met / undetermined / insufficient data), each with its bounds, n and the one sentence
+every output prints: :func:`paired_shift_verdict` (a paired mean shift against a tolerance and a scene's
+numerical floor: the fidelity audit) and :func:`reference_verdict` (one run against an ensemble of tight
+references: ``benchmarks/single_run.py``); :func:`ensemble_spread` is the spread of such an ensemble.
 """
 
 from __future__ import annotations
