@@ -54,8 +54,8 @@ def main() -> None:
         sim = simulation_speedup(name, 1 if args.quick else 3)
         for feature in audit.feature.values:
             row = audit.sel(dataset=name, feature=feature)
-            print(f"{name:4s} {feature:24s} {float(row.max_paired_difference) * 1e6:9.4f}um "
-                  f"{float(row.sampling_error) * 1e6:7.4f}um {float(row.ks_pvalue):5.2f}  {row.statement.item()}")
+            print(f"{name:4s} {feature:24s} {float(row.max_paired_difference) * 1e6:9.4f}µm "
+                  f"{float(row.sampling_error) * 1e6:7.4f}µm {float(row.ks_pvalue):5.2f}  {row.statement.item()}")
         print(f"     speedup campaign x{float(audit.speedup.sel(dataset=name)):.2f}, simulation x{sim:.2f}; "
               f"auto: {audit.attrs['fidelity_auto']}  ({time.perf_counter() - start:.0f} s)", flush=True)
 
