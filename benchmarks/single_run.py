@@ -9,11 +9,16 @@ do not, so the load average is printed with them):
    reference path and python-control's ``input_output_response`` (on the open-loop plant, the part of
    the model it can represent: ``app.studies.control_baseline``), as CPU per simulated second, the
    ratio to the default and the error of the Eq. 9.12 feature against a tight reference (RK4 at
-   7.8125 us, converged to ~1e-4 um: docs/accuracy.md);
+   7.8125 us; on the nominal scene the converged RK4 steps agree within 0.006 um: docs/accuracy.md);
 3. the Eq. 9.12 feature error of the default on every thesis data set (ds1-ds7, at the thesis
-   campaign's fidelity) against the same reference, with the 0.1 um target.
+   campaign's fidelity, 10 s) against a reference *ensemble* of ten tight runs: RK4 at six converged
+   steps and at 7.8125 us with the backlash moved by picometres (campaigns.reference_ensemble). On the data
+   sets without preload the tight runs themselves disagree by up to ~0.4 um (the numerical sensitivity floor,
+   docs/accuracy.md), so one tight run is no reference there; the verdict per data set and feature
+   (campaigns.comparison.reference_verdict) is met when even the farthest reference is within 0.1 um, not met
+   when even the nearest is beyond it, and undetermined otherwise.
 
-Usage: python benchmarks/single_run.py [--repeats N] [--quick]
+Usage: python benchmarks/single_run.py [--repeats N] [--quick]   (--quick: 0.5 s per data set, two references)
 """
 
 from __future__ import annotations
@@ -25,11 +30,13 @@ import time
 from machine import header
 
 import twin
+from campaigns.comparison import VERDICTS, reference_verdict, worst_verdict
+from campaigns.reference_ensemble import REFERENCE_STEPS, reference_ensemble
 from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR
 
 SINGLE_RUN_TARGET = 0.1        # s of CPU for the 10 s nominal scene (issue 16)
 FEATURE_TARGET = 0.1e-6        # m: the feature within 0.1 um of the tight reference on every data set
-REFERENCE = ("rk4", 7.8125e-6)  # tight reference (docs/accuracy.md: converged far below the target)
+REFERENCE = ("rk4", 7.8125e-6)  # the nominal scene's tight reference (docs/accuracy.md)
 PATHS = ((DEFAULT_INTEGRATOR, DEFAULT_DT), ("imex_euler", 1.25e-4), ("rk4", 3.125e-5),
          ("semi_implicit_euler", 3.125e-5), ("rosenbrock_w2", 6.25e-5))
 SCIPY_PATH = ("scipy_lsoda", 1e-8)  # the reference path at the tolerance that matches the default's accuracy
@@ -55,7 +62,8 @@ def feature_errors(ds, reference) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--quick", action="store_true", help="1 s of the scene, 0.5 s per data set (seconds)")
+    parser.add_argument("--quick", action="store_true",
+                        help="1 s of the scene, 0.5 s per data set against two references (seconds)")
     args = parser.parse_args()
     duration = 1.0 if args.quick else None
     dataset_duration = 0.5 if args.quick else None
@@ -107,20 +115,37 @@ def main() -> None:
         print(f"  {row['method']:52s} {row['wall_time']:9.4f} s  x{row['wall_time'] / compiled['wall_time']:8.1f} "
               f"vs compiled rk4; error {row['error'] * 1e6:.2e} um")
 
-    print(f"\n3. Eq. 9.12 feature error of the default per thesis data set (thesis campaign fidelity"
-          f"{f', {dataset_duration:g} s' if dataset_duration else ', 10 s'}) against {REFERENCE[0]} at "
-          f"{REFERENCE[1] * 1e6:g} us; target < {FEATURE_TARGET * 1e6:g} um")
-    print(f"{'data set':9s} {'CPU [s]':>8s} {'f_b [um]':>10s} {'|err f_b| um':>13s} {'|err f_b,true| um':>18s}")
-    worst = 0.0
+    # quick: two steps and no perturbed member (seconds; checks the pipeline, not the target)
+    dataset_features(params, dataset_duration, {"steps": REFERENCE_STEPS[3::2], "gap_perturbations": ()}
+                     if args.quick else {})
+
+
+def dataset_features(params, duration: float | None, ensemble_options: dict) -> None:
+    """Section 3: per thesis data set, the default's feature against the reference ensemble, with the verdict."""
+    print(f"\n3. Eq. 9.12 feature error of the default per thesis data set (thesis campaign fidelity, "
+          f"{duration or 10:g} s) against a reference ensemble of tight runs (campaigns.reference_ensemble); "
+          f"target {FEATURE_TARGET * 1e6:g} um. Error bounds: the nearest and the farthest reference (rk4 at several "
+          "steps, and with the backlash moved by picometres)."
+          + (" Short runs: a check of the pipeline, the target is judged at 10 s." if duration else ""))
+    verdicts = {}
     for name in THESIS_DATASETS:
-        options = {"outputs": THESIS_OUTPUTS, "duration": dataset_duration}
+        options = {"outputs": THESIS_OUTPUTS, "duration": duration}
         cost, ds = cpu_run(name, params, **options)
-        _, ref = cpu_run(name, params, integrator=REFERENCE[0], dt=REFERENCE[1], **options)
-        errors = feature_errors(ds, ref)
-        worst = max(worst, *errors.values())
-        print(f"{name:9s} {cost:8.3f} {float(ds[FEATURES[0]]) * 1e6:10.4f} {errors[FEATURES[0]] * 1e6:13.5f} "
-              f"{errors[FEATURES[1]] * 1e6:18.5f}")
-    print(f"largest feature error {worst * 1e6:.4f} um: target {'met' if worst < FEATURE_TARGET else 'not met'}")
+        ensemble, _ = reference_ensemble(name, params, **ensemble_options, **options)
+        values = ensemble[FEATURES[0]]
+        print(f"{name}: default {cost:.3f} s CPU, f_b {float(ds[FEATURES[0]]) * 1e6:.4f} um; "
+              f"{ensemble.sizes['member']} references: "
+              f"{float(values.min()) * 1e6:.4f} to {float(values.max()) * 1e6:.4f} um")
+        for feature in FEATURES:
+            candidate = float(ds[feature]) if ds.attrs["status"] == "ok" else float("nan")
+            verdicts[name, feature] = reference_verdict(candidate, ensemble[feature].values, FEATURE_TARGET)
+            print(f"    {feature:22s} {verdicts[name, feature].statement}")
+    overall = worst_verdict(v.verdict for v in verdicts.values())
+    print(f"feature within {FEATURE_TARGET * 1e6:g} um of the tight reference on every thesis data set: {overall}")
+    for verdict in VERDICTS:
+        cells = [f"{d}/{f}" for (d, f), v in verdicts.items() if v.verdict == verdict]
+        if cells:
+            print(f"    {verdict}: {', '.join(cells)}")
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from campaigns.analysis import BACKLASH_REQUIREMENT
-from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder
+from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder, statement_tone
 from reports.model import Callout, Paragraph
 from reports.sections.correlations import rank_order
 from reports.units import number, quantity
@@ -149,5 +149,5 @@ def build(b: Builder):
                   "bad" if n_failed else "good", "failures")
     yield control_robustness(a)
     audit = str(results.attrs.get("fidelity_audit", "not recorded in results.nc"))
-    tone = "good" if audit.startswith("passed") else "bad" if audit.startswith("FLAGGED") else "info"
-    yield Callout(f"Fidelity audit (automatic model simplification against full fidelity): {audit}.", tone, "fidelity")
+    yield Callout(f"Fidelity audit (automatic model simplification against full fidelity): {audit}.",
+                  statement_tone(audit), "fidelity")

@@ -82,15 +82,21 @@ def test_campaign_records_fidelity_and_its_audit(tmp_path):
         '[[datasets]]\nname = "ds4"\nscene = "ds4"\nconditions = { backlash = 0.0, preload = 0.0 }\n'
     )
     results = campaigns.run_campaign(campaigns.load_spec(path), tmp_path / "out", workers=1, progress=False)
+    with xr.open_dataset(tmp_path / "out" / "fidelity_audit" / "fidelity_audit.nc") as audit:
+        audit = audit.load()
+    assert audit.attrs["runs"] == 2
+    assert float(np.abs(audit.mean_shift).max()) < 0.1e-6
+    # ds4 conditions as its scene's: the measured floor applies
+    assert float(audit.numerical_floor.sel(dataset="ds4", feature="backlash_feature")) > 0
     with xr.open_dataset(results) as ds:
         assert ds.attrs["fidelity_requested"] == '"auto"'
         assert "current_loop=ideal" in ds.attrs["fidelity_ds4"] and "encoders=full" in ds.attrs["fidelity_ds4"]
         assert ds.attrs["fidelity_audit_runs"] == "2"
         assert ds.attrs["fidelity_audit_ds4"].startswith("speedup x")
-        assert "backlash_feature: mean shift" in ds.attrs["fidelity_audit_ds4"]
-    with xr.open_dataset(tmp_path / "out" / "fidelity_audit" / "fidelity_audit.nc") as audit:
-        assert audit.attrs["runs"] == 2
-        assert float(np.abs(audit.mean_shift).max()) < 0.1e-6
+        for feature in audit.feature.values:  # each feature's verdict statement, verbatim
+            statement = audit.statement.sel(dataset="ds4", feature=feature).item()
+            assert f"{feature}: {statement}; max paired" in ds.attrs["fidelity_audit_ds4"]
+        assert ds.attrs["fidelity_audit"] == audit.attrs["verdict"]
 
 
 def test_spec_fidelity_is_validated(tmp_path):

@@ -13,6 +13,12 @@ from reports.inputs import load_inputs
 from reports.model import Callout, Figure, Paragraph, Table
 from reports.units import display_scale, quantity
 
+#: Audit statements as campaigns.comparison.paired_shift_verdict words them (the report shows them verbatim).
+_MET = ("met: mean shift +0.0018 µm (95 % t interval -0.0100 to +0.0136 µm, n = 10); tolerance 0.1000 µm, "
+        "numerical floor 0.3700 µm")
+_UNDETERMINED = ("undetermined: mean shift -0.1020 µm (95 % t interval -0.2000 to -0.0040 µm, n = 10); tolerance "
+                 "0.1000 µm, numerical floor not measured")
+
 
 def _section(report, key):
     return next(s for s in report.sections if s.key == key)
@@ -80,9 +86,10 @@ def extended(campaign, tmp_path_factory):
                                 {"units": unit})
               for name, (unit, values) in BENCH_TRACES.items()}
     results = results.assign(traces).assign_attrs(
-        fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="passed",
-        fidelity_audit_ds2="speedup x0.73; backlash_feature: mean shift +0.0018 um, max paired 0.0257 um, MC error "
-                           "0.0862 um, KS p 1.00 -> pass",  # the format of campaigns.fidelity_audit.summary_attrs
+        fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="met",
+        fidelity_audit_ds2=f"speedup x0.73; backlash_feature: {_MET}; max paired 0.0257 µm, MC error 0.0862 µm, KS p "
+                           f"1.00 | backlash_feature_true: {_UNDETERMINED}; max paired 0.3 µm, MC error 0.1 µm, KS p "
+                           "0.50",  # the format of campaigns.fidelity_audit.summary_attrs
     )
     return build(dataclasses.replace(inputs, results=results), "T")
 
@@ -101,7 +108,8 @@ def test_fidelity_audit_in_words_and_micrometres(extended):
     fidelity = _section(extended, "fidelity")
     levels, audit = _blocks(fidelity, Table)
     assert levels.rows == (("ds2", "pneumatics = full, current_loop = ideal"),)
-    assert audit.rows == (("ds2", "backlash_feature", "+0.0018 µm", "0.0257 µm", "0.0862 µm", "1.00", "pass", "0.73"),)
+    assert audit.rows == (("ds2", "backlash_feature", _MET, "0.0257 µm", "0.0862 µm", "1.00", "0.73"),
+                          ("ds2", "backlash_feature_true", _UNDETERMINED, "0.3 µm", "0.1 µm", "0.50", ""))
     assert "full-fidelity wall time / automatic wall time" in audit.caption
     assert any("speedup below 1, i.e. the automatic runs took longer" in p.text for p in _blocks(fidelity, Paragraph))
 

@@ -200,9 +200,13 @@ def test_every_run_ok_is_a_good_failures_callout_and_the_audit_sets_its_tone():
     [failures] = callouts(executive(results, analysis), "Failures:")
     assert (failures.text, failures.tone) == ("Failures: 0 of 90 runs failed.", "good")
     for audit, tone in (
-        ("passed: mean shift 0.01 µm", "good"),
-        ("FLAGGED: short/f 0.2 µm", "bad"),
-        ("skipped", "info"),
+        ("met: auto is within the tolerance of full fidelity on every data set and feature", "good"),
+        ("not met: auto differs from full fidelity (rule to fix): short/f", "bad"),
+        ("undetermined: the audit's runs cannot resolve the tolerance: short/f", "info"),
+        ("insufficient data: too few paired runs: short/f", "muted"),
+        ("passed: mean shift 0.01 µm", "good"),  # results written before the three-way verdict
+        ("FLAGGED (rule to fix): short/f", "bad"),
+        ("not run (fidelity_audit.runs = 0)", "info"),
     ):
         results.attrs["fidelity_audit"] = audit
         [found] = callouts(executive(results, analysis), "Fidelity audit")
