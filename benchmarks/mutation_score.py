@@ -65,6 +65,7 @@ TESTS = {
     "sensors/analog.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/encoder.py": ["tests/sensors/test_sensor_encoder.py", "tests/sensors/test_sensor_encoder_speed.py",
                            "tests/sensors/test_sensor_encoder_timing.py",
+                           "tests/sensors/test_sensor_encoder_advance.py",
                            "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/hall.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/load_cell.py": ["tests/sensors/test_sensor_force_torque.py"],
