@@ -51,10 +51,14 @@ _ANALYSIS_TESTS = ["tests/campaigns/test_analysis_known_answers.py", "tests/camp
                    "tests/campaigns/test_campaign_verdict.py", "tests/campaigns/test_campaign_sensitivity.py",
                    "-k", "not synthetic_campaign and not cli_prints"]
 #: Module -> unit tests that exercise it without running the full compiled loop.
+# the tangents of the stiff elements (the linearly implicit integrator's) are tested against finite differences there
+_CONTACT_TANGENT = "tests/engine/test_imex_euler.py::test_contact_tangent_matches_finite_differences"
+_SLOPES = "tests/engine/test_imex_euler.py::test_friction_slopes_match_finite_differences"
 TESTS = {
-    "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py"],
+    "twin/physics/ball_groove_friction.py": ["tests/physics/test_ball_groove_friction.py", _SLOPES],
+    "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py", _CONTACT_TANGENT],
     "twin/physics/coupling.py": ["tests/physics/test_components.py"],
-    "twin/physics/friction.py": ["tests/physics/test_components.py"],
+    "twin/physics/friction.py": ["tests/physics/test_components.py", _SLOPES],
     "twin/physics/groove.py": ["tests/physics/test_groove.py", "tests/physics/test_hertz.py"],
     "twin/physics/hertz.py": ["tests/physics/test_hertz.py"],
     "twin/physics/motor.py": ["tests/physics/test_components.py"],

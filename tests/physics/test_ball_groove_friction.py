@@ -41,6 +41,11 @@ def test_rolling_coefficient_load_exponent_and_speed_term():
     at_rest = rolling_coefficient(64.0, 0.0, k_gc, 1.0, f_v1, r_b)
     at_speed = rolling_coefficient(64.0, 100.0, k_gc, 1.0, f_v1, r_b) - at_rest
     assert at_speed == pytest.approx(f_v1 * 100.0**2, rel=1e-12)
+    # the load term holds down to a light touch (a sphere just entering contact carries well under 1 N), and only an
+    # unloaded sphere (P = 0, the gap) has the speed term alone
+    assert rolling_coefficient(0.5, 0.0, k_gc, 1.0, f_v1, r_b) == pytest.approx(
+        k_gc * 0.5**ROLLING_LOAD_EXPONENT / r_b, rel=1e-12)
+    assert rolling_coefficient(0.0, 100.0, k_gc, 1.0, f_v1, r_b) == pytest.approx(f_v1 * 100.0**2, rel=1e-12)
     # k_rf scales the load term only (Fig. 5.8)
     assert rolling_coefficient(64.0, 0.0, k_gc, 2.0, 0.0, r_b) == pytest.approx(
         2.0 * rolling_coefficient(64.0, 0.0, k_gc, 1.0, 0.0, r_b), rel=1e-12)
