@@ -301,9 +301,9 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     controller_init(memory, u, instrument_state, rows, levels, x, c, force_table, stiffness_poly)
     scratch = np.zeros((2, x.shape[0]))
     written = 0
-    # Steps to the next acquisition, speed-loop and output instant: counters, not ``k % every`` (an integer
-    # division per test and step).
-    to_acquisition = to_speed = to_output = 0
+    # Steps to the next acquisition, speed-loop and output instant and W-matrix refresh: counters, not
+    # ``k % every`` (an integer division per test and step).
+    to_acquisition = to_speed = to_output = to_jacobian = 0
     acquisitions = 0
     for k in range(n_steps + 1):
         t = k * dt
@@ -323,7 +323,10 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
             to_output = output_every
         if k == n_steps:
             break
-        step(method, t, x, dt, c, u, force_table, stiffness_poly, work, k % jacobian_every == 0, active, pairs)
+        refresh = to_jacobian == 0
+        if refresh:
+            to_jacobian = jacobian_every
+        step(method, t, x, dt, c, u, force_table, stiffness_poly, work, refresh, active, pairs)
         code = guard(x, c)
         if code == 0 and check_error:
             estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance,
@@ -340,5 +343,6 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
         to_acquisition -= 1
         to_speed -= 1
         to_output -= 1
+        to_jacobian -= 1
         instruments_advance(t + dt, dt, x, c, instrument_state, rows, levels, lookback, to_acquisition, force_table)
     return STATUS_OK, 0, n_steps, written
