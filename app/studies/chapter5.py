@@ -162,33 +162,36 @@ def regimes_study(params, preload: float = 1000.0) -> dict:
     return out
 
 
+def _efficiency_pair(data: dict, x: np.ndarray, sweep: str, curve_label, xlabel: str, figure: str,
+                     transitions: bool = False):
+    """Figs. 5.6/5.7 analogues: efficiency along one sweep, a panel per load sharing; each curve is keyed
+    ``"<level>|<rpm>"`` (the other load's level) and labelled by ``curve_label(level, rpm)``; with
+    ``transitions`` the Ch. 5 panel marks each curve's transition point ``F_pr = level / 2``."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    for ax, sharing in zip(axes, SHARINGS, strict=True):
+        for key, values in data[f"vs_{sweep}_{sharing}"].items():
+            level, rpm = key.split("|")
+            ax.plot(x, values, label=curve_label(float(level), rpm))
+            if transitions and sharing == "chapter5":
+                ax.axvline(float(level) / 2e3, color="0.7", lw=0.6, ls=":")
+        ax.set(xlabel=xlabel, title=f"Fig. {figure} analogue, load sharing: {sharing}")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("direct efficiency (Eq. 5.25)")
+    axes[1].legend(fontsize=7)
+    return fig, axes
+
+
 def _figure_efficiency(data: dict, directory: Path) -> list[Path]:
     paths = []
-    loads = np.array(data["loads"]) / 1e3
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
-    for ax, sharing in zip(axes, SHARINGS, strict=True):
-        for key, values in data[f"vs_force_{sharing}"].items():
-            preload, rpm = key.split("|")
-            ax.plot(loads, values, label=f"F_pr {float(preload) / 1e3:.2g} kN, {rpm} rpm")
-        ax.set(xlabel="external force [kN]", title=f"Fig. 5.6 analogue, load sharing: {sharing}")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("direct efficiency (Eq. 5.25)")
-    axes[1].legend(fontsize=7, ncol=1)
+    fig, _ = _efficiency_pair(data, np.array(data["loads"]) / 1e3, "force",
+                              lambda preload, rpm: f"F_pr {preload / 1e3:.2g} kN, {rpm} rpm", "external force [kN]",
+                              "5.6")
     paths.append(_save(fig, directory / "fig5_6_efficiency_vs_force.png"))
 
-    preloads = np.array(data["preloads"]) / 1e3
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
-    for ax, sharing in zip(axes, SHARINGS, strict=True):
-        for key, values in data[f"vs_preload_{sharing}"].items():
-            force, rpm = key.split("|")
-            ax.plot(preloads, values, label=f"F_ext {float(force) / 1e3:.3g} kN, {rpm} rpm")
-            if sharing == "chapter5":
-                ax.axvline(float(force) / 2e3, color="0.7", lw=0.6, ls=":")
-        ax.set(xlabel="preload [kN]", title=f"Fig. 5.7 analogue, load sharing: {sharing}")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("direct efficiency (Eq. 5.25)")
+    fig, axes = _efficiency_pair(data, np.array(data["preloads"]) / 1e3, "preload",
+                                 lambda force, rpm: f"F_ext {force / 1e3:.3g} kN, {rpm} rpm", "preload [kN]", "5.7",
+                                 transitions=True)
     axes[0].text(0.02, 0.03, "dotted: transition points F_pr = F_ext/2", transform=axes[0].transAxes, fontsize=7)
-    axes[1].legend(fontsize=7)
     paths.append(_save(fig, directory / "fig5_7_efficiency_vs_preload.png"))
 
     fig, ax = plt.subplots(figsize=(5.5, 4))
