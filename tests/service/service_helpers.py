@@ -114,6 +114,13 @@ def client(server: Server, token: str | None) -> httpx.Client:
     return server.clients[token]
 
 
+def submit(api: httpx.Client, runs: int) -> dict:
+    """Submit the test spec with ``runs`` per data set; the accepted campaign's record (201 asserted)."""
+    response = api.post("/api/v1/campaigns", content=SPEC.read_text(), params={"runs": runs})
+    assert response.status_code == 201, response.text
+    return response.json()
+
+
 def wait_until(predicate, budget: float = CAMPAIGN_BUDGET, period: float = 0.5, what: str = "condition"):
     """Poll ``predicate()`` until it returns something truthy; that value."""
     deadline = time.monotonic() + budget

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import psutil
 import xarray as xr
-from service_helpers import SPEC, Server, chunk_runs, client, create_token, wait_final, wait_until
+from service_helpers import Server, chunk_runs, client, create_token, submit, wait_final, wait_until
 
 RUNS = 6  # per data set; 12 runs of one-run chunks on one worker: several seconds of runs to kill into
 
@@ -15,9 +15,8 @@ def test_kill_9_mid_campaign_then_restart_finishes_with_nothing_lost_or_duplicat
     server = Server(data, tmp_path / "server.log").start()
     try:
         api = client(server, token)
-        response = api.post("/api/v1/campaigns", content=SPEC.read_text(), params={"runs": RUNS})
-        assert response.status_code == 201, response.text
-        campaign_id, total = response.json()["id"], response.json()["progress"]["runs_total"]
+        record = submit(api, RUNS)
+        campaign_id, total = record["id"], record["progress"]["runs_total"]
         out = data / "campaigns" / campaign_id / "out"
         wait_until(lambda: len(chunk_runs(out)) >= 2, what="two recorded runs")
         server.kill9()
@@ -53,9 +52,7 @@ def test_a_runner_outliving_a_killed_server_is_waited_for_not_doubled(tmp_path):
     server = Server(data, tmp_path / "server.log").start()
     try:
         api = client(server, token)
-        response = api.post("/api/v1/campaigns", content=SPEC.read_text(), params={"runs": 2})
-        assert response.status_code == 201, response.text
-        campaign_id = response.json()["id"]
+        campaign_id = submit(api, 2)["id"]
         wait_until(lambda: api.get(f"/api/v1/campaigns/{campaign_id}").json()["legs"] == 1, what="the runner's start")
         runner_tree = server.tree()[1:]
         server.process.kill()
