@@ -22,12 +22,6 @@ SUMMARY_INFLUENCES = 3
 VERDICT_TONES = {"met": "good", "not met": "bad", "undetermined": "info", "insufficient data": "muted"}
 #: Leading words of the fidelity audit in results written before its three-way verdict (issue 16).
 _LEGACY_AUDIT_TONES = {"passed": "good", "FLAGGED": "bad"}
-
-
-def statement_tone(statement: str) -> str:
-    """The tone of a stored statement from the verdict it starts with (``"not met: ..."``); ``"info"`` if none."""
-    head = statement.split(":", 1)[0].split(" (", 1)[0]
-    return VERDICT_TONES.get(head, _LEGACY_AUDIT_TONES.get(head, "info"))
 #: Parameter rows of a correlation heat map (with wrapped names, a page holds about this many).
 HEATMAP_PARAMETERS = 20
 #: Parameters in the scatter plots of a feature.
@@ -48,6 +42,13 @@ TRACE_PANELS = (
 )
 #: Variables of the nut-minus-screw signal of Eq. 9.12 (Fig. 9.11).
 NUT, SCREW = "nut1_position", "screw_equivalent_position"
+
+
+def statement_tone(statement: str) -> str:
+    """The tone of a stored statement from the verdict it starts with (``"not met: ..."``); ``"info"`` if none."""
+    head = statement.split(":", 1)[0].split(" (", 1)[0]
+    return VERDICT_TONES.get(head, _LEGACY_AUDIT_TONES.get(head, "info"))
+
 
 
 class Builder:
