@@ -16,6 +16,7 @@ from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import SCENE_PREFIX, split_targets
+from twin.simulation import AUTO, DEFAULT_INTEGRATOR
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
@@ -274,8 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", type=_parse_assignment, metavar="NAME=VALUE",
                    help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5, "
                         "scene.zero_procedure=preloaded, scene.cylinder=detached)")
-    p.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS))
-    p.add_argument("--dt", type=float, help="integration step [s]")
+    p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=[AUTO, *sorted(INTEGRATORS)],
+                   help="default auto: imex_euler where the nuts stay held on a flank, else rk4 (twin.simulate)")
+    p.add_argument("--dt", type=float, help="integration step [s] (not with --integrator auto)")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
     p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",
                    help="subsystem fidelity (see `twin fidelity levels`; default auto: the cheapest the scene allows)")

@@ -29,6 +29,7 @@ from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
 from twin.engine.model import build_model
 from twin.engine.reference import local_error_tolerance
+from twin.engine.solver_choice import EXPLICIT, IMPLICIT
 from twin.layout import N_INPUTS, N_MEMORY, N_SIGNALS, M
 
 OUTPUTS = {"nominal": None, "ds1": ["backlash_feature", "backlash_feature_true", "backlash_hysteresis",
@@ -36,12 +37,13 @@ OUTPUTS = {"nominal": None, "ds1": ["backlash_feature", "backlash_feature_true",
                                    "screw_equivalent_position", "linear_encoder_position", "preload_force",
                                    "external_force"]}
 FIDELITY = {"nominal": "full", "ds1": "auto"}
-METHOD = INTEGRATORS[simulation.DEFAULT_INTEGRATOR]
+#: The methods profiled: the automatic integrator's two branches (twin.engine.solver_choice).
+METHODS = (IMPLICIT, EXPLICIT)
 
 
 @numba.njit
-def record_trajectory(x, c, position_table, force_table, poly, active, pairs, dt, speed_every, position_every,
-                      rows, levels, lookback, noise, trajectory):
+def record_trajectory(method, x, c, position_table, force_table, poly, active, pairs, dt, speed_every,
+                      position_every, rows, levels, lookback, noise, trajectory):
     """run_loop's sequence of samples, steps and instrument advances (no output, no checks), recording the state
     after every step (row ``k`` is the state at ``(k + 1) dt``)."""
     work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
@@ -56,7 +58,7 @@ def record_trajectory(x, c, position_table, force_table, poly, active, pairs, dt
                                     poly, position_every * dt)
         if k % speed_every == 0:
             loop.speed_sample(x, c, u, memory, rows, levels, speed_every * dt)
-        step(METHOD, t, x, dt, c, u, force_table, poly, work, False, active, pairs)
+        step(method, t, x, dt, c, u, force_table, poly, work, False, active, pairs)
         trajectory[k] = x
         loop.instruments_advance(t + dt, dt, x, c, state, rows, levels, lookback,
                                  (position_every - (k + 1) % position_every) % position_every, force_table)
@@ -72,12 +74,12 @@ def empty_pass(trajectory):
 
 
 @numba.njit
-def step_pass(trajectory, c, u, force_table, poly, active, pairs, dt):
+def step_pass(method, trajectory, c, u, force_table, poly, active, pairs, dt):
     work = np.zeros((WORK_VECTORS + trajectory.shape[1], trajectory.shape[1]))
     x = np.zeros(trajectory.shape[1])
     for k in range(trajectory.shape[0]):
         x[:] = trajectory[k]
-        step(METHOD, k * dt, x, dt, c, u, force_table, poly, work, False, active, pairs)
+        step(method, k * dt, x, dt, c, u, force_table, poly, work, False, active, pairs)
     return x
 
 
@@ -124,12 +126,12 @@ def samples_pass(trajectory, x0, c, position_table, force_table, poly, dt, every
 
 
 @numba.njit
-def local_error_pass(trajectory, c, u, force_table, poly, active, pairs, dt, every, tolerance):
+def local_error_pass(method, trajectory, c, u, force_table, poly, active, pairs, dt, every, tolerance):
     work = np.zeros((WORK_VECTORS + trajectory.shape[1], trajectory.shape[1]))
     scratch = np.zeros((2, trajectory.shape[1]))
     worst = 0.0
     for k in range(0, trajectory.shape[0], every):
-        worst = max(worst, loop.local_error(METHOD, k * dt, trajectory[k], dt, c, u, force_table, poly, work,
+        worst = max(worst, loop.local_error(method, k * dt, trajectory[k], dt, c, u, force_table, poly, work,
                                             scratch, tolerance, active, pairs))
     return worst
 
@@ -144,8 +146,9 @@ def _median_cpu(function, args, repeats) -> float:
     return statistics.median(times)
 
 
-def profile(scene_name: str, duration: float, repeats: int) -> None:
-    run = simulation._validated(scene_name, None, simulation.DEFAULT_INTEGRATOR, simulation.DEFAULT_DT,
+def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt: float) -> None:
+    method = INTEGRATORS[integrator]
+    run = simulation._validated(scene_name, None, integrator, dt,
                                 simulation.DEFAULT_OUTPUT_DT, duration, FIDELITY[scene_name], OUTPUTS[scene_name],
                                 None, "thesis", 1e-10)
     model = build_model(run.scene, run.params, run.fidelity, curvature="thesis")
@@ -158,7 +161,7 @@ def profile(scene_name: str, duration: float, repeats: int) -> None:
     rows, levels, lookback, noise = (instruments.parameters, instruments.levels, instruments.lookback,
                                      instruments.noise)
     trajectory = np.zeros((n, x0.size))
-    u = record_trajectory(x0.copy(), c, model.position_table, ft, poly, model.active, model.pairs, run.dt,
+    u = record_trajectory(method, x0.copy(), c, model.position_table, ft, poly, model.active, model.pairs, run.dt,
                           run.speed_every, run.position_every, rows, levels, lookback, noise, trajectory)
     output = np.zeros((n // run.output_every + 1, N_SIGNALS))
     tolerance = local_error_tolerance()
@@ -169,20 +172,21 @@ def profile(scene_name: str, duration: float, repeats: int) -> None:
         memory, out = np.zeros(N_MEMORY), np.full_like(output, np.nan)
         start = time.process_time()
         loop.run_loop(x0.copy(), c, model.position_table, ft, poly, model.active, model.pairs, n, run.dt,
-                      run.speed_every, run.position_every, run.output_every, run.position_every, METHOD, rows,
-                      levels, lookback, noise, memory, out, tolerance)
+                      run.speed_every, run.position_every, run.output_every, run.position_every, method, rows,
+                      levels, lookback, noise, memory, out, tolerance, 0.0, 0)
         return time.process_time() - start
 
     loop_cpu()
     total = statistics.median(loop_cpu() for _ in range(repeats))
     parts = [  # (name, function, args, calls per run)
         ("integrator step (all right-hand sides)", step_pass,
-         (trajectory, c, u, ft, poly, model.active, model.pairs, run.dt), n),
+         (method, trajectory, c, u, ft, poly, model.active, model.pairs, run.dt), n),
         ("instruments advanced after every step", instruments_pass,
          (trajectory, x0, c, ft, poly, run.dt, run.position_every, rows, levels, lookback), n),
         ("divergence guard", guard_pass, (trajectory, c), n),
         ("local-error check (3 extra steps)", local_error_pass,
-         (trajectory, c, u, ft, poly, model.active, model.pairs, run.dt, check_every, tolerance), n // check_every),
+         (method, trajectory, c, u, ft, poly, model.active, model.pairs, run.dt, check_every, tolerance),
+         n // check_every),
         ("acquisition instant", samples_pass,
          (trajectory, x0, c, model.position_table, ft, poly, run.dt, run.position_every, rows, levels, noise,
           output, 0), n // run.position_every),
@@ -194,7 +198,7 @@ def profile(scene_name: str, duration: float, repeats: int) -> None:
           output, 2), n // run.output_every),
     ]
     print(f"\n'{scene_name}' ({run.fidelity.level('encoders')} encoders, {model.active.size} states), "
-          f"{run.scene.duration:g} s = {n} steps of {run.dt * 1e6:g} us; run_loop {total:.3f} s CPU "
+          f"{run.scene.duration:g} s = {n} steps of {integrator} at {run.dt * 1e6:g} us; run_loop {total:.3f} s CPU "
           f"({1e9 * total / n:.0f} ns per step)")
     print(f"{'part':42s} {'ns/call':>9s} {'calls':>8s} {'ns/step':>8s} {'share':>7s}")
     accounted = 0.0
@@ -214,8 +218,9 @@ def main() -> None:
     args = parser.parse_args()
     duration, repeats = (0.5, 1) if args.quick else (10.0, args.repeats)
     header("step costs: the compiled loop's parts per integration step", args.quick)
-    for scene_name in ("nominal", "ds1"):
-        profile(scene_name, duration, repeats)
+    for integrator, dt in METHODS:
+        for scene_name in ("nominal", "ds1"):
+            profile(scene_name, duration, repeats, integrator, dt)
 
 
 if __name__ == "__main__":

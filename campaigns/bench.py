@@ -235,7 +235,7 @@ def simulate_run(request: RunRequest) -> dict:
         summary = twin.simulate_features(scene, params, **options)
         return {"status": summary.status, "failure_reason": summary.failure_reason, "t_reached": summary.t_reached,
                 "features": {f: float(summary.features[f]) for f in request.features if f in summary.features},
-                "trace": None, "fidelity": summary.fidelity}
+                "trace": None, "fidelity": summary.fidelity, "integrator": summary.integrator}
     ds = twin.simulate(scene, params, **options)
     kept = [v for v in request.trace_variables if v in ds]
     return {
@@ -245,6 +245,7 @@ def simulate_run(request: RunRequest) -> dict:
         "features": {f: float(ds[f]) for f in request.features if f in ds},
         "trace": ds[kept].isel(time=slice(None, None, request.trace_decimation)),
         "fidelity": ds.attrs.get("fidelity", ""),
+        "integrator": ds.attrs.get("integrator", ""),
     }
 
 

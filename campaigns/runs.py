@@ -130,7 +130,7 @@ class RunRequest:
 
 
 def record(request: RunRequest, status: str, reason: str, t_reached: float, wall_time: float, features=None, trace=None,
-           fidelity: str = "") -> dict:
+           fidelity: str = "", integrator: str = "") -> dict:
     """The stored record of one run (``features`` default to NaN)."""
     values = {f: math.nan for f in request.features}
     values.update(features or {})
@@ -144,6 +144,7 @@ def record(request: RunRequest, status: str, reason: str, t_reached: float, wall
         "features": values,
         "trace": trace,
         "fidelity": fidelity,
+        "integrator": integrator,
     }
 
 
@@ -203,7 +204,7 @@ def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:
                   "grace (not interruptible in this process: it ran to the end; its features are discarded)")
         return record(request, "timeout", reason, result.get("t_reached", math.nan), wall_time)
     return record(request, status, reason, result.get("t_reached", math.nan), wall_time, features, result.get("trace"),
-                  str(result.get("fidelity", "")))
+                  str(result.get("fidelity", "")), str(result.get("integrator", "")))
 
 
 def run_function_name(run_function) -> str:

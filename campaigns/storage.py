@@ -245,6 +245,7 @@ class ChunkStore:
             "t_reached": np.array([r["t_reached"] for r in records]),
             "wall_time": np.array([r["wall_time"] for r in records]),
             "fidelity": np.array([r.get("fidelity", "") for r in records], dtype=str),
+            "integrator": np.array([r.get("integrator", "") for r in records], dtype=str),
             "provenance": np.array(prov.as_text(self.provenance)),
         }
         for f in self.spec.features:
@@ -380,6 +381,7 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     filled = np.zeros(shape, dtype=bool)
     status = np.full(shape, "", dtype=object)
     reason = np.full(shape, "", dtype=object)
+    integrator = np.full(shape, "", dtype=object)
     t_reached, wall_time = np.full(shape, math.nan), np.full(shape, math.nan)
     features = {f: np.full(shape, math.nan) for f in spec.features}
     k_traces = min(spec.traces.runs_per_dataset, spec.runs_per_dataset)
@@ -393,6 +395,8 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         filled[d, runs] = True
         status[d, runs] = c["status"].astype(object)
         reason[d, runs] = c["failure_reason"].astype(object)
+        if "integrator" in c:  # chunks written before the automatic integrator have none
+            integrator[d, runs] = c["integrator"].astype(object)
         t_reached[d, runs], wall_time[d, runs] = c["t_reached"], c["wall_time"]
         fidelity[d].update(str(f) for f in c.get("fidelity", ()) if str(f))
         for f in spec.features:
@@ -420,6 +424,9 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         data_vars[f] = (dims, features[f], {"units": unit, "long_name": long_name, "role": "feature"})
     data_vars["status"] = (dims, status, {"long_name": "run status", "flag_meanings": json.dumps(STATUS_MEANINGS)})
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
+    data_vars["integrator"] = (dims, integrator, {
+        "long_name": "method that solved the run (the solver's 'auto' chooses per run: twin.engine.solver_choice; "
+                     "empty: not recorded)"})
     data_vars["t_reached"] = (dims, t_reached, {"units": "s", "long_name": "simulated time reached"})
     data_vars["wall_time"] = (dims, wall_time,
                               {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})

@@ -383,4 +383,8 @@ BOUND_REASONS = {
     6: "ball-groove normal approach beyond the Hertzian validity bound",
     7: "chamber pressure outside [0, 2 x supply] (absolute)",
     8: "finite but wrong: the step-doubling local-error estimate exceeds its tolerance (step beyond stability)",
+    9: "a nut's contact load fell below the held-contact premise of the implicit drive-period step",
 }
+#: Bound code of a broken held-contact premise (twin.engine.solver_choice): not a failure of the run, the
+#: automatic integrator's signal to solve the scene again with the explicit method.
+BOUND_CONTACT_RELEASED = 9

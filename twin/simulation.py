@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import json
 import math
 import time
@@ -17,6 +19,7 @@ from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
+from twin.engine.solver_choice import EXPLICIT, IMPLICIT, RELEASE_BUDGET, choice_statement, held_interference
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
@@ -34,8 +37,11 @@ from twin.layout import (
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
-DEFAULT_INTEGRATOR = "rk4"
-DEFAULT_DT = 6.25e-5         # s; chosen by the speed-versus-accuracy study (docs/accuracy.md)
+DEFAULT_INTEGRATOR = "auto"  # imex_euler where the nuts are held, else rk4 (twin.engine.solver_choice)
+DEFAULT_DT = 6.25e-5  # s; the explicit methods' step, from the speed-versus-accuracy study (docs/accuracy.md)
+#: Default step of a method when ``dt`` is not given: the implicit step takes the drive period.
+DEFAULT_STEPS = {IMPLICIT[0]: IMPLICIT[1]}
+AUTO = "auto"
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
 
@@ -49,7 +55,7 @@ def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
 
 
 def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
-             integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT, output_dt: float = DEFAULT_OUTPUT_DT,
+             integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None, output_dt: float = DEFAULT_OUTPUT_DT,
              duration: float | None = None, fidelity: str | Mapping[str, str] = "auto",
              outputs: Sequence[str] | None = None, rng: np.random.Generator | int | None = None,
              curvature: str = "thesis", rtol: float = 1e-10, local_error_guard: bool = True,
@@ -62,12 +68,16 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau", "scipy_lsoda",
-                  "scipy_bdf", "scipy_rk45"}
-        Fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of
-        the reference path (:mod:`twin.engine.reference`), which ignores ``dt``.
-    dt : float
-        Integration step [s]; must divide the speed- and position-loop periods.
+    integrator : {"auto", "rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau",
+                  "scipy_lsoda", "scipy_bdf", "scipy_rk45"}
+        ``"auto"`` (:mod:`twin.engine.solver_choice`): ``imex_euler`` at the 125 us drive period while both
+        nuts are held on a flank, else the whole run again with ``rk4`` at 62.5 us; the method used and why
+        are in ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. Otherwise a
+        fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of the reference path
+        (:mod:`twin.engine.reference`), which ignores ``dt``.
+    dt : float, optional
+        Integration step [s]; must divide the speed- and position-loop periods. Default: 125 us for
+        ``imex_euler``, 62.5 us for the other fixed-step methods; ``"auto"`` chooses its own.
     output_dt : float
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
@@ -117,7 +127,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
 
 
 def simulate_features(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
-                      integrator: str = DEFAULT_INTEGRATOR, dt: float = DEFAULT_DT,
+                      integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None,
                       output_dt: float = DEFAULT_OUTPUT_DT, duration: float | None = None,
                       fidelity: str | Mapping[str, str] = "auto", outputs: Sequence[str] | None = None,
                       rng: np.random.Generator | int | None = None, curvature: str = "thesis", rtol: float = 1e-10,
@@ -137,6 +147,7 @@ class RunSummary:
     t_reached: float        # attrs["t_reached"] [s]
     fidelity: str           # attrs["fidelity"]
     features: dict[str, float]  # every feature of twin.features.FEATURES (NaN unless the run is ok)
+    integrator: str = ""    # attrs["integrator"]: the method that solved the run
 
 
 @dataclass(frozen=True)
@@ -149,11 +160,13 @@ class _Simulated:
     output: np.ndarray
     memory: np.ndarray
     status: int
+    bound: int
     reason: str
     t_reached: float
     solver_stats: dict
     wall_time: float
     rng: object
+    choice: str  # the automatic integrator's statement (twin.engine.solver_choice), "" for a named method
 
 
 def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol,
@@ -161,6 +174,26 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     """Validate, build, solve (the steps :func:`simulate` and :func:`simulate_features` share)."""
     run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
     model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
+    # the automatic integrator's second attempt must draw the same noise as its first
+    noise_source = copy.deepcopy(rng) if run.fallback is not None and isinstance(rng, np.random.Generator) else rng
+    start = time.perf_counter()
+    done = _attempt(run, model, rng, local_error_guard, held_interference(model) if run.fallback else 0.0)
+    if run.fallback is not None and done.status != STATUS_OK:
+        # the premise broke, or the implicit step failed (a failure of the branch, not yet of the run)
+        stopped = done
+        done = _attempt(run.fallback, model, noise_source, local_error_guard, 0.0)
+        done = dataclasses.replace(done, choice=choice_statement(run.fallback.integrator, run.fallback.dt,
+                                                                 stopped.t_reached, stopped.bound, stopped.reason))
+    elif run.fallback is not None:
+        done = dataclasses.replace(done, choice=choice_statement(run.integrator, run.dt))
+    done = dataclasses.replace(done, wall_time=time.perf_counter() - start)
+    if done.status != STATUS_OK and throw:
+        raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
+    return done
+
+
+def _attempt(run: _Run, model, rng, local_error_guard: bool, held: float) -> _Simulated:
+    """Solve ``run`` once on ``model``; ``held`` > 0 stops at the first step that releases a nut's contact."""
     generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
         DEFAULT_NOISE_SEED if rng is None else rng)
     n_steps = int(round(run.scene.duration / run.dt))
@@ -171,13 +204,10 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     output = np.full((n_steps // run.output_every + 1, N_SIGNALS), np.nan)
     memory = np.zeros(N_MEMORY)
     x = model.initial_state.copy()
-    start = time.perf_counter()
-    status, t_reached, rows, reason, solver_stats = _solve(run, model, instruments, n_steps, x, output, memory,
-                                                           local_error_guard)
-    wall_time = time.perf_counter() - start
-    if status != STATUS_OK and throw:
-        raise SimulationFailed(STATUS_TEXT[status], reason, t_reached)
-    return _Simulated(run, model, x, output[:rows], memory, status, reason, t_reached, solver_stats, wall_time, rng)
+    status, bound, t_reached, rows, reason, solver_stats = _solve(run, model, instruments, n_steps, x, output, memory,
+                                                                  local_error_guard, held)
+    return _Simulated(run, model, x, output[:rows], memory, status, bound, reason, t_reached, solver_stats, 0.0,
+                      rng, "")
 
 
 @dataclass(frozen=True)
@@ -196,6 +226,7 @@ class _Run:
     speed_every: int
     position_every: int
     output_every: int
+    fallback: _Run | None = None  # the automatic integrator's explicit branch; None for a named method
 
 
 def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol) -> _Run:
@@ -207,8 +238,17 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         scene = scene.with_duration(duration)
     problems: list[str] = []
     reference = integrator in REFERENCE_METHODS
-    if integrator not in INTEGRATORS and not reference:
-        problems.append(f"integrator: {integrator!r} is not one of {', '.join([*INTEGRATORS, *REFERENCE_METHODS])}")
+    auto = integrator == AUTO
+    if integrator not in INTEGRATORS and not (reference or auto):
+        problems.append(f"integrator: {integrator!r} is not one of "
+                        f"{', '.join([AUTO, *INTEGRATORS, *REFERENCE_METHODS])}")
+    if auto and dt is not None:
+        problems.append(f"dt: {dt!r} with integrator 'auto', which chooses its own steps ({IMPLICIT[0]} "
+                        f"{IMPLICIT[1] * 1e6:g} us, {EXPLICIT[0]} {EXPLICIT[1] * 1e6:g} us); leave dt unset or "
+                        "name a method")
+    method = IMPLICIT[0] if auto else integrator
+    if dt is None or auto:
+        dt = DEFAULT_STEPS.get(method, DEFAULT_DT)
     if not (isinstance(rtol, float) and 1e-14 <= rtol < 1e-2):
         problems.append(f"rtol: {rtol!r} must be a float in [1e-14, 1e-2)")
     if curvature not in CURVATURE_FORMULAS:
@@ -227,31 +267,38 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     speed_ts = params.value("drive.speed_loop_sample_time")
     if reference:
         dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
-    speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
-    position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period",
-                                problems)
-    output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
+
+    def stepped(method: str, dt: float, fallback: _Run | None = None) -> _Run:
+        speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
+        position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt,
+                                    "position-loop period", problems)
+        output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
+        return _Run(scene, params, resolved, method, reference, dt, rtol, curvature, speed_ts, speed_every,
+                    position_every, output_every, fallback)
+
+    run = stepped(method, dt, stepped(*EXPLICIT) if auto else None)
     if problems:
         raise OptionError(problems)
-    return _Run(scene, params, resolved, integrator, reference, dt, rtol, curvature, speed_ts, speed_every,
-                position_every, output_every)
+    return run
 
 
 def _solve(run: _Run, model, instruments, n_steps: int, x: np.ndarray, output: np.ndarray, memory: np.ndarray,
-           local_error_guard: bool) -> tuple[int, float, int, str, dict]:
+           local_error_guard: bool, held: float) -> tuple[int, int, float, int, str, dict]:
     """Integrate on the compiled loop, or on the adaptive reference path; ``x``, ``output`` and ``memory`` are
-    filled in place. Returns ``(status, t_reached, rows of output written, failure reason, solver statistics)``."""
+    filled in place. Returns ``(status, bound code, t_reached, rows of output written, failure reason, solver
+    statistics)``."""
     if run.reference:
         status, bound, t_reached, rows, reason, solver_stats = run_reference(
             model, instruments, n_steps, run.speed_sample_time, run.position_every, run.output_every, output, memory,
             REFERENCE_METHODS[run.integrator], run.rtol, x)
-        return status, t_reached, rows, reason or BOUND_REASONS[bound], solver_stats
+        return status, bound, t_reached, rows, reason or BOUND_REASONS[bound], solver_stats
     status, bound, steps_done, rows = run_loop(
         x, model.constants, model.position_table, model.force_table, model.stiffness_poly, model.active,
         model.pairs, n_steps, run.dt, run.speed_every, run.position_every, run.output_every, run.position_every,
         INTEGRATORS[run.integrator], instruments.parameters, instruments.levels, instruments.lookback,
-        instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf))
-    return status, steps_done * run.dt, rows, BOUND_REASONS[bound], {}
+        instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf), held,
+        round(RELEASE_BUDGET / run.dt))
+    return status, bound, steps_done * run.dt, rows, BOUND_REASONS[bound], {}
 
 
 def _features(done: _Simulated) -> dict[str, float]:
@@ -267,7 +314,7 @@ def _features(done: _Simulated) -> dict[str, float]:
 
 def _summary(done: _Simulated) -> RunSummary:
     return RunSummary(STATUS_TEXT[done.status], done.reason, done.t_reached, done.run.fidelity.summary(),
-                      _features(done))
+                      _features(done), done.run.integrator)
 
 
 def _package(done: _Simulated) -> xr.Dataset:
@@ -308,6 +355,7 @@ def _package(done: _Simulated) -> xr.Dataset:
             "screw_lead": params.value("ball_screw.lead"),
             "integrator": run.integrator,
             "dt": dt,
+            **({"integrator_choice": done.choice} if done.choice else {}),
             **({"rtol": run.rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if run.reference else {}),
             "curvature": run.curvature,
             "fidelity": resolved.summary(),

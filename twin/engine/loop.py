@@ -27,6 +27,7 @@ from twin.engine.plant import (
 )
 from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.layout import (
+    BOUND_CONTACT_RELEASED,
     N_INPUTS,
     N_MEASURED,
     PNEUMATICS_FULL,
@@ -236,6 +237,16 @@ def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, s
             analog_step(instrument_state[channel], measurand, t, rows[channel])
 
 
+@numba.njit(cache=True)
+def contacts_held(x, c, held_interference):
+    """Whether both nuts press on a flank with at least ``held_interference`` of axial interference
+    (the deflection of the held-contact load, :func:`twin.engine.solver_choice.held_interference`)."""
+    for nut in (0, 1):
+        if abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH] < held_interference:
+            return False
+    return True
+
+
 LOCAL_ERROR_EVERY = 4        # acquisition instants between local-error checks (4 ms: ~5 % of the run's cost)
 LOCAL_ERROR_PERSISTENCE = 3  # checks in a row above tolerance before a run is declared wrong
 
@@ -268,7 +279,7 @@ def local_error(method, t, x, h, c, u, force_table, stiffness_poly, work, scratc
 @numba.njit(cache=True)
 def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n_steps, dt, speed_every,
              position_every, output_every, jacobian_every, method, rows, levels, lookback, noise, memory, output,
-             tolerance):
+             tolerance, held_interference, release_budget):
     """Integrate ``n_steps`` steps of size ``dt`` from state ``x`` (modified in place).
 
     Parameters
@@ -290,6 +301,11 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     tolerance : 1-D array
         Absolute local-error tolerance per state for the finite-but-wrong guard
         (:func:`local_error`, checked every ``LOCAL_ERROR_EVERY`` acquisition instants).
+    held_interference, release_budget : float, int
+        If ``held_interference`` is positive, the run stops with bound code ``BOUND_CONTACT_RELEASED`` at the
+        step that ends more than ``release_budget`` steps with a nut's axial interference below it
+        (:func:`contacts_held`; the premise of the automatic integrator's implicit step,
+        :mod:`twin.engine.solver_choice`); 0 checks nothing.
 
     Returns
     -------
@@ -305,6 +321,7 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
     # ``k % every`` (an integer division per test and step).
     to_acquisition = to_speed = to_output = to_jacobian = 0
     acquisitions = 0
+    released = 0
     for k in range(n_steps + 1):
         t = k * dt
         check_error = False
@@ -328,6 +345,10 @@ def run_loop(x, c, position_table, force_table, stiffness_poly, active, pairs, n
             to_jacobian = jacobian_every
         step(method, t, x, dt, c, u, force_table, stiffness_poly, work, refresh, active, pairs)
         code = guard(x, c)
+        if held_interference > 0.0 and not contacts_held(x, c, held_interference):
+            released += 1
+            if code == 0 and released > release_budget:
+                code = BOUND_CONTACT_RELEASED
         if code == 0 and check_error:
             estimate = local_error(method, t + dt, x, dt, c, u, force_table, stiffness_poly, work, scratch, tolerance,
                                    active, pairs)

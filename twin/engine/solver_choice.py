@@ -1,0 +1,54 @@
+"""The automatic integrator (``integrator="auto"``, the default): one implicit step per drive period where
+both nuts are held on a flank, explicit RK4 where a nut can move in its gap.
+
+``imex_euler`` (:func:`twin.engine.integrators.imex_euler_step`) at the 125 us drive period costs about a
+third of RK4 at 62.5 us and agrees with it within 0.02 um on the Eq. 9.12 feature as long as both ball-groove
+contacts stay loaded; once a nut unloads, the feature depends on the 3.8 kHz contact mode, which the implicit
+step damps at that period (errors of 0.08-2.7 um: docs/accuracy.md, "The automatic integrator"). So the
+choice is made *along the run*, not guessed from the scene: the implicit step is tried with the held-contact
+premise checked after every step (:func:`twin.engine.loop.contacts_held`); once the nuts have spent more than
+:data:`RELEASE_BUDGET` in all with a contact load below :data:`HELD_CONTACT_LOAD`, the attempt ends there and
+the scene is solved again from the start with RK4 at 62.5 us (same noise draws). Each run says which method
+solved it and why (``attrs["integrator_choice"]``).
+"""
+
+from __future__ import annotations
+
+from twin.engine.model import Model, contact_position_for_force
+from twin.layout import BOUND_CONTACT_RELEASED, K
+
+#: Per-nut axial contact load [N] below which a nut counts as released. Numerical choice, from the preload
+#: sweep of docs/accuracy.md ("The automatic integrator"): on the preloaded data sets the smallest load along
+#: a 10 s run after the start is 320-400 N (preload 1000 N); a nut that unloads passes through 0 N.
+HELD_CONTACT_LOAD = 100.0
+
+#: Time [s] a run may spend with a nut released and still be trusted to the implicit step. Numerical choice,
+#: from the same evidence: the release of the nuts at t = 0 while the preload settles (0.1-4 ms) and the
+#: nominal scene's 3 ms release at its 4 kN force step leave the feature within 0.002-0.007 um of RK4; 7 ms in
+#: all (preload 700 N, 80 um backlash) 0.012 um; 41 ms (preload 500 N, no backlash) 0.075 um. The free-nut data
+#: sets pass 10 ms within their first 0.05 s, so their wasted attempt is short.
+RELEASE_BUDGET = 0.010
+
+#: (method, step [s]) of the two branches: the implicit step at the drive period, RK4 at its default step.
+IMPLICIT = ("imex_euler", 1.25e-4)
+EXPLICIT = ("rk4", 6.25e-5)
+
+
+def held_interference(model: Model, load: float = HELD_CONTACT_LOAD) -> float:
+    """Axial interference [m] (``|dx| - b/2``, Eq. 9.5) at which one nut's static contact carries ``load``."""
+    c = model.constants
+    return abs(contact_position_for_force(c, model.stiffness_poly, load)) - 0.5 * c[K.BACKLASH]
+
+
+def choice_statement(method: str, dt: float, stopped_at: float | None = None, bound: int = 0,
+                     reason: str = "") -> str:
+    """Why the automatic integrator solved a run with ``method`` at ``dt``: the line of
+    ``attrs["integrator_choice"]``. ``stopped_at``, ``bound`` and ``reason``: where and why the implicit attempt
+    ended (None: it solved the run)."""
+    if stopped_at is None:
+        return (f"auto: {method} at {dt * 1e6:g} us; both nut contacts carried >= {HELD_CONTACT_LOAD:g} N but for "
+                f"<= {RELEASE_BUDGET * 1e3:g} ms")
+    why = (f"the nuts' contact loads having been below {HELD_CONTACT_LOAD:g} N for more than "
+           f"{RELEASE_BUDGET * 1e3:g} ms" if bound == BOUND_CONTACT_RELEASED else f"failed: {reason}")
+    return (f"auto: {method} at {dt * 1e6:g} us; {IMPLICIT[0]} at {IMPLICIT[1] * 1e6:g} us stopped at "
+            f"t = {stopped_at:.6f} s, {why}")
