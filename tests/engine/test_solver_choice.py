@@ -29,9 +29,10 @@ def test_held_interference_carries_the_held_load(scene_name):
     assert depth > 0.0
     force = contact_force(c, model.stiffness_poly, 0.5 * c[K.BACKLASH] + depth)
     assert abs(force) == pytest.approx(HELD_CONTACT_LOAD, rel=1e-6)
-    # a Hertz contact (F ~ delta^1.5): twice the interference carries 2^1.5 the load, to the contact-angle change
-    assert abs(contact_force(c, model.stiffness_poly, 0.5 * c[K.BACKLASH] + 2.0 * depth)) == pytest.approx(
-        2.0 ** 1.5 * HELD_CONTACT_LOAD, rel=0.02)
+    # Hertz (F ~ delta^1.5) at a contact angle that rises with the load (Eq. 9.4): twice the interference carries
+    # at least 2^1.5 the load, and not much more (the angle moves by a few degrees over this range)
+    ratio = abs(contact_force(c, model.stiffness_poly, 0.5 * c[K.BACKLASH] + 2.0 * depth)) / HELD_CONTACT_LOAD
+    assert 2.0 ** 1.5 <= ratio < 1.05 * 2.0 ** 1.5
 
 
 def test_contacts_held_needs_both_nuts_beyond_the_held_interference():
@@ -100,9 +101,9 @@ def test_simulate_features_reports_the_method_used():
 @pytest.mark.parametrize("scene_name", ["ds1", "ds5"])
 def test_implicit_branch_agrees_with_rk4_where_the_premise_holds(scene_name):
     """Cross-check of two methods: where auto keeps the implicit step (both preloaded data sets), the Eq. 9.12
-    feature on true signals is within 0.02 um of RK4 at 62.5 us. Measured at 2 s: 0.0001-0.006 um; at 10 s
-    0.0005 (ds5) and 0.007 um (ds1) (docs/accuracy.md, "The automatic integrator"); 0.02 um is the bound the
-    release budget was chosen for."""
+    feature on true signals is within 0.02 um of RK4 at 62.5 us. At 10 s the error is 0.0005 (ds5) and 0.007 um
+    (ds1), and at most 0.031 um over the preload sweep of docs/accuracy.md ("The automatic integrator", ds5 at
+    650 N); 0.02 um bounds the nominal preload with a margin of three over ds1's figure."""
     params = twin.load_parameters()
     auto = twin.simulate(scene_name, params, duration=2.0)
     assert auto.attrs["integrator"] == IMPLICIT[0]
