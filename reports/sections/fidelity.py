@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections import Counter
 
 from reports.builder import Builder, statement_tone
 from reports.model import Callout, Paragraph
@@ -42,6 +43,7 @@ def build(b: Builder):
     if configured:
         yield b.table("Subsystem levels the automatic choice used, per data set (subsystem = level).",
                       ("Data set", "Subsystem levels"), [(d, level.replace("=", " = ")) for d, level in configured])
+    yield from _integrators(b)
     rows, speedups = [], []
     for d in b.datasets:
         text = attrs.pop(f"fidelity_audit_{d}", None)
@@ -80,3 +82,26 @@ def build(b: Builder):
     if attrs:
         yield b.table("Other fidelity attributes recorded in results.nc.", ("Attribute", "Value"),
                       [(k, v.replace(" um", " µm")) for k, v in attrs.items()])
+
+
+def _integrators(b: Builder):
+    """The method that solved each run, counted per data set (results.nc ``integrator``)."""
+    requested = (b.spec.get("solver") or {}).get("integrator", "auto")
+    rows = []
+    for d in b.datasets if "integrator" in b.results else ():
+        counts = Counter(str(v) for v in b.results["integrator"].sel(dataset=d).values.ravel() if str(v))
+        if counts:
+            rows.append((d, ", ".join(f"{method}: {n}" for method, n in sorted(counts.items()))))
+    if not rows:
+        yield Paragraph(f"The campaign asked for integrator '{requested}'; which method solved each run is not "
+                        "recorded in this results.nc (written before the automatic integrator, or by a run "
+                        "function that does not report it).")
+        return
+    yield Paragraph(
+        f"The campaign asked for integrator '{requested}'. With 'auto' each run is first solved by the implicit "
+        "drive-period step (imex_euler at 125 µs) with the premise that both nuts stay held on a flank checked at "
+        "every step; a run whose nuts are released for longer than the premise allows is solved again from the "
+        "start by RK4 at 62.5 µs with the same noise (twin.engine.solver_choice, docs/accuracy.md). The table "
+        "counts the method that solved each run."
+    )
+    yield b.table("Integrator that solved the runs, per data set (method: runs).", ("Data set", "Integrator"), rows)
