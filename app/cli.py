@@ -276,7 +276,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5, "
                         "scene.zero_procedure=preloaded, scene.cylinder=detached)")
     p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=[AUTO, *sorted(INTEGRATORS)],
-                   help="default auto: imex_euler where the nuts stay held on a flank, else rk4 (twin.simulate)")
+                   help="default rk4 at 62.5 us; auto (opt-in): imex_euler where the nuts stay held on a flank, "
+                        "else rk4 (twin.simulate, docs/accuracy.md)")
     p.add_argument("--dt", type=float, help="integration step [s] (not with --integrator auto)")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
     p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",

@@ -87,7 +87,7 @@ class Solver(_Strict):
     ``{subsystem = level}`` (see ``twin fidelity levels``).
     """
 
-    integrator: str = "auto"  # twin.simulate's default: imex_euler where the nuts stay held, else rk4
+    integrator: str = "rk4"  # or "auto" (opt-in: twin.engine.solver_choice), or any twin.simulate integrator
     dt: float | None = Field(default=None, gt=0)
     output_dt: float | None = Field(default=None, gt=0)
     fidelity: str | dict[str, str] = "auto"

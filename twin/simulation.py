@@ -37,7 +37,7 @@ from twin.layout import (
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
-DEFAULT_INTEGRATOR = "auto"  # imex_euler where the nuts are held, else rk4 (twin.engine.solver_choice)
+DEFAULT_INTEGRATOR = "rk4"  # "auto" (twin.engine.solver_choice) is opt-in: docs/accuracy.md says why
 DEFAULT_DT = 6.25e-5  # s; the explicit methods' step, from the speed-versus-accuracy study (docs/accuracy.md)
 #: Default step of a method when ``dt`` is not given: the implicit step takes the drive period.
 DEFAULT_STEPS = {IMPLICIT[0]: IMPLICIT[1]}
@@ -70,11 +70,12 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
     integrator : {"auto", "rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau",
                   "scipy_lsoda", "scipy_bdf", "scipy_rk45"}
-        ``"auto"`` (:mod:`twin.engine.solver_choice`): ``imex_euler`` at the 125 us drive period while both
-        nuts are held on a flank, else the whole run again with ``rk4`` at 62.5 us; the method used and why
-        are in ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. Otherwise a
-        fixed-step method of the compiled loop, or a ``scipy_*`` adaptive method of the reference path
-        (:mod:`twin.engine.reference`), which ignores ``dt``.
+        A fixed-step method of the compiled loop (default ``rk4`` at 62.5 us), a ``scipy_*`` adaptive method
+        of the reference path (:mod:`twin.engine.reference`), which ignores ``dt``, or ``"auto"``
+        (:mod:`twin.engine.solver_choice`, opt-in): ``imex_euler`` at the 125 us drive period while both nuts
+        are held on a flank, else the whole run again with ``rk4`` at 62.5 us; the method used and why are in
+        ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. About 3x faster where the
+        implicit step is kept, but not accurate everywhere the premise holds (docs/accuracy.md).
     dt : float, optional
         Integration step [s]; must divide the speed- and position-loop periods. Default: 125 us for
         ``imex_euler``, 62.5 us for the other fixed-step methods; ``"auto"`` chooses its own.

@@ -44,6 +44,10 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                     continue
                 order = np.argsort(runs.wall_time.values)
                 error = np.maximum(runs[metric].values[order] * SCALE[metric], 1e-16)
+                if str(method).startswith("auto"):  # the default: one point, drawn over the ladders
+                    ax.loglog(runs.wall_time.values[order], error, "*", ms=13, color="k", zorder=5,
+                              label=f"{method}, opt-in")
+                    continue
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
             if panel == "quantizers_on":

@@ -50,13 +50,13 @@ def test_same_inputs_same_numbers():
 
 def test_guard_reports_unstable_step_as_data():
     """A step beyond RK4's stability limit for the contact (~4e-5 s) is caught and reported, not silent."""
-    ds = twin.simulate("nominal", integrator="rk4", dt=1.25e-4, throw=False, duration=1.0)
+    ds = twin.simulate("nominal", dt=1.25e-4, throw=False, duration=1.0)
     assert ds.attrs["status"] == "diverged"
     assert ds.attrs["failure_reason"]
     assert 0 < ds.attrs["t_reached"] < 1.0
     assert np.isnan(float(ds.backlash_feature_true))
     with pytest.raises(SimulationFailed, match="diverged"):
-        twin.simulate("nominal", integrator="rk4", dt=1.25e-4, duration=1.0)
+        twin.simulate("nominal", dt=1.25e-4, duration=1.0)
 
 
 def test_iso_curvature_selectable(bench):
@@ -88,12 +88,11 @@ def test_iso_curvature_selectable(bench):
     # thesis start would add the nut's travel from the gap's centre to its flank
     # thesis start would add the nut's travel from the gap's centre to its flank. Without the ball-groove friction:
     # its stick-slip at the reversals depends on the contact stiffness too, and moves the feature by more (and
-    # in either direction) than the 3e-5 the curvature's deflection share predicts. RK4, not the automatic
-    # integrator: the implicit step's own error on this feature (a few 1e-4 relative) exceeds the 3e-5 effect.
+    # in either direction) than the 3e-5 the curvature's deflection share predicts.
     preloaded = twin.load_scene("ds5").with_conditions({"zero_procedure": "preloaded"})
     lossless_screw = {"ball_groove_friction": "lumped", "screw_torsion": "rigid"}
-    a = twin.simulate(preloaded, duration=0.6, curvature="iso", fidelity=lossless_screw, integrator="rk4")
-    b = twin.simulate(preloaded, duration=0.6, curvature="thesis", fidelity=lossless_screw, integrator="rk4")
+    a = twin.simulate(preloaded, duration=0.6, curvature="iso", fidelity=lossless_screw)
+    b = twin.simulate(preloaded, duration=0.6, curvature="thesis", fidelity=lossless_screw)
     change = float(a.backlash_feature_true) / float(b.backlash_feature_true) - 1.0
     contact_only = expected_ratio ** (-2.0 / 3.0) - 1.0
     assert change != 0.0
@@ -102,8 +101,7 @@ def test_iso_curvature_selectable(bench):
 
 @pytest.mark.parametrize(("scene", "options"), [
     ("ds2", {"duration": 0.3, "rng": 3}),
-    # diverges: NaN features, status and reason as data
-    ("nominal", {"duration": 0.3, "integrator": "rk4", "dt": 1.25e-4}),
+    ("nominal", {"duration": 0.3, "dt": 1.25e-4}),  # diverges: NaN features, status and reason as data
 ])
 def test_features_without_the_dataset_are_the_datasets(scene, options):
     """``simulate_features`` returns exactly the scalars ``simulate`` puts in its Dataset, bit for bit."""

@@ -1,4 +1,4 @@
-"""The automatic integrator (``integrator="auto"``, twin.engine.solver_choice): the held-contact premise, the
+"""The automatic integrator (``integrator="auto"``, opt-in; twin.engine.solver_choice): the held-contact premise, the
 release budget of the compiled loop, the choice per run with its statement, the fallback's noise, and the
 implicit branch's accuracy against RK4 where the premise holds.
 """
@@ -58,7 +58,7 @@ def _features(ds):
 
 def test_auto_keeps_the_implicit_step_where_the_nuts_stay_held():
     params = twin.load_parameters()
-    auto = twin.simulate("ds5", params, duration=0.5, rng=3)
+    auto = twin.simulate("ds5", params, duration=0.5, rng=3, integrator="auto")
     assert auto.attrs["integrator"] == IMPLICIT[0] and auto.attrs["dt"] == IMPLICIT[1]
     assert auto.attrs["integrator_choice"].startswith(f"auto: {IMPLICIT[0]} at 125 us; both nut contacts carried")
     named = twin.simulate("ds5", params, duration=0.5, rng=3, integrator=IMPLICIT[0])
@@ -69,7 +69,7 @@ def test_auto_keeps_the_implicit_step_where_the_nuts_stay_held():
 def test_auto_solves_a_free_nut_scene_again_with_rk4_and_the_same_noise():
     params = twin.load_parameters()
     generator = np.random.default_rng(11)
-    auto = twin.simulate("ds2", params, duration=0.2, rng=generator)
+    auto = twin.simulate("ds2", params, duration=0.2, rng=generator, integrator="auto")
     assert auto.attrs["integrator"] == EXPLICIT[0] and auto.attrs["dt"] == EXPLICIT[1]
     choice = auto.attrs["integrator_choice"]
     assert f"{IMPLICIT[0]} at 125 us stopped at t = " in choice
@@ -87,15 +87,16 @@ def test_auto_solves_a_free_nut_scene_again_with_rk4_and_the_same_noise():
 
 def test_auto_rejects_a_step_and_names_the_field():
     with pytest.raises(OptionError, match="dt: .*integrator 'auto', which chooses its own steps"):
-        twin.simulate("ds5", duration=0.01, dt=6.25e-5)
+        twin.simulate("ds5", duration=0.01, dt=6.25e-5, integrator="auto")
     with pytest.raises(OptionError, match="integrator: 'rk5' is not one of auto, rk4"):
         twin.simulate("ds5", duration=0.01, integrator="rk5")
 
 
 def test_simulate_features_reports_the_method_used():
-    summary = twin.simulate_features("ds2", duration=0.05)
+    summary = twin.simulate_features("ds2", duration=0.05, integrator="auto")
     assert summary.integrator == EXPLICIT[0]
-    assert twin.simulate_features("ds5", duration=0.05).integrator == IMPLICIT[0]
+    assert twin.simulate_features("ds5", duration=0.05, integrator="auto").integrator == IMPLICIT[0]
+    assert twin.simulate_features("ds5", duration=0.05).integrator == "rk4"  # the default: auto is opt-in
 
 
 @pytest.mark.parametrize("scene_name", ["ds1", "ds5"])
@@ -105,7 +106,7 @@ def test_implicit_branch_agrees_with_rk4_where_the_premise_holds(scene_name):
     (ds1), and at most 0.031 um over the preload sweep of docs/accuracy.md ("The automatic integrator", ds5 at
     650 N); 0.02 um bounds the nominal preload with a margin of three over ds1's figure."""
     params = twin.load_parameters()
-    auto = twin.simulate(scene_name, params, duration=2.0)
+    auto = twin.simulate(scene_name, params, duration=2.0, integrator="auto")
     assert auto.attrs["integrator"] == IMPLICIT[0]
     rk4 = twin.simulate(scene_name, params, duration=2.0, integrator=EXPLICIT[0])
     assert abs(float(auto.backlash_feature_true) - float(rk4.backlash_feature_true)) < 0.02e-6
