@@ -10,8 +10,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
+from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from app.studies.work_precision import quantization_floor  # noqa: E402
+from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
                 "quantizers_on": "quantizers on (encoders, resolver, converters)"}
@@ -50,6 +52,10 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                     continue
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
+                default = runs.dt.values[order] == DEFAULT_DT
+                if method == DEFAULT_INTEGRATOR and default.any():  # ring the default configuration
+                    ax.loglog(runs.wall_time.values[order][default], error[default], "o", ms=12, mfc="none", color="k",
+                              mec="k", mew=1.5, label=f"{method} {DEFAULT_DT * 1e6:g} us, the default")
             if panel == "quantizers_on":
                 floor = quantization_floor(study, metric) * SCALE[metric]
                 if np.isfinite(floor) and floor > 0:
@@ -57,6 +63,7 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
             if metric == "feature_error" and sampling_error:
                 ax.axhline(sampling_error * 1e6, color="tab:red", ls="--", lw=1,
                            label="Monte Carlo error 1.96 sigma/sqrt(N)")
+            ax.xaxis.set_minor_formatter(NullFormatter())  # labelled minor ticks overlap on a short decade
             ax.set_xlabel("wall time of one run [s]")
             ax.set_ylabel(METRIC_LABELS[metric])
             ax.grid(True, which="both", alpha=0.3)

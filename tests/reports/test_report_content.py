@@ -120,6 +120,13 @@ def test_fidelity_audit_in_words_and_micrometres(extended, inputs):
     assert any("speedup below 1, i.e. the automatic runs took longer" in p.text for p in _blocks(fidelity, Paragraph))
 
 
+def test_fidelity_says_when_the_integrator_per_run_is_not_recorded(report):
+    """The synthetic test campaign's run function does not report its method: no table, a sentence saying so."""
+    fidelity = _section(report, "fidelity")
+    assert not [t for t in _blocks(fidelity, Table) if t.caption.startswith("Integrator that solved")]
+    assert any("which method solved each run is not recorded" in p.text for p in _blocks(fidelity, Paragraph))
+
+
 def test_bench_traces_get_the_thesis_panels(extended):
     """Traces named as the bench stores them give Figs. 9.6/9.7/9.11-style figures, and nut minus screw per data set."""
     keys = [f.key for f in _blocks(_section(extended, "traces"), Figure)]
