@@ -13,6 +13,11 @@ paired runs. The largest paired difference, the Monte Carlo error of the mean
 (``1.96 sigma / sqrt(N)``) and the KS p-value are reported beside it (the KS test is no part of the
 verdict: paired samples are not independent, and at ten runs it has no power).
 
+A campaign that asks for the opt-in automatic integrator (``integrator = "auto"``,
+:mod:`twin.engine.solver_choice`) is audited against full fidelity *and* the default integrator: the
+automatic choice of the method is judged with the automatic choice of the levels, by the same rule (the
+implicit step it may keep is the one that can shift a feature where a held contact vibrates, docs/accuracy.md).
+
 The verdict is a result, not an error: it is recorded in ``results.nc`` (``fidelity_audit*``
 attributes, one statement per data set and feature, printed verbatim by the CLI and the report), and
 a ``not met`` names the rule to fix (``twin/fidelity/rules.toml``).
@@ -31,6 +36,7 @@ from campaigns.comparison import VERDICTS, compare_features, paired_shift_verdic
 from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
 from campaigns.storage import atomic_write
 from twin.scenes import list_scenes, load_scene
+from twin.simulation import AUTO, DEFAULT_INTEGRATOR
 
 MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the bench must detect (Table 9.3)
 #: Per built-in scene and feature, the spread of tight runs that differ only in their step or by picometres [m]
@@ -39,11 +45,15 @@ NUMERICAL_FLOOR_FILE = Path(__file__).with_name("numerical_floor.toml")
 
 
 def full_fidelity_variant(spec: CampaignSpec, runs: int) -> CampaignSpec:
-    """The spec's first ``runs`` runs of every data set at full fidelity, without traces or audit."""
+    """The spec's first ``runs`` runs of every data set at full fidelity (and with the default integrator where the
+    spec asks for the automatic one), without traces or audit."""
+    solver = {"fidelity": "full"}
+    if spec.solver.integrator == AUTO:
+        solver.update(integrator=DEFAULT_INTEGRATOR, dt=None)
     return spec.model_copy(update={
         "name": f"{spec.name}_full_fidelity",
         "runs_per_dataset": runs,
-        "solver": spec.solver.model_copy(update={"fidelity": "full"}),
+        "solver": spec.solver.model_copy(update=solver),
         "traces": Traces(),
         "observability": Observability(),
         "fidelity_audit": FidelityAudit(runs=0),

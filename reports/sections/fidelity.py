@@ -32,7 +32,8 @@ def build(b: Builder):
         f"The campaign asked for fidelity '{requested}': with 'auto' each subsystem of the twin runs at the cheapest "
         "level the scene and its outputs allow (twin/fidelity/rules.toml). The audit re-runs the first "
         + (f"{runs} " if runs else "")
-        + "runs of every data set at full fidelity with the same parameters and noise and judges each feature's "
+        + "runs of every data set at full fidelity (and with RK4 where the campaign asked for integrator 'auto') "
+        "with the same parameters and noise and judges each feature's "
         "paired mean shift (automatic minus full) by its 95 % Student-t interval: met when the interval lies within "
         "the tolerance, not met when it lies beyond the tolerance plus the scene's numerical floor (the spread of "
         "tight runs that differ only in their step or by picometres of backlash, which no fidelity reduction can be "

@@ -6,7 +6,13 @@ import pytest
 import xarray as xr
 
 from campaigns.comparison import paired_shift_verdict
-from campaigns.fidelity_audit import MEAN_SHIFT_TOLERANCE, compare_fidelity, numerical_floors, summary_attrs
+from campaigns.fidelity_audit import (
+    MEAN_SHIFT_TOLERANCE,
+    compare_fidelity,
+    full_fidelity_variant,
+    numerical_floors,
+    summary_attrs,
+)
 from campaigns.scene_audit import THESIS_SPEC
 from campaigns.spec import load_spec
 
@@ -75,3 +81,17 @@ def test_the_thesis_data_sets_have_a_measured_floor():
     ds2 = spec.datasets[1].model_copy(update={"conditions": {"backlash": 1e-6}})
     moved = spec.model_copy(update={"datasets": [ds2]})
     assert numerical_floors(moved, list(spec.features)) == {}
+
+
+def test_an_auto_integrator_campaign_is_audited_against_the_default_integrator():
+    """The audit's reference run is full fidelity; with the opt-in automatic integrator also the default method (at
+    its own step), so the automatic choice of the method is judged by the same rule as that of the levels."""
+    spec = load_spec(THESIS_SPEC)
+    assert spec.solver.integrator == "rk4"
+    kept = full_fidelity_variant(spec, 3)
+    assert (kept.solver.fidelity, kept.solver.integrator, kept.runs_per_dataset) == ("full", "rk4", 3)
+    auto = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": "auto"})})
+    audited = full_fidelity_variant(auto, 3)
+    assert (audited.solver.fidelity, audited.solver.integrator, audited.solver.dt) == ("full", "rk4", None)
+    explicit = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": "imex_euler"})})
+    assert full_fidelity_variant(explicit, 3).solver.integrator == "imex_euler"  # a named method is the user's
