@@ -6,6 +6,7 @@ Usage::
     python benchmarks/campaign_throughput.py --runs 10          # the real bench (demo spec)
     python benchmarks/campaign_throughput.py --quick            # synthetic model, 10 runs per data set
     python benchmarks/campaign_throughput.py --thesis 60        # the thesis study end to end, 7 x 60 runs
+    python benchmarks/campaign_throughput.py --thesis 60 --integrator rk4 auto   # the default and the opt-in, in turn
 
 ``--thesis N`` times the thesis spec (campaigns/specs/thesis_backlash.toml, N runs per data set) end to
 end on a fresh local cluster of 2 workers, stage by stage (compilation check, cluster start, runs with
@@ -37,6 +38,7 @@ import time
 import tracemalloc
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 from distributed import LocalCluster
 from machine import header
@@ -124,9 +126,12 @@ def measure(args, workers: int, tmp: Path) -> dict:
 THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 16)
 
 
-def thesis_end_to_end(runs: int, workers: int, tmp: Path) -> None:
-    """Run the thesis spec with ``runs`` runs per data set, end to end, and print the stages and the rates."""
+def thesis_end_to_end(runs: int, workers: int, tmp: Path, integrator: str | None = None) -> None:
+    """Run the thesis spec with ``runs`` runs per data set (with ``integrator`` instead of the spec's, if given),
+    end to end, and print the stages and the rates."""
     spec = campaigns.load_spec(SPECS / "thesis_backlash.toml", runs=runs)
+    if integrator:
+        spec = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": integrator})})
     marks: list[tuple[str, float]] = []
     start = time.perf_counter()
     results = campaigns.run_campaign(spec, tmp / "thesis", workers=workers, progress=False,
@@ -148,8 +153,10 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path) -> None:
         ok = int((ds["status"] == "ok").sum())
         compute = float(ds["wall_time"].sum())
         audit = ds.attrs.get("fidelity_audit", "not run")
+        methods, counts = np.unique(ds["integrator"].values.astype(str), return_counts=True)
     total = end - start
-    print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, "
+    print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, integrator "
+          f"{spec.solver.integrator} (runs solved by {', '.join(f'{m}: {c}' for m, c in zip(methods, counts, strict=True))}), "
           f"end to end {total:.1f} s:")
     for stage, seconds in stages.items():
         print(f"  {stage:32s} {seconds:8.1f} s  {100 * seconds / total:5.1f} %")
@@ -174,11 +181,14 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="synthetic model, 10 runs per data set (seconds)")
     parser.add_argument("--thesis", type=int, metavar="N",
                         help="time the thesis spec end to end with N runs per data set")
+    parser.add_argument("--integrator", nargs="+", default=[None], metavar="NAME",
+                        help="with --thesis: integrators to time one after the other (default: the spec's)")
     args = parser.parse_args()
     header("campaign throughput", args.quick)
     if args.thesis:
-        with tempfile.TemporaryDirectory() as tmp:
-            thesis_end_to_end(args.thesis, max(args.workers), Path(tmp))
+        for integrator in args.integrator:
+            with tempfile.TemporaryDirectory() as tmp:
+                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), integrator)
         return
     if args.quick:
         args.synthetic, args.runs = True, 10
