@@ -154,10 +154,10 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, integrator: str | None
         compute = float(ds["wall_time"].sum())
         audit = ds.attrs.get("fidelity_audit", "not run")
         methods, counts = np.unique(ds["integrator"].values.astype(str), return_counts=True)
+    solved_by = ", ".join(f"{m}: {c}" for m, c in zip(methods, counts, strict=True))
     total = end - start
     print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, integrator "
-          f"{spec.solver.integrator} (runs solved by {', '.join(f'{m}: {c}' for m, c in zip(methods, counts, strict=True))}), "
-          f"end to end {total:.1f} s:")
+          f"{spec.solver.integrator} (runs solved by {solved_by}), end to end {total:.1f} s:")
     for stage, seconds in stages.items():
         print(f"  {stage:32s} {seconds:8.1f} s  {100 * seconds / total:5.1f} %")
     print(f"  mean run {1e3 * compute / n:.0f} ms wall inside the workers; fidelity audit: {audit}")
