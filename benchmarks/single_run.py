@@ -148,6 +148,13 @@ def dataset_features(params, duration: float | None, ensemble_options: dict) -> 
             candidate = float(ds[feature]) if ds.attrs["status"] == "ok" else float("nan")
             verdicts[name, feature] = reference_verdict(candidate, ensemble[feature].values, FEATURE_TARGET)
             print(f"    {feature:22s} {verdicts[name, feature].statement}")
+        # the opt-in automatic integrator against the same ensemble (not part of the default's verdict)
+        cost, auto = cpu_run(name, params, integrator="auto", **options)
+        print(f"  opt-in auto: {cost:.3f} s CPU, solved by {auto.attrs['integrator']}")
+        for feature in FEATURES:
+            candidate = float(auto[feature]) if auto.attrs["status"] == "ok" else float("nan")
+            print(f"    {feature:22s} "
+                  f"{reference_verdict(candidate, ensemble[feature].values, FEATURE_TARGET).statement}")
     overall = worst_verdict(v.verdict for v in verdicts.values())
     print(f"feature within {FEATURE_TARGET * 1e6:g} um of the tight reference on every thesis data set: {overall}")
     for verdict in VERDICTS:
