@@ -194,7 +194,8 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
 
 
 def _attempt(run: _Run, model, rng, local_error_guard: bool, held: float) -> _Simulated:
-    """Solve ``run`` once on ``model``; ``held`` > 0 stops at the first step that releases a nut's contact."""
+    """Solve ``run`` once on ``model``; with ``held`` > 0 [m] the loop stops once the nuts have spent more than the
+    release budget below that interference (:mod:`twin.engine.solver_choice`)."""
     generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
         DEFAULT_NOISE_SEED if rng is None else rng)
     n_steps = int(round(run.scene.duration / run.dt))
