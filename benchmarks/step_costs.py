@@ -29,16 +29,19 @@ from twin.engine.instrumentation import build_instruments, instrument_levels
 from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
 from twin.engine.model import build_model
 from twin.engine.reference import local_error_tolerance
-from twin.engine.solver_choice import EXPLICIT, IMPLICIT
+from twin.engine.solver_choice import IMPLICIT_METHOD
 from twin.layout import N_INPUTS, N_MEMORY, N_SIGNALS, M
+from twin.parameters import load_parameters
 
 OUTPUTS = {"nominal": None, "ds1": ["backlash_feature", "backlash_feature_true", "backlash_hysteresis",
                                    "backlash_hysteresis_true", "position_demand", "nut1_position",
                                    "screw_equivalent_position", "linear_encoder_position", "preload_force",
                                    "external_force"]}
 FIDELITY = {"nominal": "full", "ds1": "auto"}
-#: The methods profiled: the automatic integrator's two branches (twin.engine.solver_choice).
-METHODS = (IMPLICIT, EXPLICIT)
+#: The methods profiled, each at its step: the default, and the implicit branch of the opt-in automatic integrator
+#: (twin.engine.solver_choice) at the bench's drive period.
+METHODS = ((simulation.DEFAULT_INTEGRATOR, simulation.DEFAULT_DT),
+           (IMPLICIT_METHOD, load_parameters().value("drive.speed_loop_sample_time")))
 
 
 @numba.njit

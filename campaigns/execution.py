@@ -49,7 +49,7 @@ from tqdm.auto import tqdm
 from campaigns import bench as bench_adapter
 from campaigns.budget import check_disk, estimate
 from campaigns.catalog import Catalog
-from campaigns.fidelity_audit import audit_campaign
+from campaigns.fidelity_audit import audit_campaign, has_automatic_choice
 from campaigns.provenance import provenance
 from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
 from campaigns.sampling import sample
@@ -254,7 +254,7 @@ def run_campaign(
             results = store.assemble(samples,
                                      {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
                                       "workers": scheduler or workers}, attrs, margins)
-            if spec.fidelity_audit.runs >= 2 and spec.solver.fidelity != "full":
+            if spec.fidelity_audit.runs >= 2 and has_automatic_choice(spec):
                 runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
                 announce("fidelity audit",
                          f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"

@@ -44,6 +44,12 @@ MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the ben
 NUMERICAL_FLOOR_FILE = Path(__file__).with_name("numerical_floor.toml")
 
 
+def has_automatic_choice(spec: CampaignSpec) -> bool:
+    """Whether the spec leaves something to an automatic choice the audit can check: the fidelity levels
+    (anything but ``"full"``) or the integrator (``"auto"``)."""
+    return spec.solver.fidelity != "full" or spec.solver.integrator == AUTO
+
+
 def full_fidelity_variant(spec: CampaignSpec, runs: int) -> CampaignSpec:
     """The spec's first ``runs`` runs of every data set at full fidelity (and with the default integrator where the
     spec asks for the automatic one), without traces or audit."""
@@ -121,7 +127,8 @@ def overall_verdict(audit: xr.Dataset) -> str:
              for d in audit.dataset.values for f in audit.feature.values}
     worst = worst_verdict(cells.values())
     meaning = {"met": "auto is within the tolerance of full fidelity on every data set and feature",
-               "not met": "auto differs from full fidelity (rule to fix)",
+               "not met": "auto differs from full fidelity (the fidelity rule to fix, or with integrator 'auto' "
+                           "the integrator's choice)",
                "undetermined": "the audit's runs cannot resolve the tolerance",
                "insufficient data": "too few paired runs"}[worst]
     named = [f"{d}/{f}" for (d, f), v in cells.items() if v == worst]
@@ -154,8 +161,8 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
         auto = handle.load()
     reported = any(k.startswith("fidelity_") and k != "fidelity_requested" for k in auto.attrs)
     runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset)
-    if runs < 2 or spec.solver.fidelity == "full" or not reported:
-        why = ("the campaign runs at full fidelity" if spec.solver.fidelity == "full"
+    if runs < 2 or not has_automatic_choice(spec) or not reported:
+        why = ("the campaign runs at full fidelity with a named integrator" if not has_automatic_choice(spec)
                else "the run function reports no fidelity" if not reported
                else f"fidelity_audit.runs = {spec.fidelity_audit.runs} with {spec.runs_per_dataset} run(s) "
                     "per data set; it needs 2 or more")

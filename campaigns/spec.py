@@ -104,7 +104,7 @@ class Solver(_Strict):
 class FidelityAudit(_Strict):
     """After the campaign, re-run the first ``runs`` runs of every data set at full fidelity
     (same parameters, same noise) and compare the features (:mod:`campaigns.fidelity_audit`).
-    ``0`` skips it; it is also skipped when the campaign already runs at full fidelity."""
+    ``0`` skips it; it is also skipped when the campaign already runs at full fidelity with a named integrator."""
 
     runs: int = Field(default=10, ge=0)
 

@@ -19,7 +19,7 @@ from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
-from twin.engine.solver_choice import EXPLICIT, IMPLICIT, RELEASE_BUDGET, choice_statement, held_interference
+from twin.engine.solver_choice import IMPLICIT_METHOD, RELEASE_BUDGET, choice_statement, held_interference
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
@@ -38,9 +38,7 @@ from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
 DEFAULT_INTEGRATOR = "rk4"  # "auto" (twin.engine.solver_choice) is opt-in: docs/accuracy.md says why
-DEFAULT_DT = 6.25e-5  # s; the explicit methods' step, from the speed-versus-accuracy study (docs/accuracy.md)
-#: Default step of a method when ``dt`` is not given: the implicit step takes the drive period.
-DEFAULT_STEPS = {IMPLICIT[0]: IMPLICIT[1]}
+DEFAULT_DT = 6.25e-5  # s; chosen by the speed-versus-accuracy study (docs/accuracy.md)
 AUTO = "auto"
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
@@ -77,8 +75,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. About 3x faster where the
         implicit step is kept, but not accurate everywhere the premise holds (docs/accuracy.md).
     dt : float, optional
-        Integration step [s]; must divide the speed- and position-loop periods. Default: 125 us for
-        ``imex_euler``, 62.5 us for the other fixed-step methods; ``"auto"`` chooses its own.
+        Integration step [s]; must divide the speed- and position-loop periods. Default 62.5 us;
+        ``"auto"`` chooses its own (the drive period for its implicit branch).
     output_dt : float
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
@@ -177,17 +175,15 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
     # the automatic integrator's second attempt must draw the same noise as its first
     noise_source = copy.deepcopy(rng) if run.fallback is not None and isinstance(rng, np.random.Generator) else rng
-    start = time.perf_counter()
-    done = _attempt(run, model, rng, local_error_guard, held_interference(model) if run.fallback else 0.0)
+    done = _attempt(run, model, rng, local_error_guard, held_interference(model) if run.fallback is not None else 0.0)
     if run.fallback is not None and done.status != STATUS_OK:
         # the premise broke, or the implicit step failed (a failure of the branch, not yet of the run)
         stopped = done
         done = _attempt(run.fallback, model, noise_source, local_error_guard, 0.0)
-        done = dataclasses.replace(done, choice=choice_statement(run.fallback.integrator, run.fallback.dt,
-                                                                 stopped.t_reached, stopped.bound, stopped.reason))
+        done = dataclasses.replace(done, wall_time=stopped.wall_time + done.wall_time, choice=choice_statement(
+            run.fallback.integrator, run.fallback.dt, run.dt, stopped.t_reached, stopped.bound, stopped.reason))
     elif run.fallback is not None:
         done = dataclasses.replace(done, choice=choice_statement(run.integrator, run.dt))
-    done = dataclasses.replace(done, wall_time=time.perf_counter() - start)
     if done.status != STATUS_OK and throw:
         raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
     return done
@@ -206,10 +202,11 @@ def _attempt(run: _Run, model, rng, local_error_guard: bool, held: float) -> _Si
     output = np.full((n_steps // run.output_every + 1, N_SIGNALS), np.nan)
     memory = np.zeros(N_MEMORY)
     x = model.initial_state.copy()
+    start = time.perf_counter()
     status, bound, t_reached, rows, reason, solver_stats = _solve(run, model, instruments, n_steps, x, output, memory,
                                                                   local_error_guard, held)
-    return _Simulated(run, model, x, output[:rows], memory, status, bound, reason, t_reached, solver_stats, 0.0,
-                      rng, "")
+    return _Simulated(run, model, x, output[:rows], memory, status, bound, reason, t_reached, solver_stats,
+                      time.perf_counter() - start, rng, "")
 
 
 @dataclass(frozen=True)
@@ -245,12 +242,16 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         problems.append(f"integrator: {integrator!r} is not one of "
                         f"{', '.join([AUTO, *INTEGRATORS, *REFERENCE_METHODS])}")
     if auto and dt is not None:
-        problems.append(f"dt: {dt!r} with integrator 'auto', which chooses its own steps ({IMPLICIT[0]} "
-                        f"{IMPLICIT[1] * 1e6:g} us, {EXPLICIT[0]} {EXPLICIT[1] * 1e6:g} us); leave dt unset or "
-                        "name a method")
-    method = IMPLICIT[0] if auto else integrator
+        problems.append(f"dt: {dt!r} with integrator 'auto', which chooses its own steps ({IMPLICIT_METHOD} at the "
+                        f"drive period, {DEFAULT_INTEGRATOR} at {DEFAULT_DT * 1e6:g} us); leave dt unset or name a "
+                        "method")
+    if auto and output_dt == 0:
+        problems.append("output_dt: 0 (every step) with integrator 'auto', whose step depends on the run; give a "
+                        "spacing, e.g. 1e-3 s")
+    speed_ts = params.value("drive.speed_loop_sample_time")
+    method = IMPLICIT_METHOD if auto else integrator
     if dt is None or auto:
-        dt = DEFAULT_STEPS.get(method, DEFAULT_DT)
+        dt = speed_ts if auto else DEFAULT_DT
     if not (isinstance(rtol, float) and 1e-14 <= rtol < 1e-2):
         problems.append(f"rtol: {rtol!r} must be a float in [1e-14, 1e-2)")
     if curvature not in CURVATURE_FORMULAS:
@@ -266,21 +267,20 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
             problems += exc.problems
     if rng is not None and not isinstance(rng, (np.random.Generator, int)):
         problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
-    speed_ts = params.value("drive.speed_loop_sample_time")
     if reference:
         dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
 
-    def stepped(method: str, dt: float, fallback: _Run | None = None) -> _Run:
-        speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
-        position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt,
+    def stepped(name: str, step: float, fallback: _Run | None = None) -> _Run:
+        speed_every = _steps_per(speed_ts, step, "speed-loop period", problems)
+        position_every = _steps_per(params.value("controller.position_loop_sample_time"), step,
                                     "position-loop period", problems)
-        output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
-        return _Run(scene, params, resolved, method, reference, dt, rtol, curvature, speed_ts, speed_every,
+        output_every = _steps_per(output_dt, step, "output spacing output_dt", problems) if output_dt > 0 else 1
+        return _Run(scene, params, resolved, name, reference, step, rtol, curvature, speed_ts, speed_every,
                     position_every, output_every, fallback)
 
-    run = stepped(method, dt, stepped(*EXPLICIT) if auto else None)
+    run = stepped(method, dt, stepped(DEFAULT_INTEGRATOR, DEFAULT_DT) if auto else None)
     if problems:
-        raise OptionError(problems)
+        raise OptionError(list(dict.fromkeys(problems)))  # the two branches of 'auto' may repeat a problem
     return run
 
 

@@ -46,13 +46,13 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                     continue
                 order = np.argsort(runs.wall_time.values)
                 error = np.maximum(runs[metric].values[order] * SCALE[metric], 1e-16)
-                if str(method).startswith("auto"):  # the default: one point, drawn over the ladders
+                if str(method).startswith("auto"):  # the opt-in automatic integrator: one point, over the ladders
                     ax.loglog(runs.wall_time.values[order], error, "*", ms=13, color="k", zorder=5,
                               label=f"{method}, opt-in")
                     continue
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
-                default = runs.dt.values[order] == DEFAULT_DT
+                default = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
                 if method == DEFAULT_INTEGRATOR and default.any():  # ring the default configuration
                     ax.loglog(runs.wall_time.values[order][default], error[default], "o", ms=12, mfc="none", color="k",
                               mec="k", mew=1.5, label=f"{method} {DEFAULT_DT * 1e6:g} us, the default")

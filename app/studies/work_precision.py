@@ -130,7 +130,7 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
         attrs[f"{panel}_reference_stats"] = ", ".join(f"{k[7:]}={v}" for k, v in reference.attrs.items()
                                                      if k.startswith("solver_"))
         progress(f"[{panel}] reference {REFERENCE}: {reference_time:.2f} s, status {reference.attrs['status']}")
-        # the default (the automatic integrator, which picks its own method and step) as one point
+        # the opt-in automatic integrator, which picks its own method and step, as one point
         runs = ([(AUTO, np.nan, np.nan)] + [(m, dt, np.nan) for m in methods for dt in steps]
                 + [(b, np.nan, r) for b in baselines for r in tolerances])
         for k, (method, dt, rtol) in enumerate(runs, start=1):

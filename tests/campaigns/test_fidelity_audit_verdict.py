@@ -10,6 +10,7 @@ from campaigns.fidelity_audit import (
     MEAN_SHIFT_TOLERANCE,
     compare_fidelity,
     full_fidelity_variant,
+    has_automatic_choice,
     numerical_floors,
     summary_attrs,
 )
@@ -55,7 +56,8 @@ def test_each_synthetic_case_gets_its_verdict_and_the_attributes_print_it_verbat
         assert row.statement.item() == expected.statement
         assert float(row.shift_lower) == pytest.approx(expected.lower, nan_ok=True)
     attrs = summary_attrs(audit)
-    assert attrs["fidelity_audit"] == "not met: auto differs from full fidelity (rule to fix): outside/backlash_feature"
+    assert attrs["fidelity_audit"] == ("not met: auto differs from full fidelity (the fidelity rule to fix, or with "
+                                       "integrator 'auto' the integrator's choice): outside/backlash_feature")
     for name in CASES:
         statement = audit.statement.sel(dataset=name, feature="backlash_feature").item()
         assert attrs[f"fidelity_audit_{name}"].startswith(f"speedup x1.50; backlash_feature: {statement}; max paired")
@@ -95,3 +97,8 @@ def test_an_auto_integrator_campaign_is_audited_against_the_default_integrator()
     assert (audited.solver.fidelity, audited.solver.integrator, audited.solver.dt) == ("full", "rk4", None)
     explicit = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": "imex_euler"})})
     assert full_fidelity_variant(explicit, 3).solver.integrator == "imex_euler"  # a named method is the user's
+    # at full fidelity only the automatic integrator is left to audit
+    full = {"fidelity": "full"}
+    assert has_automatic_choice(spec) and has_automatic_choice(auto)
+    assert not has_automatic_choice(spec.model_copy(update={"solver": spec.solver.model_copy(update=full)}))
+    assert has_automatic_choice(auto.model_copy(update={"solver": auto.solver.model_copy(update=full)}))

@@ -110,7 +110,7 @@ def test_work_precision_round_trip_and_replot(tmp_path):
                       baselines=("scipy_lsoda",), repeats=1, progress=lambda line: None)
     assert set(study.panel.values) == {"quantizers_off", "quantizers_on"}
     assert np.all(study.wall_time > 0)
-    # the default is one point per panel, named by the method the automatic integrator chose (ds4: a free nut)
+    # the opt-in automatic integrator is one point per panel, named by the method it chose (ds4: a free nut)
     default = study.where(study.method == "auto (rk4)", drop=True)
     assert default.sizes["run"] == 2 and np.all(default.dt == 6.25e-5)
     study.to_netcdf(tmp_path / "work_precision.nc", engine="netcdf4")
