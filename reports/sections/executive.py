@@ -10,6 +10,7 @@ from campaigns.analysis import BACKLASH_REQUIREMENT
 from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder, statement_tone
 from reports.model import Callout, Paragraph
 from reports.sections.correlations import rank_order
+from reports.sections.fidelity import AUTO_INTEGRATOR
 from reports.units import number, quantity
 
 
@@ -149,5 +150,7 @@ def build(b: Builder):
                   "bad" if n_failed else "good", "failures")
     yield control_robustness(a)
     audit = str(results.attrs.get("fidelity_audit", "not recorded in results.nc"))
-    yield Callout(f"Fidelity audit (automatic model simplification against full fidelity): {audit}.",
-                  statement_tone(audit), "fidelity")
+    checked = ("automatic model simplification and integrator against full fidelity with RK4"
+               if (b.spec.get("solver") or {}).get("integrator") == AUTO_INTEGRATOR
+               else "automatic model simplification against full fidelity")
+    yield Callout(f"Fidelity audit ({checked}): {audit}.", statement_tone(audit), "fidelity")

@@ -130,6 +130,18 @@ def test_fidelity_says_when_the_integrator_per_run_is_not_recorded(report):
     assert any("which method solved each run is not recorded" in p.text for p in _blocks(fidelity, Paragraph))
 
 
+def test_page_one_names_the_integrator_when_the_audit_checks_it_too(inputs):
+    """With the opt-in automatic integrator the audit's reference is full fidelity with RK4: page 1 says so."""
+    def audit_callout(report):
+        callouts = [c.text for c in report.executive if isinstance(c, Callout)]
+        return next(text for text in callouts if text.startswith("Fidelity audit ("))
+    assert audit_callout(build(inputs, "T")).startswith(
+        "Fidelity audit (automatic model simplification against full fidelity):")
+    spec = {**inputs.spec, "spec": {**inputs.spec["spec"], "solver": {"integrator": "auto", "fidelity": "auto"}}}
+    assert audit_callout(build(dataclasses.replace(inputs, spec=spec), "T")).startswith(
+        "Fidelity audit (automatic model simplification and integrator against full fidelity with RK4):")
+
+
 def test_bench_traces_get_the_thesis_panels(extended):
     """Traces named as the bench stores them give Figs. 9.6/9.7/9.11-style figures, and nut minus screw per data set."""
     keys = [f.key for f in _blocks(_section(extended, "traces"), Figure)]
