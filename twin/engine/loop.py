@@ -20,7 +20,7 @@ from twin.engine.plant import (
     ball_screw_outputs,
     external_force,
     internal_forces,
-    nut_relative_position,
+    nut_interference,
     preload_between_nuts,
     sensed_current,
     transmitted_torque,
@@ -84,7 +84,7 @@ def guard(x, c):
     if x[S.WINDING_TEMP] > c[K.MAX_TEMPERATURE]:
         return 5
     for nut in (0, 1):
-        gap = abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
+        gap = nut_interference(x, c, nut)
         # The normal approach never exceeds the axial interference (the triangle inequality on
         # Eq. 9.4's exact form), so the geometry is needed only near the limit.
         if gap > 0.0 and gap * c[K.COS_HELIX] > (1.0 - _APPROACH_MARGIN) * c[K.MAX_NORMAL_APPROACH]:
@@ -242,7 +242,7 @@ def contacts_held(x, c, held_interference):
     """Whether both nuts press on a flank with at least ``held_interference`` of axial interference
     (the deflection of the held-contact load, :func:`twin.engine.solver_choice.held_interference`)."""
     for nut in (0, 1):
-        if abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH] < held_interference:
+        if nut_interference(x, c, nut) < held_interference:
             return False
     return True
 

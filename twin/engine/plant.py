@@ -60,6 +60,13 @@ def nut_relative_position(x, c, nut):
 
 
 @numba.njit(cache=True)
+def nut_interference(x, c, nut):
+    """Axial interference of nut ``nut`` with its flank, ``|dx_i| - b/2`` [m] (Eq. 9.5): positive when the
+    contact is closed."""
+    return abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
+
+
+@numba.njit(cache=True)
 def nut_relative_velocity(x, c, nut):
     """Time derivative of :func:`nut_relative_position` (Eq. 9.5, second line)."""
     speed, angular = (S.NUT1_SPEED, S.NUT1_ANGULAR_SPEED) if nut == 0 else (S.NUT2_SPEED, S.NUT2_ANGULAR_SPEED)
