@@ -58,6 +58,12 @@ def cpu_run(scene, params, **options):
     return time.process_time() - start, ds
 
 
+def feature_verdicts(ds, ensemble) -> dict:
+    """Per feature, the run's verdict against the reference ensemble (NaN candidate when the run failed)."""
+    return {f: reference_verdict(float(ds[f]) if ds.attrs["status"] == "ok" else float("nan"), ensemble[f].values,
+                                 FEATURE_TARGET) for f in FEATURES}
+
+
 def feature_errors(ds, reference) -> dict[str, float]:
     return {f: abs(float(ds[f]) - float(reference[f])) for f in FEATURES}
 
@@ -80,15 +86,15 @@ def main() -> None:
 
     for integrator, dt in (*PATHS, REFERENCE):  # compile (or load the cache) outside the timings
         twin.simulate(scene, params, integrator=integrator, dt=dt, duration=0.01)
-    auto_times = [cpu_run(scene, params, integrator="auto")[0] for _ in range(repeats)]
-    chosen = twin.simulate(scene, params, integrator="auto", throw=False).attrs["integrator_choice"]
+    auto_runs = [cpu_run(scene, params, integrator="auto") for _ in range(repeats)]
+    chosen = auto_runs[0][1].attrs["integrator_choice"]
     times = [cpu_run(scene, params)[0] for _ in range(repeats)]
     cpu = statistics.median(times)
     verdict = "met" if cpu <= SINGLE_RUN_TARGET * scene.duration / 10.0 else "not met"
     print(f"\n1. '{scene.name}' scene, {scene.duration:g} s, default {DEFAULT_INTEGRATOR} at {DEFAULT_DT * 1e6:g} us: "
           f"{cpu:.3f} s CPU (median of {repeats}; min {min(times):.3f}), {scene.duration / cpu:.0f}x real time; "
           f"target <= {SINGLE_RUN_TARGET * scene.duration / 10.0:g} s: {verdict}")
-    auto_cpu = statistics.median(auto_times)
+    auto_cpu = statistics.median(cost for cost, _ in auto_runs)
     print(f"   opt-in integrator auto ({chosen}): {auto_cpu:.3f} s CPU (median of {repeats}), "
           f"{cpu / auto_cpu:.2f}x faster than the default; not the default: docs/accuracy.md")
 
@@ -144,17 +150,14 @@ def dataset_features(params, duration: float | None, ensemble_options: dict) -> 
         print(f"{name}: default {cost:.3f} s CPU, f_b {float(ds[FEATURES[0]]) * 1e6:.4f} um; "
               f"{ensemble.sizes['member']} references: "
               f"{float(values.min()) * 1e6:.4f} to {float(values.max()) * 1e6:.4f} um")
-        for feature in FEATURES:
-            candidate = float(ds[feature]) if ds.attrs["status"] == "ok" else float("nan")
-            verdicts[name, feature] = reference_verdict(candidate, ensemble[feature].values, FEATURE_TARGET)
-            print(f"    {feature:22s} {verdicts[name, feature].statement}")
+        for feature, verdict in feature_verdicts(ds, ensemble).items():
+            verdicts[name, feature] = verdict
+            print(f"    {feature:22s} {verdict.statement}")
         # the opt-in automatic integrator against the same ensemble (not part of the default's verdict)
         cost, auto = cpu_run(name, params, integrator="auto", **options)
         print(f"  opt-in auto: {cost:.3f} s CPU, solved by {auto.attrs['integrator']}")
-        for feature in FEATURES:
-            candidate = float(auto[feature]) if auto.attrs["status"] == "ok" else float("nan")
-            print(f"    {feature:22s} "
-                  f"{reference_verdict(candidate, ensemble[feature].values, FEATURE_TARGET).statement}")
+        for feature, verdict in feature_verdicts(auto, ensemble).items():
+            print(f"    {feature:22s} {verdict.statement}")
     overall = worst_verdict(v.verdict for v in verdicts.values())
     print(f"feature within {FEATURE_TARGET * 1e6:g} um of the tight reference on every thesis data set: {overall}")
     for verdict in VERDICTS:
