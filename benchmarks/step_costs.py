@@ -17,10 +17,12 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from types import SimpleNamespace
 
 import numba
 import numpy as np
 from machine import header
+from single_run import THESIS_OUTPUTS
 
 from twin import simulation
 from twin.engine import instrumentation as ins
@@ -33,11 +35,10 @@ from twin.engine.solver_choice import IMPLICIT_METHOD
 from twin.layout import N_INPUTS, N_MEMORY, N_SIGNALS, M
 from twin.parameters import load_parameters
 
-OUTPUTS = {"nominal": None, "ds1": ["backlash_feature", "backlash_feature_true", "backlash_hysteresis",
-                                   "backlash_hysteresis_true", "position_demand", "nut1_position",
-                                   "screw_equivalent_position", "linear_encoder_position", "preload_force",
-                                   "external_force"]}
-FIDELITY = {"nominal": "full", "ds1": "auto"}
+#: The nominal scene as `twin.simulate` runs it by default (every output: full fidelity); any other scene (the
+#: thesis data sets) as a thesis campaign runs it (its outputs set the automatic fidelity).
+OUTPUTS = {"nominal": None}
+FIDELITY = {"nominal": "full"}
 #: The methods profiled, each at its step: the default, and the implicit branch of the opt-in automatic integrator
 #: (twin.engine.solver_choice) at the bench's drive period.
 METHODS = ((simulation.DEFAULT_INTEGRATOR, simulation.DEFAULT_DT),
@@ -46,9 +47,9 @@ METHODS = ((simulation.DEFAULT_INTEGRATOR, simulation.DEFAULT_DT),
 
 @numba.njit
 def record_trajectory(method, x, c, position_table, force_table, poly, active, pairs, dt, speed_every,
-                      position_every, rows, levels, lookback, noise, trajectory):
+                      position_every, rows, levels, lookback, noise, trajectory, inputs):
     """run_loop's sequence of samples, steps and instrument advances (no output, no checks), recording the state
-    after every step (row ``k`` is the state at ``(k + 1) dt``)."""
+    after every step (row ``k`` is the state at ``(k + 1) dt``) and the held inputs of that step."""
     work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
     u = np.zeros(N_INPUTS)
     memory = np.zeros(N_MEMORY)
@@ -63,6 +64,7 @@ def record_trajectory(method, x, c, position_table, force_table, poly, active, p
             loop.speed_sample(x, c, u, memory, rows, levels, speed_every * dt)
         step(method, t, x, dt, c, u, force_table, poly, work, False, active, pairs)
         trajectory[k] = x
+        inputs[k] = u
         loop.instruments_advance(t + dt, dt, x, c, state, rows, levels, lookback,
                                  (position_every - (k + 1) % position_every) % position_every, force_table)
     return u
@@ -139,7 +141,7 @@ def local_error_pass(method, trajectory, c, u, force_table, poly, active, pairs,
     return worst
 
 
-def _median_cpu(function, args, repeats) -> float:
+def median_cpu(function, args, repeats) -> float:
     function(*args)  # compile
     times = []
     for _ in range(repeats):
@@ -149,10 +151,11 @@ def _median_cpu(function, args, repeats) -> float:
     return statistics.median(times)
 
 
-def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt: float) -> None:
-    method = INTEGRATORS[integrator]
-    run = simulation._validated(scene_name, None, integrator, dt,
-                                simulation.DEFAULT_OUTPUT_DT, duration, FIDELITY[scene_name], OUTPUTS[scene_name],
+def recorded_run(scene_name: str, duration: float, integrator: str, dt: float) -> SimpleNamespace:
+    """One run of ``scene_name`` (fidelity and outputs as in :data:`FIDELITY`, :data:`OUTPUTS`), its model and
+    instruments, and the state and held inputs after every step (``trajectory``, ``inputs``, one row per step)."""
+    run = simulation._validated(scene_name, None, integrator, dt, simulation.DEFAULT_OUTPUT_DT, duration,
+                                FIDELITY.get(scene_name, "auto"), OUTPUTS.get(scene_name, THESIS_OUTPUTS),
                                 None, "thesis", 1e-10)
     model = build_model(run.scene, run.params, run.fidelity, curvature="thesis")
     n = int(round(run.scene.duration / run.dt))
@@ -160,27 +163,48 @@ def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt:
         run.params.values(), run.scene.condition("room_temperature"), instrument_levels(run.fidelity),
         np.random.default_rng(0), n // run.position_every + 1, run.dt,
         torque_meter_refresh=run.fidelity.level("torque_meter_refresh") == "modelled")
+    x0 = model.initial_state
+    trajectory, inputs = np.zeros((n, x0.size)), np.zeros((n, N_INPUTS))
+    record_trajectory(INTEGRATORS[integrator], x0.copy(), model.constants, model.position_table, model.force_table,
+                      model.stiffness_poly, model.active, model.pairs, run.dt, run.speed_every, run.position_every,
+                      instruments.parameters, instruments.levels, instruments.lookback, instruments.noise,
+                      trajectory, inputs)
+    return SimpleNamespace(run=run, model=model, instruments=instruments, trajectory=trajectory, inputs=inputs, n=n)
+
+
+def run_loop_cpu(recorded: SimpleNamespace, integrator: str, repeats: int) -> float:
+    """Median CPU seconds of :func:`twin.engine.loop.run_loop` over the recorded run's scene (after a warm-up)."""
+    run, model, instruments = recorded.run, recorded.model, recorded.instruments
+
+    def once():
+        memory = np.zeros(N_MEMORY)
+        out = np.full((recorded.n // run.output_every + 1, N_SIGNALS), np.nan)
+        start = time.process_time()
+        loop.run_loop(model.initial_state.copy(), model.constants, model.position_table, model.force_table,
+                      model.stiffness_poly, model.active, model.pairs, recorded.n, run.dt, run.speed_every,
+                      run.position_every, run.output_every, run.position_every, INTEGRATORS[integrator],
+                      instruments.parameters, instruments.levels, instruments.lookback, instruments.noise, memory,
+                      out, local_error_tolerance(), 0.0, 0)
+        return time.process_time() - start
+
+    once()
+    return statistics.median(once() for _ in range(repeats))
+
+
+def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt: float) -> None:
+    method = INTEGRATORS[integrator]
+    recorded = recorded_run(scene_name, duration, integrator, dt)
+    run, model, instruments, trajectory, n = (recorded.run, recorded.model, recorded.instruments,
+                                              recorded.trajectory, recorded.n)
     c, ft, poly, x0 = model.constants, model.force_table, model.stiffness_poly, model.initial_state
     rows, levels, lookback, noise = (instruments.parameters, instruments.levels, instruments.lookback,
                                      instruments.noise)
-    trajectory = np.zeros((n, x0.size))
-    u = record_trajectory(method, x0.copy(), c, model.position_table, ft, poly, model.active, model.pairs, run.dt,
-                          run.speed_every, run.position_every, rows, levels, lookback, noise, trajectory)
+    u = recorded.inputs[-1]
     output = np.zeros((n // run.output_every + 1, N_SIGNALS))
     tolerance = local_error_tolerance()
     check_every = loop.LOCAL_ERROR_EVERY * run.position_every
-    empty = _median_cpu(empty_pass, (trajectory,), repeats)
-
-    def loop_cpu():
-        memory, out = np.zeros(N_MEMORY), np.full_like(output, np.nan)
-        start = time.process_time()
-        loop.run_loop(x0.copy(), c, model.position_table, ft, poly, model.active, model.pairs, n, run.dt,
-                      run.speed_every, run.position_every, run.output_every, run.position_every, method, rows,
-                      levels, lookback, noise, memory, out, tolerance, 0.0, 0)
-        return time.process_time() - start
-
-    loop_cpu()
-    total = statistics.median(loop_cpu() for _ in range(repeats))
+    empty = median_cpu(empty_pass, (trajectory,), repeats)
+    total = run_loop_cpu(recorded, integrator, repeats)
     parts = [  # (name, function, args, calls per run)
         ("integrator step (all right-hand sides)", step_pass,
          (method, trajectory, c, u, ft, poly, model.active, model.pairs, run.dt), n),
@@ -206,7 +230,7 @@ def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt:
     print(f"{'part':42s} {'ns/call':>9s} {'calls':>8s} {'ns/step':>8s} {'share':>7s}")
     accounted = 0.0
     for name, function, args, calls in parts:
-        cpu = max(_median_cpu(function, args, repeats) - empty * calls / n, 0.0)
+        cpu = max(median_cpu(function, args, repeats) - empty * calls / n, 0.0)
         accounted += cpu
         print(f"{name:42s} {1e9 * cpu / calls:9.0f} {calls:8d} {1e9 * cpu / n:8.1f} {100 * cpu / total:6.1f} %")
     rest = total - accounted

@@ -1,4 +1,4 @@
-"""Jacobian of the bench's right-hand side and its highest natural frequency (stability limits)."""
+"""Jacobian of the bench's right-hand side, its highest natural frequency and the step limits they set."""
 
 from __future__ import annotations
 
@@ -30,3 +30,39 @@ def jacobian(model, y: np.ndarray, t: float = 0.0, u: np.ndarray | None = None) 
 def highest_frequency(matrix: np.ndarray) -> float:
     """Largest eigenvalue modulus ``|lambda|max`` [rad/s]: what limits an explicit step."""
     return float(np.max(np.abs(np.linalg.eigvals(matrix))))
+
+
+#: Stability function of the classical RK4 step, ``R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24`` (Hairer & Wanner,
+#: *Solving ODEs II*, Sec. IV.2): one step maps ``y' = lambda y`` to ``R(lambda h) y``.
+RK4_STABILITY = np.polynomial.Polynomial([1.0, 1.0, 1.0 / 2.0, 1.0 / 6.0, 1.0 / 24.0])
+
+
+def largest_stable_step(eigenvalues, stability=RK4_STABILITY) -> float:
+    """Largest step ``h`` [s] with ``|R(lambda h')| <= 1`` for every ``h' <= h`` and every eigenvalue.
+
+    Zero eigenvalues (rigid-body modes) and modes the physics itself lets grow (real part above ``1e-6 |lambda|``)
+    set no step limit and are skipped; ``inf`` if none is left. An oscillation whose finite-difference real part
+    is positive but below that is judged on the imaginary axis. Bisection along each ray ``lambda h`` to 1e-12
+    relative: e.g. ``2 sqrt(2) / |lambda|`` on the imaginary axis and ``2.7853 / |lambda|`` on the negative real
+    axis for RK4.
+    """
+    limit = np.inf
+    for lam in np.asarray(eigenvalues, dtype=complex).ravel():
+        if lam == 0.0 or lam.real > 1e-6 * abs(lam):
+            continue
+        lam = complex(min(lam.real, 0.0), lam.imag)
+        unstable = 1.0 / abs(lam)
+        while abs(stability(lam * unstable)) <= 1.0:
+            unstable *= 2.0  # every polynomial leaves its stability region far enough out
+        stable = 0.0
+        while unstable - stable > 1e-12 * unstable:
+            middle = 0.5 * (stable + unstable)
+            stable, unstable = (middle, unstable) if _stable_up_to(stability, lam, middle) else (stable, middle)
+        limit = min(limit, stable)
+    return float(limit)
+
+
+def _stable_up_to(stability, lam: complex, h: float, samples: int = 64) -> bool:
+    """Whether ``|R(lambda h')| <= 1`` (to rounding) on ``0 < h' <= h``, checked at ``samples`` points: the
+    region may be left and re-entered along a ray, and the first exit is the limit."""
+    return bool(np.all(np.abs(stability(lam * np.linspace(h / samples, h, samples))) <= 1.0 + 1e-12))
