@@ -23,6 +23,7 @@ from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
+from twin.simulation import solver_label
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
@@ -235,7 +236,8 @@ def simulate_run(request: RunRequest) -> dict:
         summary = twin.simulate_features(scene, params, **options)
         return {"status": summary.status, "failure_reason": summary.failure_reason, "t_reached": summary.t_reached,
                 "features": {f: float(summary.features[f]) for f in request.features if f in summary.features},
-                "trace": None, "fidelity": summary.fidelity, "integrator": summary.integrator}
+                "trace": None, "fidelity": summary.fidelity,
+                "integrator": solver_label(summary.integrator, summary.dt)}
     ds = twin.simulate(scene, params, **options)
     kept = [v for v in request.trace_variables if v in ds]
     return {
@@ -245,7 +247,7 @@ def simulate_run(request: RunRequest) -> dict:
         "features": {f: float(ds[f]) for f in request.features if f in ds},
         "trace": ds[kept].isel(time=slice(None, None, request.trace_decimation)),
         "fidelity": ds.attrs.get("fidelity", ""),
-        "integrator": ds.attrs.get("integrator", ""),
+        "integrator": solver_label(ds.attrs.get("integrator", ""), float(ds.attrs.get("dt", math.nan))),
     }
 
 

@@ -71,12 +71,13 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         A fixed-step method of the compiled loop (default ``rk4`` at 62.5 us), a ``scipy_*`` adaptive method
         of the reference path (:mod:`twin.engine.reference`), which ignores ``dt``, or ``"auto"``
         (:mod:`twin.engine.solver_choice`, opt-in): ``imex_euler`` at the 125 us drive period while both nuts
-        are held on a flank, else the whole run again with ``rk4`` at 62.5 us; the method used and why are in
+        are held on a flank, else the whole run again with ``rk4``, at 125 us if that stays stable and within its
+        local-error tolerance, else at 62.5 us; the method used and why are in
         ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. About 3x faster where the
         implicit step is kept, but not accurate everywhere the premise holds (docs/accuracy.md).
     dt : float, optional
         Integration step [s]; must divide the speed- and position-loop periods. Default 62.5 us;
-        ``"auto"`` chooses its own (the drive period for its implicit branch).
+        ``"auto"`` chooses its own.
     output_dt : float
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
@@ -101,7 +102,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Relative tolerance of the ``scipy_*`` reference path.
     local_error_guard : bool
         The finite-but-wrong guard (:func:`twin.engine.loop.local_error`); switch it off
-        only to demonstrate what it catches.
+        only to demonstrate what it catches (``"auto"`` keeps it on for its RK4 attempt at the
+        drive period, which it judges by it).
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -147,6 +149,13 @@ class RunSummary:
     fidelity: str           # attrs["fidelity"]
     features: dict[str, float]  # every feature of twin.features.FEATURES (NaN unless the run is ok)
     integrator: str = ""    # attrs["integrator"]: the method that solved the run
+    dt: float = math.nan    # attrs["dt"]: its step [s]
+
+
+def solver_label(integrator: str, dt: float) -> str:
+    """How campaign results and reports name the solver of a run: the method and, for a fixed-step method of the
+    compiled loop, its step (``"rk4 at 62.5 us"``); an adaptive reference method by its name alone."""
+    return integrator if integrator in REFERENCE_METHODS or not integrator else f"{integrator} at {dt * 1e6:g} us"
 
 
 @dataclass(frozen=True)
@@ -173,17 +182,26 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     """Validate, build, solve (the steps :func:`simulate` and :func:`simulate_features` share)."""
     run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
     model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
-    # the automatic integrator's second attempt must draw the same noise as its first
-    noise_source = copy.deepcopy(rng) if run.fallback is not None and isinstance(rng, np.random.Generator) else rng
-    done = _attempt(run, model, rng, local_error_guard, held_interference(model) if run.fallback is not None else 0.0)
-    if run.fallback is not None and done.status != STATUS_OK:
-        # the premise broke, or the implicit step failed (a failure of the branch, not yet of the run)
-        stopped = done
-        done = _attempt(run.fallback, model, noise_source, local_error_guard, 0.0)
-        done = dataclasses.replace(done, wall_time=stopped.wall_time + done.wall_time, choice=choice_statement(
-            run.fallback.integrator, run.fallback.dt, run.dt, stopped.t_reached, stopped.bound, stopped.reason))
-    elif run.fallback is not None:
-        done = dataclasses.replace(done, choice=choice_statement(run.integrator, run.dt))
+    attempts = [run]  # a named method: one; the automatic integrator: its branches in order (solver_choice)
+    while attempts[-1].fallback is not None:
+        attempts.append(attempts[-1].fallback)
+    # every attempt of the automatic integrator draws the same noise as its first
+    pristine = copy.deepcopy(rng) if len(attempts) > 1 and isinstance(rng, np.random.Generator) else None
+    stopped, wall_time = [], 0.0
+    for k, attempt in enumerate(attempts):
+        last = k == len(attempts) - 1
+        done = _attempt(attempt, model, rng if pristine is None or k == 0 else copy.deepcopy(pristine),
+                        # an explicit step at the drive period is trusted only as long as its local error is
+                        local_error_guard or not (k == 0 or last),
+                        held_interference(model) if k == 0 and not last else 0.0)
+        wall_time += done.wall_time
+        if done.status == STATUS_OK or last:
+            break
+        stopped.append(done)  # the premise broke, or the branch failed: a failure of the branch, not of the run
+    if len(attempts) > 1:
+        done = dataclasses.replace(done, wall_time=wall_time, choice=choice_statement(
+            done.run.integrator, done.run.dt,
+            [(s.run.integrator, s.run.dt, s.t_reached, s.bound, s.reason) for s in stopped]))
     if done.status != STATUS_OK and throw:
         raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
     return done
@@ -278,7 +296,10 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         return _Run(scene, params, resolved, name, reference, step, rtol, curvature, speed_ts, speed_every,
                     position_every, output_every, fallback)
 
-    run = stepped(method, dt, stepped(DEFAULT_INTEGRATOR, DEFAULT_DT) if auto else None)
+    explicit = stepped(DEFAULT_INTEGRATOR, DEFAULT_DT) if auto else None
+    if auto and speed_ts > DEFAULT_DT:  # the explicit branch tries the drive period first (solver_choice)
+        explicit = stepped(DEFAULT_INTEGRATOR, speed_ts, explicit)
+    run = stepped(method, dt, explicit)
     if problems:
         raise OptionError(list(dict.fromkeys(problems)))  # the two branches of 'auto' may repeat a problem
     return run
@@ -316,7 +337,7 @@ def _features(done: _Simulated) -> dict[str, float]:
 
 def _summary(done: _Simulated) -> RunSummary:
     return RunSummary(STATUS_TEXT[done.status], done.reason, done.t_reached, done.run.fidelity.summary(),
-                      _features(done), done.run.integrator)
+                      _features(done), done.run.integrator, done.run.dt)
 
 
 def _package(done: _Simulated) -> xr.Dataset:

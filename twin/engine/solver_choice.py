@@ -1,5 +1,5 @@
 """The automatic integrator (``integrator="auto"``, opt-in): one implicit step per drive period where both nuts
-are held on a flank, explicit RK4 where a nut can move in its gap.
+are held on a flank, explicit RK4 where a nut can move in its gap, at the drive period where that is stable.
 
 ``imex_euler`` (:func:`twin.engine.integrators.imex_euler_step`) at the 125 us drive period costs about a
 third of RK4 at 62.5 us and agrees with it within 0.02 um on the Eq. 9.12 feature as long as both ball-groove
@@ -8,8 +8,16 @@ step damps at that period (errors of 0.08-2.7 um: docs/accuracy.md, "The automat
 choice is made *along the run*, not guessed from the scene: the implicit step is tried with the held-contact
 premise checked after every step (:func:`twin.engine.loop.contacts_held`); once the nuts have spent more than
 :data:`RELEASE_BUDGET` in all with a contact load below :data:`HELD_CONTACT_LOAD`, the attempt ends there and
-the scene is solved again from the start with RK4 at 62.5 us (same noise draws). Each run says which method
-solved it and why (``attrs["integrator_choice"]``).
+the scene is solved again from the start by RK4 (same noise draws).
+
+RK4 is tried first at the drive period, 125 us, and kept only if the run ends ``ok`` with its local-error guard on
+(:func:`twin.engine.loop.local_error`, whatever the caller asked for) and the divergence guard silent; else the
+scene is solved once more at RK4's default 62.5 us, bit-identical to a plain RK4 run. Why this can pay: with a nut
+free in its gap the ball-groove/screw-axial mode has one contact instead of two, and RK4's stability limit along
+the free-nut data sets' runs is 137-153 us (``benchmarks/speed_floor.py``: the Jacobian's eigenvalues at 200
+instants of each run), against 109-121 us with both nuts loaded, where the 125 us attempt diverges within ~1 s of
+simulated time. Its accuracy on the thesis data sets is in docs/accuracy.md ("The automatic integrator").
+Each run says which method and step solved it and why (``attrs["integrator_choice"]``).
 
 Why it is not the default: a held contact can still carry a self-excited vibration of the contact mode, which the
 implicit step damps like the free nut's. Under the preloaded zero procedure (ds1, ds5) the Eq. 9.12 feature
@@ -40,7 +48,8 @@ HELD_CONTACT_LOAD = 300.0
 RELEASE_BUDGET = 0.020
 
 #: The implicit branch, run at the drive period (``drive.speed_loop_sample_time``, over which its inputs are
-#: held); the explicit branch is the default method at its default step (:mod:`twin.simulation`).
+#: held); the explicit branch is the default method (:mod:`twin.simulation`), at the drive period, then at its
+#: default step.
 IMPLICIT_METHOD = "imex_euler"
 
 
@@ -50,15 +59,16 @@ def held_interference(model: Model, load: float = HELD_CONTACT_LOAD) -> float:
     return abs(contact_position_for_force(c, model.stiffness_poly, load)) - 0.5 * c[K.BACKLASH]
 
 
-def choice_statement(method: str, dt: float, implicit_dt: float = 0.0, stopped_at: float | None = None,
-                     bound: int = 0, reason: str = "") -> str:
+def choice_statement(method: str, dt: float, stopped=()) -> str:
     """Why the automatic integrator solved a run with ``method`` at ``dt`` [s]: the line of
-    ``attrs["integrator_choice"]``. ``implicit_dt``, ``stopped_at``, ``bound`` and ``reason``: the implicit
-    attempt's step and where and why it ended (``stopped_at`` None: it solved the run)."""
-    if stopped_at is None:
+    ``attrs["integrator_choice"]``. ``stopped``: the attempts before it, each ``(method, dt, t_reached, bound code,
+    reason)`` of where and why it ended (empty: the implicit step solved the run)."""
+    if not stopped:
         return (f"auto: {method} at {dt * 1e6:g} us; both nuts' contact loads stayed >= {HELD_CONTACT_LOAD:g} N "
                 f"except for <= {RELEASE_BUDGET * 1e3:g} ms in all")
-    why = (f"a nut's contact load having been below {HELD_CONTACT_LOAD:g} N for more than "
-           f"{RELEASE_BUDGET * 1e3:g} ms in all" if bound == BOUND_CONTACT_RELEASED else f"failed: {reason}")
-    return (f"auto: {method} at {dt * 1e6:g} us; {IMPLICIT_METHOD} at {implicit_dt * 1e6:g} us stopped at "
-            f"t = {stopped_at:.6f} s, {why}")
+    ends = []
+    for tried, step, stopped_at, bound, reason in stopped:
+        why = (f"a nut's contact load having been below {HELD_CONTACT_LOAD:g} N for more than "
+               f"{RELEASE_BUDGET * 1e3:g} ms in all" if bound == BOUND_CONTACT_RELEASED else f"failed: {reason}")
+        ends.append(f"{tried} at {step * 1e6:g} us stopped at t = {stopped_at:.6f} s, {why}")
+    return f"auto: {method} at {dt * 1e6:g} us; " + "; ".join(ends)
