@@ -38,7 +38,8 @@ SINGLE_RUN_TARGET = 0.1        # s of CPU for the 10 s nominal scene (issue 16)
 FEATURE_TARGET = 0.1e-6        # m: the feature within 0.1 um of the tight reference on every data set
 REFERENCE = ("rk4", 7.8125e-6)  # the nominal scene's tight reference (docs/accuracy.md)
 #: (integrator, step) of the paths compared; None: the method's own choice. The first is the default, the second
-#: the opt-in automatic integrator (imex_euler at 125 us where the nuts stay held, else rk4 at 62.5 us).
+#: the opt-in automatic integrator (imex_euler at 125 us where the nuts stay held, else rk4 at 125 us where that is
+#: stable, else at 62.5 us).
 PATHS = ((DEFAULT_INTEGRATOR, DEFAULT_DT), ("auto", None), ("imex_euler", 1.25e-4), ("rk4", 3.125e-5),
          ("semi_implicit_euler", 3.125e-5), ("rosenbrock_w2", 6.25e-5))
 PATH_NOTES = {0: " (default)", 1: " (opt-in)"}

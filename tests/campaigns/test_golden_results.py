@@ -59,8 +59,8 @@ def test_small_thesis_campaign_reproduces_the_golden_results(tmp_path):
     with xr.open_dataset(golden_results.GOLDEN) as stored:
         golden = stored.load()
     assert (new["status"] == "ok").all(), "golden runs must succeed"
-    # the method that solved each run is recorded (the spec's integrator: rk4)
-    assert set(new["integrator"].values.ravel()) == {"rk4"}
+    # the method and step that solved each run are recorded (the spec's integrator: rk4 at its default step)
+    assert set(new["integrator"].values.ravel()) == {"rk4 at 62.5 us"}
     differences = _differences(new, golden)
     assert not differences, ("results differ from the golden file (regenerate it only for a model change on "
                              "purpose: scripts/golden_results.py):\n" + "\n".join(differences))

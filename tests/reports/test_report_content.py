@@ -85,9 +85,10 @@ def extended(campaign, tmp_path_factory):
     traces = {f"trace_{name}": (("dataset", "trace_run", "trace_time"), np.broadcast_to(values(time), shape),
                                 {"units": unit})
               for name, (unit, values) in BENCH_TRACES.items()}
-    solved_by = np.full((results.sizes["dataset"], results.sizes["run"]), "rk4", dtype=object)
-    solved_by[0, :2] = "imex_euler"  # as the automatic integrator records it (twin.engine.solver_choice)
+    solved_by = np.full((results.sizes["dataset"], results.sizes["run"]), "rk4 at 62.5 us", dtype=object)
+    solved_by[0, :2] = "imex_euler at 125 us"  # as the automatic integrator records it (twin.engine.solver_choice)
     solved_by[0, 2] = ""  # a run that records no method (failed before solving, or an older chunk)
+    solved_by[0, 3] = "rk4 at 125 us"
     results = results.assign({**traces, "integrator": (("dataset", "run"), solved_by)}).assign_attrs(
         fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="met",
         fidelity_audit_ds2=f"speedup x0.73; backlash_feature: {_MET}; max paired 0.0257 µm, MC error 0.0862 µm, KS p "
@@ -113,8 +114,9 @@ def test_fidelity_audit_in_words_and_micrometres(extended, inputs):
     assert levels.rows == (("ds2", "pneumatics = full, current_loop = ideal"),)
     # the method that solved each run, counted per data set from the fixture's integrator array
     names, n = [str(d) for d in inputs.results["dataset"].values], inputs.results.sizes["run"]
-    assert integrators.rows == ((names[0], f"imex_euler: 2, rk4: {n - 3}, not recorded: 1"),
-                                *((d, f"rk4: {n}") for d in names[1:]))
+    assert integrators.rows == ((names[0], f"imex_euler at 125 us: 2, rk4 at 125 us: 1, rk4 at 62.5 us: {n - 4}, "
+                                           "not recorded: 1"),
+                                *((d, f"rk4 at 62.5 us: {n}") for d in names[1:]))
     said = next(p.text for p in _blocks(fidelity, Paragraph) if p.text.startswith("The campaign asked for integrator"))
     assert "asked for integrator 'rk4'" in said and "solved again" not in said  # how 'auto' works: only under auto
     assert audit.rows == (("ds2", "backlash_feature", _MET, "0.0257 µm", "0.0862 µm", "1.00", "0.73"),
