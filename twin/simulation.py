@@ -19,7 +19,13 @@ from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
-from twin.engine.solver_choice import IMPLICIT_METHOD, RELEASE_BUDGET, choice_statement, held_interference
+from twin.engine.solver_choice import (
+    IMPLICIT_METHOD,
+    RELEASE_BUDGET,
+    choice_statement,
+    held_interference,
+    rk4_limit_at_start,
+)
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
@@ -190,6 +196,10 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     stopped, wall_time = [], 0.0
     for k, attempt in enumerate(attempts):
         last = k == len(attempts) - 1
+        if 0 < k and not last and (limit := rk4_limit_at_start(model)) < attempt.dt:  # the explicit drive period
+            stopped.append((attempt.integrator, attempt.dt, None, 0,
+                            f"RK4's stability limit at the initial state is {limit * 1e6:.0f} us"))
+            continue
         done = _attempt(attempt, model, rng if pristine is None or k == 0 else copy.deepcopy(pristine),
                         # an explicit step at the drive period is trusted only as long as its local error is
                         local_error_guard or not (k == 0 or last),
@@ -197,11 +207,11 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         wall_time += done.wall_time
         if done.status == STATUS_OK or last:
             break
-        stopped.append(done)  # the premise broke, or the branch failed: a failure of the branch, not of the run
+        # the premise broke, or the branch failed: a failure of the branch, not of the run
+        stopped.append((attempt.integrator, attempt.dt, done.t_reached, done.bound, done.reason))
     if len(attempts) > 1:
-        done = dataclasses.replace(done, wall_time=wall_time, choice=choice_statement(
-            done.run.integrator, done.run.dt,
-            [(s.run.integrator, s.run.dt, s.t_reached, s.bound, s.reason) for s in stopped]))
+        done = dataclasses.replace(done, wall_time=wall_time,
+                                   choice=choice_statement(done.run.integrator, done.run.dt, stopped))
     if done.status != STATUS_OK and throw:
         raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
     return done

@@ -10,7 +10,9 @@ premise checked after every step (:func:`twin.engine.loop.contacts_held`); once 
 :data:`RELEASE_BUDGET` in all with a contact load below :data:`HELD_CONTACT_LOAD`, the attempt ends there and
 the scene is solved again from the start by RK4 (same noise draws).
 
-RK4 is tried first at the drive period, 125 us, and kept only if the run ends ``ok`` with its local-error guard on
+RK4 is tried first at the drive period, 125 us, unless the linearised bench at its initial state already has a
+mode beyond RK4's reach at that step (:func:`rk4_limit_at_start`: the full-fidelity analog current loop), and is
+kept only if the run ends ``ok`` with its local-error guard on
 (:func:`twin.engine.loop.local_error`, whatever the caller asked for) and the divergence guard silent; else the
 scene is solved once more at RK4's default 62.5 us, bit-identical to a plain RK4 run. Why this can pay: with a nut
 free in its gap the ball-groove/screw-axial mode has one contact instead of two, and RK4's stability limit along
@@ -28,6 +30,9 @@ run-to-run sigma halved (docs/accuracy.md). The premise, judged on the implicit 
 
 from __future__ import annotations
 
+import numpy as np
+
+from twin.engine.linearize import jacobian, largest_stable_step
 from twin.engine.model import Model, contact_position_for_force
 from twin.layout import BOUND_CONTACT_RELEASED, K
 
@@ -59,15 +64,28 @@ def held_interference(model: Model, load: float = HELD_CONTACT_LOAD) -> float:
     return abs(contact_position_for_force(c, model.stiffness_poly, load)) - 0.5 * c[K.BACKLASH]
 
 
+def rk4_limit_at_start(model: Model) -> float:
+    """RK4's largest stable step [s] for the linearised bench at its initial state (the Jacobian's eigenvalues,
+    :mod:`twin.engine.linearize`). Where it is below the drive period a mode is beyond reach from the start, such
+    as the full-fidelity analog current loop's -2.28e4 1/s (limit 122 us), and the drive-period attempt would
+    fail once that mode is excited, so it is not tried; a mode that appears only under load (the ball-groove
+    contacts) is left to the attempt's guards."""
+    return largest_stable_step(np.linalg.eigvals(jacobian(model, model.initial_state[model.active])), rtol=1e-6)
+
+
 def choice_statement(method: str, dt: float, stopped=()) -> str:
     """Why the automatic integrator solved a run with ``method`` at ``dt`` [s]: the line of
     ``attrs["integrator_choice"]``. ``stopped``: the attempts before it, each ``(method, dt, t_reached, bound code,
-    reason)`` of where and why it ended (empty: the implicit step solved the run)."""
+    reason)`` of where and why it ended, ``t_reached`` None for an attempt not tried (empty: the implicit step
+    solved the run)."""
     if not stopped:
         return (f"auto: {method} at {dt * 1e6:g} us; both nuts' contact loads stayed >= {HELD_CONTACT_LOAD:g} N "
                 f"except for <= {RELEASE_BUDGET * 1e3:g} ms in all")
     ends = []
     for tried, step, stopped_at, bound, reason in stopped:
+        if stopped_at is None:
+            ends.append(f"{tried} at {step * 1e6:g} us not tried: {reason}")
+            continue
         why = (f"a nut's contact load having been below {HELD_CONTACT_LOAD:g} N for more than "
                f"{RELEASE_BUDGET * 1e3:g} ms in all" if bound == BOUND_CONTACT_RELEASED else f"failed: {reason}")
         ends.append(f"{tried} at {step * 1e6:g} us stopped at t = {stopped_at:.6f} s, {why}")
