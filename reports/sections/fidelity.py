@@ -90,6 +90,12 @@ def build(b: Builder):
                       [(k, v.replace(" um", " µm")) for k, v in attrs.items()])
 
 
+def _step_in_micro(label: str) -> str:
+    """A solver label as results.nc stores it (twin.simulation.solver_label, ASCII "rk4 at 62.5 us"), in the
+    report's unit spelling ("rk4 at 62.5 µs")."""
+    return re.sub(r"(\d) us$", r"\1 µs", label)
+
+
 def _integrators(b: Builder):
     """The method that solved each run, counted per data set (results.nc ``integrator``)."""
     requested = (b.spec.get("solver") or {}).get("integrator", DEFAULT_INTEGRATOR)
@@ -98,7 +104,7 @@ def _integrators(b: Builder):
         counts = Counter(str(v) for v in b.results["integrator"].sel(dataset=d).values.ravel())
         unrecorded = counts.pop("", 0)  # runs that failed before solving, or chunks written before the variable
         if counts:
-            rows.append((d, ", ".join([*(f"{method}: {n}" for method, n in sorted(counts.items())),
+            rows.append((d, ", ".join([*(f"{_step_in_micro(method)}: {n}" for method, n in sorted(counts.items())),
                                        *([f"not recorded: {unrecorded}"] if unrecorded else [])])))
     if not rows:
         yield Paragraph(f"The campaign asked for integrator '{requested}'; which method solved each run is not "

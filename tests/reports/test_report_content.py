@@ -114,9 +114,9 @@ def test_fidelity_audit_in_words_and_micrometres(extended, inputs):
     assert levels.rows == (("ds2", "pneumatics = full, current_loop = ideal"),)
     # the method that solved each run, counted per data set from the fixture's integrator array
     names, n = [str(d) for d in inputs.results["dataset"].values], inputs.results.sizes["run"]
-    assert integrators.rows == ((names[0], f"imex_euler at 125 us: 2, rk4 at 125 us: 1, rk4 at 62.5 us: {n - 4}, "
+    assert integrators.rows == ((names[0], f"imex_euler at 125 µs: 2, rk4 at 125 µs: 1, rk4 at 62.5 µs: {n - 4}, "
                                            "not recorded: 1"),
-                                *((d, f"rk4 at 62.5 us: {n}") for d in names[1:]))
+                                *((d, f"rk4 at 62.5 µs: {n}") for d in names[1:]))
     said = next(p.text for p in _blocks(fidelity, Paragraph) if p.text.startswith("The campaign asked for integrator"))
     assert "asked for integrator 'rk4'" in said and "solved again" not in said  # how 'auto' works: only under auto
     assert audit.rows == (("ds2", "backlash_feature", _MET, "0.0257 µm", "0.0862 µm", "1.00", "0.73"),
