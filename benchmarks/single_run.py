@@ -32,7 +32,7 @@ from machine import header
 import twin
 from campaigns.comparison import VERDICTS, reference_verdict, worst_verdict
 from campaigns.reference_ensemble import REFERENCE_STEPS, reference_ensemble
-from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR
+from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR, solver_label
 
 SINGLE_RUN_TARGET = 0.1        # s of CPU for the 10 s nominal scene (issue 16)
 FEATURE_TARGET = 0.1e-6        # m: the feature within 0.1 um of the tight reference on every data set
@@ -156,7 +156,7 @@ def dataset_features(params, duration: float | None, ensemble_options: dict) -> 
             print(f"    {feature:22s} {verdict.statement}")
         # the opt-in automatic integrator against the same ensemble (not part of the default's verdict)
         cost, auto = cpu_run(name, params, integrator="auto", **options)
-        print(f"  opt-in auto: {cost:.3f} s CPU, solved by {auto.attrs['integrator']}")
+        print(f"  opt-in auto: {cost:.3f} s CPU, solved by {solver_label(auto.attrs['integrator'], auto.attrs['dt'])}")
         for feature, verdict in feature_verdicts(auto, ensemble).items():
             print(f"    {feature:22s} {verdict.statement}")
     overall = worst_verdict(v.verdict for v in verdicts.values())
