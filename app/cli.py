@@ -277,7 +277,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "scene.zero_procedure=preloaded, scene.cylinder=detached)")
     p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=[AUTO, *sorted(INTEGRATORS)],
                    help="default rk4 at 62.5 us; auto (opt-in): imex_euler where the nuts stay held on a flank, "
-                        "else rk4 (twin.simulate, docs/accuracy.md)")
+                        "else rk4 at the 125 us drive period where that is stable, else at 62.5 us (twin.simulate, "
+                        "docs/accuracy.md)")
     p.add_argument("--dt", type=float, help="integration step [s] (not with --integrator auto)")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
     p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",

@@ -32,7 +32,8 @@ from machine import header
 import twin
 from campaigns.comparison import VERDICTS, reference_verdict, worst_verdict
 from campaigns.reference_ensemble import REFERENCE_STEPS, reference_ensemble
-from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR, solver_label
+from twin.engine.solver_choice import solver_label
+from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR
 
 SINGLE_RUN_TARGET = 0.1        # s of CPU for the 10 s nominal scene (issue 16)
 FEATURE_TARGET = 0.1e-6        # m: the feature within 0.1 um of the tight reference on every data set

@@ -18,12 +18,12 @@ from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.control.margins import LOOPS, METRICS, loop_margins
 from twin.engine.model import load_system_parameters
+from twin.engine.solver_choice import solver_label
 from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
-from twin.simulation import solver_label
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).

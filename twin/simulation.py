@@ -77,8 +77,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         A fixed-step method of the compiled loop (default ``rk4`` at 62.5 us), a ``scipy_*`` adaptive method
         of the reference path (:mod:`twin.engine.reference`), which ignores ``dt``, or ``"auto"``
         (:mod:`twin.engine.solver_choice`, opt-in): ``imex_euler`` at the 125 us drive period while both nuts
-        are held on a flank, else the whole run again with ``rk4``, at 125 us if that stays stable and within its
-        local-error tolerance, else at 62.5 us; the method used and why are in
+        are held on a flank, else the whole run again with ``rk4``, at 125 us if that run stays stable and its
+        local-error estimate never exceeds the tolerance, else at 62.5 us; the method used and why are in
         ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. About 3x faster where the
         implicit step is kept, but not accurate everywhere the premise holds (docs/accuracy.md).
     dt : float, optional
@@ -158,12 +158,6 @@ class RunSummary:
     dt: float = math.nan    # attrs["dt"]: its step [s]
 
 
-def solver_label(integrator: str, dt: float) -> str:
-    """How campaign results and reports name the solver of a run: the method and, for a fixed-step method of the
-    compiled loop, its step (``"rk4 at 62.5 us"``); an adaptive reference method by its name alone."""
-    return integrator if integrator in REFERENCE_METHODS or not integrator else f"{integrator} at {dt * 1e6:g} us"
-
-
 @dataclass(frozen=True)
 class _Simulated:
     """A finished run before packaging: the request, the model and the loop's buffers."""
@@ -198,13 +192,18 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         last = k == len(attempts) - 1
         if 0 < k and not last and (limit := rk4_limit_at_start(model)) < attempt.dt:  # the explicit drive period
             stopped.append((attempt.integrator, attempt.dt, None, 0,
-                            f"RK4's stability limit at the initial state is {limit * 1e6:.0f} us"))
+                            f"RK4's stability limit at the initial state is {limit * 1e6:.1f} us"))
             continue
         done = _attempt(attempt, model, rng if pristine is None or k == 0 else copy.deepcopy(pristine),
                         # an explicit step at the drive period is trusted only as long as its local error is
                         local_error_guard or not (k == 0 or last),
                         held_interference(model) if k == 0 and not last else 0.0)
         wall_time += done.wall_time
+        if not (last or k == 0) and done.status == STATUS_OK and done.memory[M.LOCAL_ERROR] > 1.0:
+            # the explicit drive period is kept only if no local-error check ever exceeded its tolerance
+            stopped.append((attempt.integrator, attempt.dt, done.t_reached, 0,
+                            f"its local-error estimate reached {done.memory[M.LOCAL_ERROR]:.2f} times the tolerance"))
+            continue
         if done.status == STATUS_OK or last:
             break
         # the premise broke, or the branch failed: a failure of the branch, not of the run
@@ -271,8 +270,8 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
                         f"{', '.join([AUTO, *INTEGRATORS, *REFERENCE_METHODS])}")
     if auto and dt is not None:
         problems.append(f"dt: {dt!r} with integrator 'auto', which chooses its own steps ({IMPLICIT_METHOD} at the "
-                        f"drive period, {DEFAULT_INTEGRATOR} at {DEFAULT_DT * 1e6:g} us); leave dt unset or name a "
-                        "method")
+                        f"drive period, {DEFAULT_INTEGRATOR} at the drive period or at {DEFAULT_DT * 1e6:g} us); leave "
+                        "dt unset or name a method")
     if auto and output_dt == 0:
         problems.append("output_dt: 0 (every step) with integrator 'auto', whose step depends on the run; give a "
                         "spacing, e.g. 1e-3 s")

@@ -115,9 +115,10 @@ def _integrators(b: Builder):
         f"The campaign asked for integrator '{requested}'. "
         + ("With 'auto' each run is first solved by the implicit drive-period step (imex_euler at 125 µs) with the "
            "premise that both nuts stay held on a flank checked at every step; a run whose nuts are released for "
-           "longer than the premise allows is solved again from the start by RK4 with the same noise, at the 125 µs "
-           "drive period if that run stays stable and within its local-error tolerance, else at 62.5 µs "
-           "(twin.engine.solver_choice, docs/accuracy.md). " if requested == AUTO_INTEGRATOR else "")
+           "longer than the premise allows is solved again from the start by RK4 with the same noise: at the drive "
+           "period if that run stays stable and its local-error estimate never exceeds the tolerance (not tried "
+           "where a mode is beyond RK4's reach at that step from the start, e.g. the full-fidelity current loop), "
+           "else at 62.5 µs (twin.engine.solver_choice, docs/accuracy.md). " if requested == AUTO_INTEGRATOR else "")
         + "The table counts the method and step that solved each run."
     )
     yield b.table("Integrator that solved the runs, per data set (method and step: runs).", ("Data set", "Integrator"),

@@ -31,7 +31,8 @@ def test_forward_euler_limit_off_the_axis_is_two_a_over_lambda_squared():
 
 def test_the_most_limiting_eigenvalue_sets_the_step():
     modes = [-1e3, -5.9e3 + 2.6e4j, -5.9e3 - 2.6e4j, -2.28e4]
-    assert largest_stable_step(modes) == min(largest_stable_step([m]) for m in modes)
+    # all rays bisected at once against one at a time: the same limit to the bisection's tolerance
+    assert largest_stable_step(modes) == pytest.approx(min(largest_stable_step([m]) for m in modes), rel=1e-11)
     # the lightly damped contact pair of docs/performance.md limits RK4 to ~110 us: 62.5 us is stable, 125 not
     assert 62.5e-6 < largest_stable_step(modes) < 125e-6
 

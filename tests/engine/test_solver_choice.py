@@ -17,11 +17,12 @@ from twin.engine.solver_choice import (
     RELEASE_BUDGET,
     held_interference,
     rk4_limit_at_start,
+    solver_label,
 )
 from twin.errors import OptionError
 from twin.fidelity import resolve_fidelity
 from twin.layout import K, S
-from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR, solver_label
+from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR
 
 #: The branches: the implicit step at the bench's drive period, the default method at the drive period, then at
 #: its default step.
@@ -141,7 +142,7 @@ def test_auto_does_not_try_the_drive_period_where_a_mode_is_beyond_rk4_from_the_
     auto = twin.simulate("ds4", params, duration=0.1, fidelity="full", rng=generator, integrator="auto")
     assert (auto.attrs["integrator"], auto.attrs["dt"]) == EXPLICIT
     assert auto.attrs["integrator_choice"].endswith(
-        f"{EXPLICIT_DRIVE[0]} at 125 us not tried: RK4's stability limit at the initial state is 122 us")
+        f"{EXPLICIT_DRIVE[0]} at 125 us not tried: RK4's stability limit at the initial state is 122.3 us")
     named = twin.simulate("ds4", params, duration=0.1, fidelity="full", rng=reference_generator)
     np.testing.assert_array_equal(auto.motor_current.values, named.motor_current.values)
 
@@ -175,9 +176,31 @@ def test_auto_hands_a_failed_implicit_attempt_to_rk4():
     weak = twin.load_parameters().with_values({"drive.dc_bus_voltage": 60.0})
     ds = twin.simulate("nominal", weak, duration=8.0, integrator="auto", fidelity={"default": "full",
                                                                                    "pneumatics": "ideal"})
-    assert ds.attrs["status"] == "ok" and ds.attrs["integrator"] == EXPLICIT[0]
-    assert "stopped at t = " in ds.attrs["integrator_choice"] and ", failed: finite but wrong" in \
-        ds.attrs["integrator_choice"]
+    assert ds.attrs["status"] == "ok" and (ds.attrs["integrator"], ds.attrs["dt"]) == EXPLICIT
+    choice = ds.attrs["integrator_choice"]
+    assert "stopped at t = " in choice and ", failed: finite but wrong" in choice
+    assert f"{EXPLICIT_DRIVE[0]} at 125 us not tried" in choice  # full fidelity: the analog current loop
+
+
+def test_auto_keeps_the_local_error_check_on_for_rk4_at_the_drive_period(monkeypatch):
+    """The drive-period attempt is judged by its local error even when the caller turns the guard off: with a
+    tolerance a million times tighter every check exceeds it, so ds2 ends at 62.5 us, where the caller's choice
+    (no guard) holds and the run is a plain unguarded RK4 run, bit for bit."""
+    tight = twin.simulation.local_error_tolerance() * 1e-6
+    monkeypatch.setattr(twin.simulation, "local_error_tolerance", lambda: tight)
+    auto = twin.simulate("ds2", duration=0.2, integrator="auto", local_error_guard=False)
+    assert (auto.attrs["integrator"], auto.attrs["dt"]) == EXPLICIT
+    assert f"{EXPLICIT_DRIVE[0]} at 125 us stopped at t = " in auto.attrs["integrator_choice"]
+    named = twin.simulate("ds2", duration=0.2, local_error_guard=False)
+    np.testing.assert_equal(_features(auto), _features(named))
+
+
+def test_auto_with_a_drive_period_of_the_default_step_has_no_drive_period_rk4_attempt():
+    fast_drive = twin.load_parameters().with_values({"drive.speed_loop_sample_time": DEFAULT_DT})
+    auto = twin.simulate("ds2", fast_drive, duration=0.1, integrator="auto")
+    assert (auto.attrs["integrator"], auto.attrs["dt"]) == EXPLICIT
+    stops = auto.attrs["integrator_choice"].split("; ")[1:]
+    assert len(stops) == 1 and stops[0].startswith(f"{IMPLICIT[0]} at 62.5 us stopped at t = ")
 
 
 def test_simulate_features_reports_the_method_and_step_used():

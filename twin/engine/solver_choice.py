@@ -12,8 +12,9 @@ the scene is solved again from the start by RK4 (same noise draws).
 
 RK4 is tried first at the drive period, 125 us, unless the linearised bench at its initial state already has a
 mode beyond RK4's reach at that step (:func:`rk4_limit_at_start`: the full-fidelity analog current loop), and is
-kept only if the run ends ``ok`` with its local-error guard on
-(:func:`twin.engine.loop.local_error`, whatever the caller asked for) and the divergence guard silent; else the
+kept only if the run ends ``ok`` (divergence guard silent, the local-error guard on whatever the caller asked
+for) and its step-doubling local-error estimate (:func:`twin.engine.loop.local_error`, every 4 ms) never exceeded
+the tolerance, not even once (the guard itself stops a run only after three checks in a row); else the
 scene is solved once more at RK4's default 62.5 us, bit-identical to a plain RK4 run. Why this can pay: with a nut
 free in its gap the ball-groove/screw-axial mode has one contact instead of two, and RK4's stability limit along
 the free-nut data sets' runs is 137-153 us (``benchmarks/speed_floor.py``: the Jacobian's eigenvalues at 200
@@ -34,6 +35,7 @@ import numpy as np
 
 from twin.engine.linearize import jacobian, largest_stable_step
 from twin.engine.model import Model, contact_position_for_force
+from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.layout import BOUND_CONTACT_RELEASED, K
 
 #: Per-nut axial contact load [N] below which a nut counts as released. Numerical choice, from the preload
@@ -73,20 +75,26 @@ def rk4_limit_at_start(model: Model) -> float:
     return largest_stable_step(np.linalg.eigvals(jacobian(model, model.initial_state[model.active])), rtol=1e-6)
 
 
+def solver_label(integrator: str, dt: float) -> str:
+    """How results, reports and statements name the solver of a run: the method and, for a fixed-step method of the
+    compiled loop, its step (``"rk4 at 62.5 us"``); an adaptive reference method by its name alone."""
+    return integrator if integrator in REFERENCE_METHODS or not integrator else f"{integrator} at {dt * 1e6:g} us"
+
+
 def choice_statement(method: str, dt: float, stopped=()) -> str:
     """Why the automatic integrator solved a run with ``method`` at ``dt`` [s]: the line of
     ``attrs["integrator_choice"]``. ``stopped``: the attempts before it, each ``(method, dt, t_reached, bound code,
     reason)`` of where and why it ended, ``t_reached`` None for an attempt not tried (empty: the implicit step
     solved the run)."""
     if not stopped:
-        return (f"auto: {method} at {dt * 1e6:g} us; both nuts' contact loads stayed >= {HELD_CONTACT_LOAD:g} N "
+        return (f"auto: {solver_label(method, dt)}; both nuts' contact loads stayed >= {HELD_CONTACT_LOAD:g} N "
                 f"except for <= {RELEASE_BUDGET * 1e3:g} ms in all")
     ends = []
     for tried, step, stopped_at, bound, reason in stopped:
         if stopped_at is None:
-            ends.append(f"{tried} at {step * 1e6:g} us not tried: {reason}")
+            ends.append(f"{solver_label(tried, step)} not tried: {reason}")
             continue
         why = (f"a nut's contact load having been below {HELD_CONTACT_LOAD:g} N for more than "
                f"{RELEASE_BUDGET * 1e3:g} ms in all" if bound == BOUND_CONTACT_RELEASED else f"failed: {reason}")
-        ends.append(f"{tried} at {step * 1e6:g} us stopped at t = {stopped_at:.6f} s, {why}")
-    return f"auto: {method} at {dt * 1e6:g} us; " + "; ".join(ends)
+        ends.append(f"{solver_label(tried, step)} stopped at t = {stopped_at:.6f} s, {why}")
+    return f"auto: {solver_label(method, dt)}; " + "; ".join(ends)
