@@ -14,6 +14,7 @@ from pathlib import Path
 import twin
 from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
+from twin.engine.solver_choice import solver_label
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import SCENE_PREFIX, split_targets
 from twin.simulation import AUTO, DEFAULT_INTEGRATOR
@@ -108,6 +109,7 @@ def cmd_simulate(args) -> int:
                 f"{label}: measured {float(ds[name]) * 1e6:.4f} um, "
                 f"true signals {float(ds[name + '_true']) * 1e6:.4f} um")
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
+    print(f"integrator: {ds.attrs.get('integrator_choice') or solver_label(ds.attrs['integrator'], ds.attrs['dt'])}")
     if args.out:
         ds.to_netcdf(args.out, engine="netcdf4")
         print(f"wrote {args.out}")

@@ -15,10 +15,18 @@ def test_simulate_writes_dataset_and_plot(tmp_path):
     result = run("simulate", "ds4", "--duration", "0.5", "--out", str(out), "--plot", str(plot))
     assert result.returncode == 0, result.stderr
     assert "backlash feature" in result.stdout
+    assert "integrator: rk4 at 62.5 us" in result.stdout  # the default, named with its step
     assert plot.stat().st_size > 10_000
     with xr.open_dataset(out) as ds:
         assert ds.attrs["status"] == "ok"
         assert ds.nut1_position.attrs["units"] == "m"
+
+
+def test_simulate_says_what_the_automatic_integrator_chose():
+    result = run("simulate", "ds2", "--duration", "0.2", "--integrator", "auto")
+    assert result.returncode == 0, result.stderr
+    # ds2's nut is free: the implicit attempt ends at the release budget, RK4 at the drive period solves the run
+    assert "integrator: auto: rk4 at 125 us; imex_euler at 125 us stopped at t = 0.020125 s" in result.stdout
 
 
 def test_bad_input_is_a_clear_error():
