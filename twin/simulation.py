@@ -189,18 +189,18 @@ def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, out
     pristine = copy.deepcopy(rng) if len(attempts) > 1 and isinstance(rng, np.random.Generator) else None
     stopped, wall_time = [], 0.0
     for k, attempt in enumerate(attempts):
-        last = k == len(attempts) - 1
-        if 0 < k and not last and (limit := rk4_limit_at_start(model)) < attempt.dt:  # the explicit drive period
+        first, last = k == 0, k == len(attempts) - 1
+        explicit_drive_period = not (first or last)  # solver_choice: judged by its stability and local error
+        if explicit_drive_period and (limit := rk4_limit_at_start(model)) < attempt.dt:
             stopped.append((attempt.integrator, attempt.dt, None, 0,
                             f"RK4's stability limit at the initial state is {limit * 1e6:.1f} us"))
             continue
-        done = _attempt(attempt, model, rng if pristine is None or k == 0 else copy.deepcopy(pristine),
-                        # an explicit step at the drive period is trusted only as long as its local error is
-                        local_error_guard or not (k == 0 or last),
-                        held_interference(model) if k == 0 and not last else 0.0)
+        done = _attempt(attempt, model, rng if pristine is None or first else copy.deepcopy(pristine),
+                        local_error_guard or explicit_drive_period,
+                        held_interference(model) if first and not last else 0.0)
         wall_time += done.wall_time
-        if not (last or k == 0) and done.status == STATUS_OK and done.memory[M.LOCAL_ERROR] > 1.0:
-            # the explicit drive period is kept only if no local-error check ever exceeded its tolerance
+        if explicit_drive_period and done.status == STATUS_OK and done.memory[M.LOCAL_ERROR] > 1.0:
+            # kept only if no local-error check ever exceeded its tolerance (the guard waits for three in a row)
             stopped.append((attempt.integrator, attempt.dt, done.t_reached, 0,
                             f"its local-error estimate reached {done.memory[M.LOCAL_ERROR]:.2f} times the tolerance"))
             continue

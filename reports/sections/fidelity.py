@@ -91,13 +91,13 @@ def build(b: Builder):
 
 
 def _step_in_micro(label: str) -> str:
-    """A solver label as results.nc stores it (twin.simulation.solver_label, ASCII "rk4 at 62.5 us"), in the
+    """A solver label as results.nc stores it (twin.engine.solver_choice.solver_label, ASCII "rk4 at 62.5 us"), in the
     report's unit spelling ("rk4 at 62.5 µs")."""
     return re.sub(r"(\d) us$", r"\1 µs", label)
 
 
 def _integrators(b: Builder):
-    """The method that solved each run, counted per data set (results.nc ``integrator``)."""
+    """The method and step that solved each run, counted per data set (results.nc ``integrator``)."""
     requested = (b.spec.get("solver") or {}).get("integrator", DEFAULT_INTEGRATOR)
     rows = []
     for d in b.datasets if "integrator" in b.results else ():
