@@ -16,6 +16,7 @@ stored next to the results); analysis is a separate module.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -51,7 +52,7 @@ def draw(distribution: Distribution, rng: np.random.Generator) -> float:
     if d.kind == "gaussian":
         return float(rng.normal(d.mean, d.sigma))
     if d.kind == "lognormal":
-        return float(d.mean * np.exp(rng.normal(0.0, d.sigma)))
+        return d.mean * math.exp(float(rng.normal(0.0, d.sigma)))  # libm, not numpy's CPU-dispatched exp
     if d.kind == "truncated_gaussian":
         if d.sigma == 0.0:
             return d.mean

@@ -17,6 +17,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 import campaigns
@@ -29,6 +30,26 @@ GOLDEN = DATA / "golden_thesis_small.nc"
 def comparable(ds: xr.Dataset) -> xr.Dataset:
     """The part of a results file that must not depend on the machine, the workers or the date."""
     return ds.drop_vars("wall_time").drop_attrs()
+
+
+def differences(new: xr.Dataset, golden: xr.Dataset) -> list[str]:
+    """One line per variable or coordinate that differs (bit for bit), with the largest difference for numbers."""
+    lines = []
+    if set(new.variables) != set(golden.variables):
+        lines.append(f"variables: new has {sorted(set(new.variables) - set(golden.variables))}, "
+                     f"golden has {sorted(set(golden.variables) - set(new.variables))}")
+    for name in sorted(set(new.variables) & set(golden.variables)):
+        a, b = new[name], golden[name]
+        if a.dims != b.dims or a.shape != b.shape:
+            lines.append(f"{name}: shape {dict(a.sizes)} != golden {dict(b.sizes)}")
+        elif a.dtype.kind == "f":
+            if not np.array_equal(a.values, b.values, equal_nan=True):
+                lines.append(f"{name}: max |new - golden| = {np.nanmax(np.abs(a.values - b.values)):.3g}")
+        elif a.dtype.kind != "f" and not np.array_equal(a.values, b.values):
+            lines.append(f"{name}: {a.values.ravel()[:6]} != golden {b.values.ravel()[:6]}")
+        if a.attrs != b.attrs:
+            lines.append(f"{name}: attributes {a.attrs} != golden {b.attrs}")
+    return lines
 
 
 def run_golden_campaign(out_dir: Path) -> xr.Dataset:

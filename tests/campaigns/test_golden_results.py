@@ -7,11 +7,13 @@ traces) and every coordinate is compared; ``wall_time`` and the provenance/execu
 the machine and the day, and are left out.
 
 Tolerance: none, the comparison is exact. The project promises bit-identical results for the same spec and
-seed (docs/campaigns.md), and nothing in the model licenses a rounding difference: the sampling is numpy's
-PCG64 (platform independent), and the compiled code is built without ``fastmath``, so LLVM neither
-contracts multiply-adds into FMA nor reorders sums, whatever the host CPU's instruction set. A refactoring
-that changes a single bit (an operation reordered, a constant computed another way) fails here, which is
-the point: such a change is a model change and must be made on purpose.
+seed on every machine (docs/campaigns.md, "The same numbers everywhere"), and nothing in the model licenses a
+rounding difference: the sampling is numpy's PCG64 (platform independent), the compiled code is built without
+``fastmath``, so LLVM neither contracts multiply-adds into FMA nor reorders sums whatever the host CPU's
+instruction set, and no BLAS/LAPACK kernel or CPU-dispatched numpy array kernel lies between the spec and the
+stored numbers (:mod:`twin.linalg`; ``test_same_numbers_everywhere.py`` runs this campaign under other
+kernels). A refactoring that changes a single bit (an operation reordered, a constant computed another way)
+fails here, which is the point: such a change is a model change and must be made on purpose.
 
 When the model changes on purpose, regenerate the golden file and say why in the commit::
 
@@ -23,7 +25,6 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
-import numpy as np
 import pytest
 import xarray as xr
 
@@ -31,26 +32,6 @@ ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("golden_results", ROOT / "scripts" / "golden_results.py")
 golden_results = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(golden_results)
-
-
-def _differences(new: xr.Dataset, golden: xr.Dataset) -> list[str]:
-    """One line per variable or coordinate that differs, with the largest difference for numbers."""
-    lines = []
-    if set(new.variables) != set(golden.variables):
-        lines.append(f"variables: new has {sorted(set(new.variables) - set(golden.variables))}, "
-                     f"golden has {sorted(set(golden.variables) - set(new.variables))}")
-    for name in sorted(set(new.variables) & set(golden.variables)):
-        a, b = new[name], golden[name]
-        if a.dims != b.dims or a.shape != b.shape:
-            lines.append(f"{name}: shape {dict(a.sizes)} != golden {dict(b.sizes)}")
-        elif a.dtype.kind == "f":
-            if not np.array_equal(a.values, b.values, equal_nan=True):
-                lines.append(f"{name}: max |new - golden| = {np.nanmax(np.abs(a.values - b.values)):.3g}")
-        elif a.dtype.kind != "f" and not np.array_equal(a.values, b.values):
-            lines.append(f"{name}: {a.values.ravel()[:6]} != golden {b.values.ravel()[:6]}")
-        if a.attrs != b.attrs:
-            lines.append(f"{name}: attributes {a.attrs} != golden {b.attrs}")
-    return lines
 
 
 @pytest.mark.slow
@@ -61,6 +42,6 @@ def test_small_thesis_campaign_reproduces_the_golden_results(tmp_path):
     assert (new["status"] == "ok").all(), "golden runs must succeed"
     # the method and step that solved each run are recorded (the spec's integrator: rk4 at its default step)
     assert set(new["integrator"].values.ravel()) == {"rk4 at 62.5 us"}
-    differences = _differences(new, golden)
+    differences = golden_results.differences(new, golden)
     assert not differences, ("results differ from the golden file (regenerate it only for a model change on "
                              "purpose: scripts/golden_results.py):\n" + "\n".join(differences))

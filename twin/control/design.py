@@ -84,10 +84,20 @@ def current_closed_loop(p: dict[str, float], kp: float, ki: float) -> tuple[np.n
     p_num, p_den = winding_admittance(p)
     h_num, h_den = hall_sensor(p)
     c_num, c_den = np.array([kp, ki]), np.array([1.0, 0.0])
-    forward_num, forward_den = np.polymul(c_num, p_num), np.polymul(c_den, p_den)
-    num = np.polymul(forward_num, h_den)
-    den = np.polyadd(np.polymul(forward_den, h_den), np.polymul(forward_num, h_num))
+    forward_num, forward_den = polymul(c_num, p_num), polymul(c_den, p_den)
+    num = polymul(forward_num, h_den)
+    den = np.polyadd(polymul(forward_den, h_den), polymul(forward_num, h_num))
     return num, den
+
+
+def polymul(a, b) -> np.ndarray:
+    """Product of two polynomials (highest power first), each coefficient summed in index order: the same bits on
+    every machine (``np.polymul`` convolves through BLAS dot products, whose order depends on the CPU's kernel)."""
+    out = [0.0] * (len(a) + len(b) - 1)
+    for i, x in enumerate(a):
+        for j, y in enumerate(b):
+            out[i + j] += float(x) * float(y)
+    return np.array(out)
 
 
 def two_mass_speed_plant(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:

@@ -35,22 +35,25 @@ The design (:mod:`twin.control.design`) assumed one sample of computation delay 
 integral in the digital motion loops; the twin has neither, so the margins here differ from the design
 figures by the phase of that delay (``docs/control_design.md`` lists both).
 
-Method: each ``L`` is evaluated on a fixed logarithmic frequency grid with numpy (up to the Nyquist
-frequency for the digital loops, which is always included: ``L(-1)`` is real); gain crossings and
-phase crossings are located between grid points by interpolation in ``log w``. This costs about
-a millisecond per loop; ``tests/control/test_margins.py`` cross-checks it against python-control's
-``stability_margins`` on the same loops (:func:`loop_systems`).
+Method: each ``L`` is evaluated on a fixed logarithmic frequency grid (up to the Nyquist frequency for the
+digital loops, which is always included: ``L(-1)`` is real); gain crossings and phase crossings are located
+between grid points by interpolation in ``log w``. This costs a few milliseconds per loop;
+``tests/control/test_margins.py`` cross-checks it against python-control's ``stability_margins`` on the same
+loops (:func:`loop_systems`).
+
+The margins are stored per run (``results.nc``), so they must be the same bits on every machine: the matrix
+algebra goes through :mod:`twin.linalg` (fixed operation order) instead of BLAS/LAPACK, and the complex
+arithmetic and elementary functions are Python's and the C library's on scalars instead of numpy's
+CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs them under other kernels).
 """
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import asdict, dataclass
-from functools import lru_cache
 
 import numpy as np
-from scipy.linalg import expm
-from threadpoolctl import ThreadpoolController
 
 from twin.control.design import (
     current_closed_loop,
@@ -60,6 +63,7 @@ from twin.control.design import (
     winding_admittance,
 )
 from twin.control.force_loop_design import linearised_matrices
+from twin.linalg import expm, matmul, state_space_response
 
 __all__ = ["LOOPS", "METRICS", "LoopMargins", "frequency_grid", "loop_margins", "loop_responses", "loop_systems",
            "margins_from_response"]
@@ -100,20 +104,37 @@ class LoopMargins:
 
 def frequency_grid(sample_time: float) -> np.ndarray:
     """Angular frequencies [rad/s] from :data:`LOWEST_HZ` to the Nyquist frequency (included), or to
-    :data:`CURRENT_LOOP_HIGHEST_HZ` for a continuous loop (``sample_time == 0``)."""
+    :data:`CURRENT_LOOP_HIGHEST_HZ` for a continuous loop (``sample_time == 0``): geometrically spaced, both ends
+    exact, each point from its index by the C library's ``exp`` (no CPU-dispatched array kernel)."""
     top = 0.5 / sample_time if sample_time > 0 else CURRENT_LOOP_HIGHEST_HZ
     n = int(math.ceil(POINTS_PER_DECADE * math.log10(top / LOWEST_HZ))) + 1
-    return 2.0 * math.pi * np.geomspace(LOWEST_HZ, top, n)
+    span = math.log(top / LOWEST_HZ)
+    hz = [LOWEST_HZ * math.exp(span * i / (n - 1)) for i in range(n)]
+    hz[0], hz[-1] = LOWEST_HZ, top
+    return np.array([2.0 * math.pi * f for f in hz])
 
 
-# ---------------------------------------------------------------- state-space helpers (numpy/scipy)
+# ---------------------------------------------------------------- state-space helpers (fixed operation order)
 
 def _ss(num, den):
-    """Controllable-form state space of a proper transfer function (polynomials in s)."""
-    from scipy.signal import tf2ss  # lazy: scipy.signal costs ~1 s of start-up; only margin computations need it
-
-    a, b, c, d = tf2ss(num, den)
-    return a, b, c, d
+    """Controllable canonical form ``(A, B, C, D)`` of a proper transfer function (polynomials in s, highest
+    power first): the realisation of ``scipy.signal.tf2ss``, built element by element."""
+    num = np.atleast_1d(np.asarray(num, dtype=float))
+    den = np.atleast_1d(np.asarray(den, dtype=float))
+    n = den.size - 1
+    lead = den[0]
+    den = den / lead
+    num = np.concatenate([np.zeros(den.size - num.size), num / lead])
+    a = np.zeros((n, n))
+    a[0, :] = -den[1:]
+    for i in range(1, n):
+        a[i, i - 1] = 1.0
+    b = np.zeros((n, 1))
+    if n:
+        b[0, 0] = 1.0
+    d = num[0]
+    c = (num[1:] - d * den[1:]).reshape(1, n)
+    return a, b, c, np.array([[d]])
 
 
 def _series(first, second):
@@ -121,10 +142,13 @@ def _series(first, second):
     a1, b1, c1, d1 = first
     a2, b2, c2, d2 = second
     n1, n2 = a1.shape[0], a2.shape[0]
-    a = np.block([[a1, np.zeros((n1, n2))], [b2 @ c1, a2]])
-    b = np.vstack([b1, b2 @ d1])
-    c = np.hstack([d2 @ c1, c2])
-    return a, b, c, d2 @ d1
+    a = np.zeros((n1 + n2, n1 + n2))
+    a[:n1, :n1] = a1
+    a[n1:, :n1] = matmul(b2, c1)
+    a[n1:, n1:] = a2
+    b = np.concatenate([b1, matmul(b2, d1)])
+    c = np.concatenate([matmul(d2, c1), c2], axis=1)
+    return a, b, c, matmul(d2, d1)
 
 
 def _zoh(a, b, sample_time):
@@ -139,15 +163,36 @@ def _zoh(a, b, sample_time):
 
 def _response(a, b, c, d, points):
     """``C (pI - A)^-1 B + D`` at complex ``points`` (s or z) for a SISO system."""
-    n = a.shape[0]
-    matrices = points[:, None, None] * np.eye(n)[None] - a[None]
-    x = np.linalg.solve(matrices, np.broadcast_to(b, (points.size, n, 1)))
-    return (c[None] @ x)[:, 0, 0] + d[0, 0]
+    return state_space_response(np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float),
+                                np.ascontiguousarray(c, dtype=float), np.ascontiguousarray(d, dtype=float),
+                                np.asarray(points, dtype=np.complex128))
+
+
+def _polyval(coefficients, x: complex) -> complex:
+    """A polynomial (highest power first) at ``x`` by Horner's rule on Python scalars."""
+    value = 0j
+    for coefficient in coefficients:
+        value = value * x + float(coefficient)
+    return value
+
+
+def _unit_circle(w: np.ndarray, sample_time: float) -> np.ndarray:
+    """``exp(j w T)`` at each frequency, from the C library's cosine and sine."""
+    return np.array([complex(math.cos(x * sample_time), math.sin(x * sample_time)) for x in w.tolist()])
 
 
 def _pi(kp, ki, sample_time, z):
-    """``pi_step`` as a transfer function: ``kp + ki T / (z - 1)`` (forward-Euler integral)."""
-    return kp + ki * sample_time / (z - 1.0)
+    """``pi_step`` as a transfer function: ``kp + ki T / (z - 1)`` (forward-Euler integral), at each point."""
+    return np.array([kp + ki * sample_time / (point - 1.0) for point in np.asarray(z).tolist()])
+
+
+def _product(*factors: np.ndarray) -> np.ndarray:
+    """Elementwise product of complex arrays on Python scalars (numpy's complex kernels may fuse
+    multiply-adds on some CPUs)."""
+    values = [complex(v) for v in factors[0].tolist()]
+    for factor in factors[1:]:
+        values = [v * complex(f) for v, f in zip(values, factor.tolist(), strict=True)]
+    return np.array(values)
 
 
 # ---------------------------------------------------------------- the loops
@@ -182,7 +227,7 @@ def _closed_speed_loop(p, speed_plant):
     ad, bd, c = speed_plant
     n = ad.shape[0]
     a = np.zeros((n + 2, n + 2))
-    a[:n, :n] = ad - (kp / ts) * bd @ c
+    a[:n, :n] = ad - (kp / ts) * matmul(bd, c)
     a[:n, n:n + 1] = (kp / ts) * bd
     a[:n, n + 1:] = bd
     a[n, :n] = c[0]
@@ -208,8 +253,8 @@ def _position_plant(p, speed_plant):
     lifted_b = np.zeros_like(b)
     power = np.eye(a.shape[0])
     for _ in range(steps):
-        lifted_b += power @ b
-        power = power @ a
+        lifted_b += matmul(power, b)
+        power = matmul(power, a)
     return power, lifted_b, screw_kinematics_gain(p) * c
 
 
@@ -246,10 +291,16 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
     out = {}
     if "current" in loops:
         w = frequency_grid(0.0)
-        s = 1j * w
+        kp, ki = p["controller.current_kp"], p["controller.current_ki"]
         blocks = (winding_admittance(p), hall_sensor(p))
-        out["current"] = (0.0, w, (p["controller.current_kp"] + p["controller.current_ki"] / s)
-                          * np.prod([np.polyval(num, s) / np.polyval(den, s) for num, den in blocks], axis=0))
+        values = []
+        for x in w.tolist():
+            s = complex(0.0, x)
+            value = kp + ki / s
+            for num, den in blocks:
+                value *= _polyval(num, s) / _polyval(den, s)
+            values.append(value)
+        out["current"] = (0.0, w, np.array(values))
 
     t = p["controller.position_loop_sample_time"]
     if "speed" in loops or "position" in loops:
@@ -257,22 +308,25 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
         speed_plant = _speed_loop_discrete(p)
     if "speed" in loops:
         w = frequency_grid(ts)
-        z = np.exp(1j * w * ts)
+        z = _unit_circle(w, ts)
         angle = _response(*speed_plant, np.zeros((1, 1)), z)
-        out["speed"] = (ts, w, _pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z) * (1.0 - 1.0 / z) / ts
-                        * angle)
+        differencing = np.array([(1.0 - 1.0 / point) / ts for point in z.tolist()])
+        out["speed"] = (ts, w, _product(_pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z), differencing,
+                                        angle))
     w = frequency_grid(t)
-    z = np.exp(1j * w * t)
+    z = _unit_circle(w, t)
     if "position" in loops:
         a, b, c = _position_plant(p, speed_plant)
         position = _response(a, b, c, np.zeros((1, 1)), z)
-        out["position"] = (t, w, _pi(p["controller.position_kp"], p["controller.position_ki"], t, z) * position)
+        out["position"] = (t, w, _product(_pi(p["controller.position_kp"], p["controller.position_ki"], t, z),
+                                          position))
 
     if load_system is not None and "force" in loops:
         ad, bd, c = _force_plant(p, load_system, force)
         refresh_delay = 0.5 / p["sensors.load_cell_measuring_rate"] if load_cell_refresh else 0.0
-        measured = _response(ad, bd, c, np.zeros((1, 1)), z) * np.exp(-1j * w * refresh_delay)
-        out["force"] = (t, w, _pi(p["controller.force_kp"], p["controller.force_ki"], t, z) * measured)
+        delay = _unit_circle(w, -refresh_delay)
+        out["force"] = (t, w, _product(_pi(p["controller.force_kp"], p["controller.force_ki"], t, z),
+                                       _response(ad, bd, c, np.zeros((1, 1)), z), delay))
     return out
 
 
@@ -288,50 +342,42 @@ def margins_from_response(loop: str, sample_time: float, omega: np.ndarray, resp
     interpolated in ``log w`` between grid points; the reported phase margin and crossover are those of
     the crossing with the smallest phase margin, the gain margin the smallest ``1/|L|`` over the phase
     crossings (``inf`` without one). A loop that never crosses unit gain has ``nan`` phase margin and
-    crossover.
+    crossover. Scalar arithmetic throughout (module docstring: the same bits on every machine).
     """
-    log_w = np.log(omega)
-    log_mag = np.log(np.abs(response))
+    w = [float(x) for x in np.asarray(omega).tolist()]
+    values = [complex(v) for v in np.asarray(response).tolist()]
+    log_w = [math.log(x) for x in w]
+    log_mag = [math.log(abs(v)) for v in values]
     crossover, phase_margin = math.nan, math.nan
-    for i in np.nonzero((log_mag[:-1] >= 0.0) != (log_mag[1:] >= 0.0))[0]:
+    for i in range(len(values) - 1):
+        if (log_mag[i] >= 0.0) == (log_mag[i + 1] >= 0.0):
+            continue
         lw = _interpolate(log_w[i], log_w[i + 1], log_mag[i], log_mag[i + 1], 0.0)
         fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
-        phase = np.angle(response[i] * (response[i + 1] / response[i]) ** fraction, deg=True)
+        phase = math.degrees(cmath.phase(values[i] * (values[i + 1] / values[i]) ** fraction))
         margin = (phase + 180.0) % 360.0
         margin = margin - 360.0 if margin > 180.0 else margin
         if math.isnan(phase_margin) or margin < phase_margin:
-            crossover, phase_margin = math.exp(lw) / (2 * math.pi), float(margin)
+            crossover, phase_margin = math.exp(lw) / (2 * math.pi), margin
     gain_margin = math.inf
-    imag = response.imag
-    crossings = list(np.nonzero((imag[:-1] > 0.0) != (imag[1:] > 0.0))[0])
-    for i in crossings:
-        lw = _interpolate(log_w[i], log_w[i + 1], imag[i], imag[i + 1], 0.0)
+    for i in range(len(values) - 1):
+        if (values[i].imag > 0.0) == (values[i + 1].imag > 0.0):
+            continue
+        lw = _interpolate(log_w[i], log_w[i + 1], values[i].imag, values[i + 1].imag, 0.0)
         fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
-        value = response[i] + (response[i + 1] - response[i]) * fraction
+        value = values[i] + (values[i + 1] - values[i]) * fraction
         if value.real < 0.0:
             gain_margin = min(gain_margin, -20.0 * math.log10(abs(value.real)))
-    if sample_time > 0 and response[-1].real < 0.0 and abs(omega[-1] * sample_time - math.pi) < 1e-9:
-        gain_margin = min(gain_margin, -20.0 * math.log10(abs(response[-1].real)))  # Nyquist: L(-1) is real
-    peak = float(np.max(1.0 / np.abs(1.0 + response)))
+    if sample_time > 0 and values[-1].real < 0.0 and abs(w[-1] * sample_time - math.pi) < 1e-9:
+        gain_margin = min(gain_margin, -20.0 * math.log10(abs(values[-1].real)))  # Nyquist: L(-1) is real
+    peak = max(1.0 / abs(1.0 + v) for v in values)
     return LoopMargins(loop, float(sample_time), float(gain_margin), float(phase_margin), float(crossover), peak)
-
-
-@lru_cache(maxsize=1)
-def _thread_pools() -> ThreadpoolController:
-    """The process's BLAS thread pools, found once (finding them reads the memory map: ~3 ms)."""
-    return ThreadpoolController()
 
 
 def loop_margins(p: dict[str, float], load_system: dict[str, float] | None = None, force: float = 0.0, *,
                  loops=LOOPS) -> dict[str, LoopMargins]:
-    """Margins of every loop present (see :func:`loop_responses` for the arguments).
-
-    BLAS/LAPACK run single-threaded here: on matrices this small the threads only synchronise, and on a
-    loaded machine that costs milliseconds per LAPACK call (measured: ``expm`` of a 7 x 7 matrix 8 ms with
-    two OpenBLAS threads on the loaded 2-core machine, 20 us with one).
-    """
-    with _thread_pools().limit(limits=1):
-        responses = loop_responses(p, load_system, force, loops=loops)
+    """Margins of every loop present (see :func:`loop_responses` for the arguments)."""
+    responses = loop_responses(p, load_system, force, loops=loops)
     return {loop: margins_from_response(loop, ts, w, response) for loop, (ts, w, response) in responses.items()}
 
 

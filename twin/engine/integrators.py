@@ -21,6 +21,7 @@ from twin.engine.plant import (
     stiff_velocity_system,
 )
 from twin.layout import PNEUMATICS_FULL, K, S, U
+from twin.linalg import inverse
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
@@ -102,7 +103,7 @@ def w_matrix(t, x, h, c, u, force_table, stiffness_poly, work, active):
         for i in range(n):
             matrix[i, j] = -ROS2_GAMMA * h * (column[active[i]] - f0[active[i]]) / delta
         matrix[j, j] += 1.0
-    matrix[:, :] = np.linalg.inv(matrix)
+    matrix[:, :] = inverse(matrix)  # fixed operation order: not LAPACK, whose bits depend on the BLAS kernel
 
 
 @numba.njit(cache=True)
