@@ -8,10 +8,8 @@ Modules: :mod:`sensors.encoder` (linear and torque-meter encoders),
 :mod:`sensors.analog` (shared force/torque channel), :mod:`sensors.torque_meter`,
 :mod:`sensors.load_cell`, :mod:`sensors.resolver`, :mod:`sensors.hall`,
 :mod:`sensors.acquisition` (converters, noise, uncertainty convention),
-:mod:`sensors.parameters` (parameters as data), :mod:`sensors.compiled_cache`. Conventions: ``docs/sensors.md``.
+:mod:`sensors.parameters` (parameters as data). Conventions: ``docs/sensors.md``.
 """
 
-# Key numba's cache on the source before any sensor or twin module is compiled (see sensors.compiled_cache).
-from sensors import compiled_cache
-
-compiled_cache.configure()
+# numba's cache is keyed on the source before any sensor or twin module is compiled (numerics.compiled_cache).
+import numerics  # noqa: F401

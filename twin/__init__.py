@@ -5,7 +5,7 @@ Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -
 The public names (``twin.simulate``, ``twin.load_parameters``, ...) are imported on first use
 (lazy: start-up cost; ``import twin`` or ``import twin.scenes`` must not load xarray and the compiled
 engine). Importing ``sensors`` first keys numba's on-disk cache on the source before any function of
-either package is compiled (:mod:`sensors.compiled_cache`; no stale machine code).
+either package is compiled (:mod:`numerics.compiled_cache`; no stale machine code).
 """
 
 import importlib

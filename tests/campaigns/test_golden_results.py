@@ -11,7 +11,7 @@ seed on every machine (docs/campaigns.md, "The same numbers everywhere"), and no
 rounding difference: the sampling is numpy's PCG64 (platform independent), the compiled code is built without
 ``fastmath``, so LLVM neither contracts multiply-adds into FMA nor reorders sums whatever the host CPU's
 instruction set, and no BLAS/LAPACK kernel or CPU-dispatched numpy array kernel lies between the spec and the
-stored numbers (:mod:`twin.linalg`; ``test_same_numbers_everywhere.py`` runs this campaign under other
+stored numbers (:mod:`numerics.linalg`; ``test_same_numbers_everywhere.py`` runs this campaign under other
 kernels). A refactoring that changes a single bit (an operation reordered, a constant computed another way)
 fails here, which is the point: such a change is a model change and must be made on purpose.
 

@@ -1,5 +1,5 @@
 """numba's on-disk cache is keyed on the project source: editing a called function in another module is
-seen by the next process (sensors.compiled_cache; numba alone checks only the caller's own file)."""
+seen by the next process (numerics.compiled_cache; numba alone checks only the caller's own file)."""
 
 import os
 import shutil
@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 import twin
-from sensors import compiled_cache
+from numerics import compiled_cache
 
 ROOT = Path(twin.__file__).resolve().parent.parent
 

@@ -42,7 +42,7 @@ between grid points by interpolation in ``log w``. This costs a few milliseconds
 loops (:func:`loop_systems`).
 
 The margins are stored per run (``results.nc``), so they must be the same bits on every machine: the matrix
-algebra goes through :mod:`twin.linalg` (fixed operation order) instead of BLAS/LAPACK, and the complex
+algebra goes through :mod:`numerics.linalg` (fixed operation order) instead of BLAS/LAPACK, and the complex
 arithmetic and elementary functions are Python's and the C library's on scalars instead of numpy's
 CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs them under other kernels).
 """
@@ -63,7 +63,7 @@ from twin.control.design import (
     winding_admittance,
 )
 from twin.control.force_loop_design import linearised_matrices
-from twin.linalg import expm, matmul, state_space_response
+from numerics.linalg import expm, matmul, state_space_response
 
 __all__ = ["LOOPS", "METRICS", "LoopMargins", "frequency_grid", "loop_margins", "loop_responses", "loop_systems",
            "margins_from_response"]

@@ -21,7 +21,7 @@ from twin.engine.plant import (
     stiff_velocity_system,
 )
 from twin.layout import PNEUMATICS_FULL, K, S, U
-from twin.linalg import inverse
+from numerics.linalg import inverse
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1

@@ -24,7 +24,7 @@ from twin.layout import (
     K,
     S,
 )
-from twin.linalg import lstsq
+from numerics.linalg import lstsq
 from twin.parameters import ParameterSet
 from twin.physics import hertz
 from twin.physics import pneumatics as pn
@@ -269,7 +269,7 @@ def _hertz_stiffness_fit(ball_radius: float, pitch_radius: float, alpha_e: float
     sin_grid = np.linspace(sin_min, SIN_ALPHA_MAX, STIFFNESS_FIT_POINTS)
     groove_radius = 2.0 * conformity * ball_radius
     e_star = hertz.equivalent_modulus(elastic_modulus, poisson_ratio, elastic_modulus, poisson_ratio)
-    # the C library's asin, not numpy's CPU-dispatched array kernel (twin.linalg: the same bits on every machine)
+    # the C library's asin, not numpy's CPU-dispatched array kernel (numerics.linalg: the same bits on every machine)
     alpha_grid = np.array([math.asin(value) for value in sin_grid.tolist()])
     stiffness = hertz.stiffness_table(alpha_grid, pitch_radius, ball_radius, groove_radius, groove_radius,
                                       alpha_e, ogival_offset, e_star, CURVATURE_FORMULAS[curvature])
@@ -374,7 +374,7 @@ def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     """Power-series coefficients (in the normalised variable of ``stiffness_at``) of ``K(sin alpha)``.
 
     A least-squares fit in the Chebyshev basis (well conditioned on the grid), converted to powers. The fit is
-    :func:`twin.linalg.lstsq` rather than ``chebfit``, whose LAPACK call gives other last bits under another
+    :func:`numerics.linalg.lstsq` rather than ``chebfit``, whose LAPACK call gives other last bits under another
     BLAS kernel: the coefficients are model constants of every run and must not depend on the machine.
 
     Raises

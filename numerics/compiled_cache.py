@@ -7,13 +7,13 @@ changes (say ``twin.physics.coupling.elasto_backlash``, called by
 still holds the old callee, and a run silently executes the old physics.
 
 :func:`configure` points ``NUMBA_CACHE_DIR`` at a directory named after a hash
-of every ``.py`` file of the packages numba compiles from (``twin`` and
-``sensors``): any source edit selects a fresh, empty cache directory. It must
+of every ``.py`` file of the packages numba compiles from (``twin``, ``sensors``
+and ``numerics``): any source edit selects a fresh, empty cache directory. It must
 run before the first ``@njit(cache=True)`` decorator executes (numba fixes a
-function's cache location when it is decorated), so ``sensors/__init__.py``
-calls it before importing anything compiled, and ``twin/__init__.py`` imports
-``sensors`` first. It lives in ``sensors``, the bottom layer, so that both
-compiled packages can use it without an upward import.
+function's cache location when it is decorated), so ``numerics/__init__.py``
+calls it before importing anything compiled, ``sensors`` imports ``numerics``
+first and ``twin`` imports ``sensors`` first. It lives in ``numerics``, the bottom
+layer, so that every compiled package can use it without an upward import.
 
 Child processes (dask workers, the campaign sandbox) inherit the environment
 variable and, importing ``twin`` themselves, recognise the directory as
@@ -29,8 +29,8 @@ from pathlib import Path
 
 #: Prefix of the per-source-hash cache directories.
 KEY_PREFIX = "benchtwin-"
-#: Packages whose modules hold ``numba`` functions (directories next to ``sensors``).
-COMPILED_PACKAGES = ("twin", "sensors")
+#: Packages whose modules hold ``numba`` functions (directories next to ``numerics``).
+COMPILED_PACKAGES = ("twin", "sensors", "numerics")
 
 
 def source_hash(root: Path | None = None) -> str:
@@ -39,7 +39,7 @@ def source_hash(root: Path | None = None) -> str:
     Parameters
     ----------
     root : Path, optional
-        Directory holding the packages; by default the one holding this ``sensors`` package.
+        Directory holding the packages; by default the one holding this ``numerics`` package.
     """
     root = Path(__file__).resolve().parent.parent if root is None else root
     digest = hashlib.sha256()
