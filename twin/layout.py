@@ -230,6 +230,10 @@ class K(IntEnum):
     SIN_HELIX = 135           # sin(alpha_e)
     # screw torsion between the coupling and the nuts (fidelity "screw_torsion")
     SHAFT_TWIST_COMPLIANCE = 136  # (p/2pi)^2 / (G J_p) [1/N]: the shaft twist as an axial compliance per length
+    # the design contact angle's trigonometry, computed once (twin.physics.ball_screw.contact_geometry)
+    CONTACT_RADIAL_0 = 137    # A0 cos(alpha_0) [m]
+    CONTACT_AXIAL_0 = 138     # A0 sin(alpha_0) [m]
+    SIN_ALPHA_0 = 139         # sin(alpha_0)
 
 N_CONSTANTS = len(K)
 

@@ -22,7 +22,7 @@ from twin.engine.plant import current_loop_jacobian, drive_electronics_rhs, held
 from twin.fidelity import resolve_fidelity
 from twin.layout import N_INPUTS, K, S
 from twin.physics.ball_groove_friction import nut_friction_force, nut_friction_slope
-from twin.physics.ball_screw import nut_axial_force, nut_axial_tangent
+from twin.physics.ball_screw import nut_axial_force, nut_axial_tangent, nut_elastic_force
 from twin.physics.friction import stribeck_friction, stribeck_slope
 
 DRIVE_PERIOD = 1.25e-4  # s: the step the integrator is built for
@@ -103,21 +103,24 @@ def test_contact_tangent_matches_finite_differences(bench, scene_factory, relati
     poly = _plant_model(bench, scene_factory(0.01, backlash=2e-6)).stiffness_poly
     linear = 2e8
     dx = 0.5 * c[K.BACKLASH] + relative_position_um * 1e-6
-    alpha_0 = c[K.CONTACT_ANGLE_0]
-    common = (c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE])
-    tail = (poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN], c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], contact_model,
-            linear)
+    common = (c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0],
+              c[K.SIN_ALPHA_0], poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN])
+    tail = (c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], contact_model, linear)
 
     def force(position, velocity):
-        return nut_axial_force(position, velocity, *common, alpha_0, *tail)[0]
+        return nut_axial_force(position, velocity, *common, *tail)[0]
 
-    stiffness, damping, load = nut_axial_tangent(dx, 1e-5, *common, c[K.CENTRE_DISTANCE] * math.cos(alpha_0),
-                                                 c[K.CENTRE_DISTANCE] * math.sin(alpha_0), *tail)
+    stiffness, damping, load = nut_axial_tangent(dx, 1e-5, *common, *tail)
     step_x, step_v = 1e-4 * relative_position_um * 1e-6, 1e-8
     assert stiffness == pytest.approx((force(dx + step_x, 1e-5) - force(dx - step_x, 1e-5)) / (2 * step_x), rel=1e-2)
     assert damping == pytest.approx((force(dx, 1e-5 + step_v) - force(dx, 1e-5 - step_v)) / (2 * step_v), rel=1e-6)
-    assert load == pytest.approx(nut_axial_force(dx, 0.0, *common, alpha_0, *tail)[1], rel=1e-12)
-    assert nut_axial_tangent(0.4 * c[K.BACKLASH], 0.0, *common, 1.0, 1.0, *tail) == (0.0, 0.0, 0.0)  # in the gap
+    assert load == pytest.approx(nut_axial_force(dx, 0.0, *common, *tail)[1], rel=1e-12)
+    assert nut_axial_tangent(0.4 * c[K.BACKLASH], 0.0, *common, *tail) == (0.0, 0.0, 0.0)  # in the gap
+    # the elastic part the quasi-static screw-axial balance solves with: the undamped force, the same tangent
+    elastic, slope = nut_elastic_force(dx, *common, c[K.LOADED_BALLS], contact_model, linear)
+    assert elastic == nut_axial_force(dx, 0.0, *common, *tail)[0]
+    assert slope == stiffness
+    assert nut_elastic_force(0.4 * c[K.BACKLASH], *common, c[K.LOADED_BALLS], contact_model, linear) == (0.0, 0.0)
 
 
 def test_friction_slopes_match_finite_differences():

@@ -36,7 +36,8 @@ def test_approach_limit_decided_by_the_exact_contact_geometry(bench):
         base = nut_relative_position(x, c, 0)
         x[S.SCREW_AXIAL] = interference / c[K.COS_HELIX] + 0.5 * c[K.BACKLASH] - base
         gap = abs(nut_relative_position(x, c, 0)) - 0.5 * c[K.BACKLASH]
-        approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
+        approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0],
+                                       c[K.CONTACT_AXIAL_0])
         code = guard(x, c)
         assert code in (0, 6)
         assert (code == 6) == (approach > limit)

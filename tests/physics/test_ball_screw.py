@@ -18,8 +18,9 @@ from twin.physics.ball_screw import (
 
 A0 = groove_centre_distance(1.5875e-3, 0.528)
 ALPHA0 = math.radians(45.13)
+RADIAL0, AXIAL0, SIN0 = A0 * math.cos(ALPHA0), A0 * math.sin(ALPHA0), math.sin(ALPHA0)
 COS_HELIX = math.cos(helix_angle(5e-3, 8e-3))
-K_CONST = np.array([5.27e9])  # constant stiffness polynomial
+K_CONST = np.array([5.27e9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # constant stiffness polynomial (degree 6)
 Z = 22.0
 
 
@@ -27,7 +28,7 @@ def force(dx, dv=0.0, backlash=0.0, variable=True, damping=0.0, linear_stiffness
     """Axial nut force at the contact level: variable or constant angle Hertz, or linear if a stiffness is given."""
     model = (CONTACT_LINEAR if linear_stiffness is not None
              else (CONTACT_VARIABLE_ANGLE if variable else CONTACT_CONSTANT_ANGLE))
-    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, ALPHA0, K_CONST, math.sin(ALPHA0), 0.2, damping, Z,
+    return nut_axial_force(dx, dv, backlash, COS_HELIX, A0, RADIAL0, AXIAL0, SIN0, K_CONST, SIN0, 0.2, damping, Z,
                            model, linear_stiffness or 0.0)
 
 
@@ -38,13 +39,13 @@ def test_helix_angle_matches_table_7_5():
 def test_contact_angle_first_order_matches_eq_9_4():
     """For small deformation the exact geometry reduces to Eq. 9.4: tan(a) = tan(a0) + d/(2(r_s - r_b) cos a0)."""
     delta = 1e-7
-    _, sin_alpha = contact_geometry(delta, A0, ALPHA0)
+    _, sin_alpha = contact_geometry(delta, A0, RADIAL0, AXIAL0)
     alpha = math.asin(sin_alpha)
     assert math.tan(alpha) == pytest.approx(math.tan(ALPHA0) + delta / (A0 * math.cos(ALPHA0)), rel=1e-9)
 
 
 def test_contact_angle_grows_with_load():
-    angles = [math.asin(contact_geometry(d, A0, ALPHA0)[1]) for d in (0.0, 5e-6, 2e-5)]
+    angles = [math.asin(contact_geometry(d, A0, RADIAL0, AXIAL0)[1]) for d in (0.0, 5e-6, 2e-5)]
     assert angles[0] == pytest.approx(ALPHA0, abs=1e-12)
     assert angles[0] < angles[1] < angles[2]
 
@@ -54,7 +55,7 @@ def test_force_is_gradient_of_energy(variable):
     """dF/dx integrated numerically equals the Hertz energy Z * K * (2/5) delta_n^2.5 (conservative contact)."""
     dx = 8e-6
     energy, _ = quad(lambda d: force(d, variable=variable)[0], 0.0, dx, epsabs=1e-15, epsrel=1e-12)
-    delta_n = contact_geometry(dx * COS_HELIX, A0, ALPHA0)[0] if variable else dx * COS_HELIX * math.sin(ALPHA0)
+    delta_n = contact_geometry(dx * COS_HELIX, A0, RADIAL0, AXIAL0)[0] if variable else dx * COS_HELIX * SIN0
     assert energy == pytest.approx(Z * K_CONST[0] * 0.4 * delta_n**2.5, rel=1e-9)
 
 
@@ -95,7 +96,7 @@ def test_saturated_damping_never_pulls():
 def test_stiffness_polynomial_is_evaluated_in_the_fitted_range_and_clamped_outside():
     """Horner evaluation of sum c_k u^k with u = 2 (s - s_min) / span - 1, clamped to [-1, 1]: beyond the fitted
     angles (Sec. 3.5.5) the stiffness stays at its end values instead of following the polynomial."""
-    coefficients = np.array([1.0, 2.0, 3.0])  # 1 + 2u + 3u^2
+    coefficients = np.array([1.0, 2.0, 3.0, 0.0, 0.0, 0.0, 0.0])  # 1 + 2u + 3u^2, as a degree-6 fit
     s_min, span = 0.7, 0.2
     assert stiffness_at(coefficients, s_min, span, 0.8) == pytest.approx(1.0, rel=1e-12)  # u = 0
     assert stiffness_at(coefficients, s_min, span, 0.85) == pytest.approx(1.0 + 1.0 + 0.75, rel=1e-12)  # u = 0.5

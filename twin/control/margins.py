@@ -55,6 +55,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from numerics.linalg import expm, matmul, state_space_response
 from twin.control.design import (
     current_closed_loop,
     hall_sensor,
@@ -63,7 +64,6 @@ from twin.control.design import (
     winding_admittance,
 )
 from twin.control.force_loop_design import linearised_matrices
-from numerics.linalg import expm, matmul, state_space_response
 
 __all__ = ["LOOPS", "METRICS", "LoopMargins", "frequency_grid", "loop_margins", "loop_responses", "loop_systems",
            "margins_from_response"]

@@ -10,6 +10,7 @@ of ``x`` holds fixed values the right-hand side reads.
 import numba
 import numpy as np
 
+from numerics.linalg import inverse
 from twin.engine.plant import (
     CURRENT_LOOP_STATES,
     DOF_POSITIONS,
@@ -21,7 +22,6 @@ from twin.engine.plant import (
     stiff_velocity_system,
 )
 from twin.layout import PNEUMATICS_FULL, K, S, U
-from numerics.linalg import inverse
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1

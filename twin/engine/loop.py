@@ -88,7 +88,8 @@ def guard(x, c):
         # The normal approach never exceeds the axial interference (the triangle inequality on
         # Eq. 9.4's exact form), so the geometry is needed only near the limit.
         if gap > 0.0 and gap * c[K.COS_HELIX] > (1.0 - _APPROACH_MARGIN) * c[K.MAX_NORMAL_APPROACH]:
-            approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0])
+            approach, _ = contact_geometry(gap * c[K.COS_HELIX], c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0],
+                                           c[K.CONTACT_AXIAL_0])
             if approach > c[K.MAX_NORMAL_APPROACH]:
                 return 6
     if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:

@@ -10,6 +10,7 @@ from typing import Protocol
 import numpy as np
 from scipy.optimize import brentq
 
+from numerics.linalg import lstsq
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
 from twin.layout import (
@@ -24,11 +25,11 @@ from twin.layout import (
     K,
     S,
 )
-from numerics.linalg import lstsq
 from twin.parameters import ParameterSet
 from twin.physics import hertz
 from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import (
+    STIFFNESS_FIT_DEGREE,
     effective_loaded_balls,
     groove_centre_distance,
     helix_angle,
@@ -41,7 +42,6 @@ from twin.scenes import Scene
 
 CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}
 STIFFNESS_FIT_POINTS = 200
-STIFFNESS_FIT_DEGREE = 6
 STIFFNESS_FIT_TOLERANCE = 1e-5  # relative; far below the 2 % error of the curvature fits (Sec. 3.5.5)
 # sin(70 deg): upper validity limit of the fitted curvature formulas (Eqs. 3.20, 3.27); far beyond any load the screw
 # can carry
@@ -249,6 +249,9 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.COS_HELIX] = math.cos(alpha_e)
     c[K.CENTRE_DISTANCE] = groove_centre_distance(ball_radius, p["ball_screw.conformity"])
     c[K.CONTACT_ANGLE_0] = alpha_0
+    c[K.CONTACT_RADIAL_0] = c[K.CENTRE_DISTANCE] * math.cos(alpha_0)
+    c[K.CONTACT_AXIAL_0] = c[K.CENTRE_DISTANCE] * math.sin(alpha_0)
+    c[K.SIN_ALPHA_0] = math.sin(alpha_0)
     sin_min = math.sin(alpha_0)
     stiffness_poly = _hertz_stiffness_fit(ball_radius, pitch_radius, alpha_e, sin_min, p["ball_screw.conformity"],
                                           p["ball_screw.elastic_modulus"], p["ball_screw.poisson_ratio"],
@@ -394,7 +397,8 @@ def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
 def contact_force(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
     """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N]."""
     return nut_axial_force(relative_position, 0.0, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE],
-                           c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+                           c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
+        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
                            0.0, c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])[0]
 
 

@@ -79,7 +79,8 @@ def nut_contact(x, c, stiffness_poly, nut):
     ``K.CONTACT_MODEL``."""
     force, normal, _ = nut_axial_force(
         nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
-        c[K.CENTRE_DISTANCE], c[K.CONTACT_ANGLE_0], stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+        c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
+        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
         c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
     return force, normal
 
@@ -432,13 +433,12 @@ def stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity):
     roll_arm = arm if rotation else 0.0
     # ball-groove contacts and their helix friction
     tangent_arm = c[K.PITCH_RADIUS] * c[K.COS_HELIX]
-    radial_0 = c[K.CENTRE_DISTANCE] * math.cos(c[K.CONTACT_ANGLE_0])
-    axial_0 = c[K.CENTRE_DISTANCE] * math.sin(c[K.CONTACT_ANGLE_0])
     for nut in range(2):
         position, roll = (DOF_NUT1, DOF_NUT1_ROLL) if nut == 0 else (DOF_NUT2, DOF_NUT2_ROLL)
         stiffness, damping, load = nut_axial_tangent(
             nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
-            c[K.CENTRE_DISTANCE], radial_0, axial_0, stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
+            c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
+        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
             c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
         if stiffness > 0.0:
             _add_element(matrix, b, velocity, h, stiffness, damping, DOF_AXIAL, 1.0, DOF_SCREW, arm, roll,

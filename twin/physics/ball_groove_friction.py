@@ -43,6 +43,8 @@ import math
 
 import numba
 
+from numerics import elementary
+from numerics.jit import SCALAR
 from twin.physics.friction import sech_squared
 
 #: Exponent of the load dependence of the rolling friction (Eqs. 5.20, 5.22): "an average exponent
@@ -50,7 +52,7 @@ from twin.physics.friction import sech_squared
 ROLLING_LOAD_EXPONENT = 0.26
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def sliding_coefficient(v, g1, g2, g3, g4, g5, g6):
     """Sliding friction coefficient of Eq. 5.16 (Makkar et al. 2005), odd in ``v``.
 
@@ -67,10 +69,11 @@ def sliding_coefficient(v, g1, g2, g3, g4, g5, g6):
     g6 : float
         Viscous slope [s/m].
     """
-    return g1 * (math.tanh(g2 * v) - math.tanh(g3 * v)) + g4 * math.tanh(g5 * v) + g6 * v
+    return (g1 * (elementary.tanh(g2 * v) - elementary.tanh(g3 * v)) + g4 * elementary.tanh(g5 * v)
+            + g6 * v)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def rolling_coefficient(normal_load, ball_speed, k_gc, k_rf, f_v1, ball_radius):
     """Rolling friction coefficient ``f_v = u / r_b`` of one contact (Eqs. 5.19-5.24) [1].
 
@@ -89,12 +92,12 @@ def rolling_coefficient(normal_load, ball_speed, k_gc, k_rf, f_v1, ball_radius):
     ball_radius : float
         ``r_b`` [m].
     """
-    if normal_load <= 0.0:
-        return f_v1 * ball_speed * ball_speed
-    return k_gc * k_rf * normal_load**ROLLING_LOAD_EXPONENT / ball_radius + f_v1 * ball_speed * ball_speed
+    # x^0.26 of numerics.elementary (the exponent ROLLING_LOAD_EXPONENT is built into it); 0 for P <= 0
+    load_term = k_gc * k_rf * elementary.pow026(max(normal_load, 0.0)) / ball_radius
+    return load_term + f_v1 * ball_speed * ball_speed
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def nut_friction_force(normal_load, tangential_speed, loaded_balls, ball_radius, g1, g2, g3, g4, g5, g6,
                        k_gc, k_rf, f_v1, rolling_threshold):
     """Tangential friction force of one nut along the helix [N], positive along ``v_t`` (reduced Ch. 5).
@@ -120,15 +123,15 @@ def nut_friction_force(normal_load, tangential_speed, loaded_balls, ball_radius,
     rolling_threshold : float
         ``v_roll`` of the rolling term's direction, ``tanh(v_t / v_roll)`` [m/s].
     """
-    if normal_load <= 0.0:
-        return 0.0
     ball_speed = 0.5 * tangential_speed / ball_radius
     sliding = sliding_coefficient(tangential_speed, g1, g2, g3, g4, g5, g6)
     rolling = rolling_coefficient(normal_load, ball_speed, k_gc, k_rf, f_v1, ball_radius)
-    return 2.0 * loaded_balls * normal_load * (sliding + rolling * math.tanh(tangential_speed / rolling_threshold))
+    direction = elementary.tanh(tangential_speed / rolling_threshold)
+    force = 2.0 * loaded_balls * normal_load * (sliding + rolling * direction)
+    return force if normal_load > 0.0 else 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def tangential_speed(screw_speed, nut_angular_speed, screw_axial_speed, nut_speed, pitch_radius, cos_helix,
                      sin_helix):
     """``v_t``: speed of the screw's groove relative to the nut's along the helix tangent [m/s].
@@ -143,7 +146,7 @@ def tangential_speed(screw_speed, nut_angular_speed, screw_axial_speed, nut_spee
             - sin_helix * (screw_axial_speed - nut_speed))
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def friction_generalised_forces(force, pitch_radius, cos_helix, sin_helix):
     """Generalised forces of a nut's helix friction ``force`` (from :func:`nut_friction_force`).
 
@@ -167,7 +170,7 @@ def catalogue_drag_torque(lead: float, preload: float, helix_angle: float) -> fl
     return 0.05 * lead * preload / (2.0 * math.pi * math.sqrt(math.tan(helix_angle)))
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def nut_friction_slope(normal_load, tangential_speed, loaded_balls, ball_radius, g1, g2, g3, g4, g5, g6,
                        k_gc, k_rf, f_v1, rolling_threshold):
     """Stiff part of ``dF_t/dv_t`` of :func:`nut_friction_force` [N s/m], load held, floored at zero (same
@@ -177,12 +180,9 @@ def nut_friction_slope(normal_load, tangential_speed, loaded_balls, ball_radius,
     Stribeck decay may make the exact slope negative: the linearly implicit integrators use this only for the stability
     of sticking (a W-method is consistent for any matrix; Hairer & Wanner, *Solving ODEs II*, Sec. IV.7).
     """
-    if normal_load <= 0.0:
-        return 0.0
     v = tangential_speed
     slope = g1 * (g2 * sech_squared(g2 * v) - g3 * sech_squared(g3 * v)) + g4 * g5 * sech_squared(g5 * v)
-    rolling_direction = sech_squared(v / rolling_threshold)
-    if rolling_direction > 0.0:  # the load's power law only near a reversal
-        slope += (rolling_coefficient(normal_load, 0.5 * v / ball_radius, k_gc, k_rf, f_v1, ball_radius)
-                  * rolling_direction / rolling_threshold)
-    return max(2.0 * loaded_balls * normal_load * slope, 0.0)
+    rolling_direction = sech_squared(v / rolling_threshold)  # exactly 0 away from a reversal
+    slope += (rolling_coefficient(normal_load, 0.5 * v / ball_radius, k_gc, k_rf, f_v1, ball_radius)
+              * rolling_direction / rolling_threshold)
+    return max(2.0 * loaded_balls * normal_load * slope, 0.0) if normal_load > 0.0 else 0.0

@@ -42,11 +42,15 @@ import math
 
 import numba
 
-from twin.physics.hertz import damping_coefficient, elastic_force, saturated_damping_force
+from numerics.jit import SCALAR
+from twin.physics.hertz import damping_coefficient, saturated_damping_force
+
+#: Degree of the polynomial fit of the series Hertz stiffness in ``sin(alpha)`` (:func:`stiffness_at`).
+STIFFNESS_FIT_DEGREE = 6
 
 
-@numba.njit(cache=True)
-def contact_geometry(axial_interference, centre_distance, contact_angle_0):
+@numba.njit(**SCALAR)
+def contact_geometry(axial_interference, centre_distance, radial_0, axial_0):
     """Normal approach and ``sin(alpha)`` for an axial interference (Eq. 9.4, exact form).
 
     Parameters
@@ -55,22 +59,23 @@ def contact_geometry(axial_interference, centre_distance, contact_angle_0):
         ``delta_a >= 0`` on the plane normal to the thread [m].
     centre_distance : float
         ``A0``, distance of the groove curvature centres at first contact [m].
-    contact_angle_0 : float
-        Design contact angle ``alpha_0`` [rad].
+    radial_0, axial_0 : float
+        ``A0 cos(alpha_0)`` and ``A0 sin(alpha_0)`` [m], with ``alpha_0`` the design contact angle (constants of
+        the screw, computed once).
 
     Returns
     -------
     (delta_n, sin_alpha)
     """
-    radial = centre_distance * math.cos(contact_angle_0)
-    axial = centre_distance * math.sin(contact_angle_0) + axial_interference
-    distance = math.sqrt(radial * radial + axial * axial)
+    axial = axial_0 + axial_interference
+    distance = math.sqrt(radial_0 * radial_0 + axial * axial)
     return distance - centre_distance, axial / distance
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
-    """Series Hertz stiffness ``K(alpha)`` from its polynomial fit in ``sin(alpha)`` (Horner).
+    """Series Hertz stiffness ``K(alpha)`` from its polynomial fit in ``sin(alpha)`` (Horner, degree
+    :data:`STIFFNESS_FIT_DEGREE`; ``coefficients`` an array or a tuple, lowest power first).
 
     The fit variable ``u = 2 (sin(alpha) - sin_min)/span - 1`` is clamped to [-1, 1]:
     the curvature formulas are only fitted up to 70 deg (Sec. 3.5.5). A polynomial,
@@ -79,16 +84,59 @@ def stiffness_at(coefficients, sin_alpha_min, sin_alpha_span, sin_alpha):
     """
     u = 2.0 * (sin_alpha - sin_alpha_min) / sin_alpha_span - 1.0
     u = min(max(u, -1.0), 1.0)
-    value = 0.0
-    for k in range(coefficients.shape[0] - 1, -1, -1):
-        value = value * u + coefficients[k]
-    return value
+    value = coefficients[6]
+    value = value * u + coefficients[5]
+    value = value * u + coefficients[4]
+    value = value * u + coefficients[3]
+    value = value * u + coefficients[2]
+    value = value * u + coefficients[1]
+    return value * u + coefficients[0]
 
 
-@numba.njit(cache=True)
-def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance,
-                    contact_angle_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h,
-                    loaded_balls, contact_model, linear_stiffness):
+@numba.njit(**SCALAR)
+def _contact_deflection(relative_position, backlash, cos_helix, centre_distance, radial_0, axial_0, sin_alpha_0,
+                        stiffness_coefficients, sin_alpha_min, sin_alpha_span, contact_model, linear_stiffness):
+    """The contact's state at a relative position (shared by :func:`nut_axial_force`, :func:`nut_elastic_force`
+    and :func:`nut_axial_tangent`), branch-free in the data: in the backlash gap every quantity is that of an
+    unloaded contact and ``closed`` is False.
+
+    Returns
+    -------
+    (closed, side, sin_alpha, stiffness, elastic, normal_stiffness, geometric)
+        Whether the flank is loaded, the sign of ``dx``, ``sin(alpha)``, ``K(alpha)`` [N/m^1.5], the elastic
+        normal load per sphere ``P_el`` [N], ``dP_el/d(delta_n)`` [N/m], and ``d(sin alpha)/d(delta_a)`` [1/m]
+        (the variable angle's geometric stiffening, 0 at a constant angle).
+    """
+    gap = abs(relative_position) - 0.5 * backlash
+    closed = gap > 0.0
+    side = 1.0 if relative_position > 0.0 else -1.0
+    delta_a = max(gap, 0.0) * cos_helix
+    if contact_model == 1:  # a group-invariant level: the same branch for every lane
+        axial = axial_0 + delta_a
+        distance = math.sqrt(radial_0 * radial_0 + axial * axial)
+        delta_n = distance - centre_distance
+        sin_alpha = axial / distance
+        geometric = radial_0 * radial_0 / (distance * distance * distance)
+    else:
+        sin_alpha = sin_alpha_0
+        delta_n = delta_a * sin_alpha
+        geometric = 0.0
+    delta_n = max(delta_n, 0.0)  # sqrt(r0^2 + a0^2) may round a few ulps below A0 at first contact
+    stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
+    if contact_model == 2:
+        elastic = linear_stiffness * delta_n
+        normal_stiffness = linear_stiffness
+    else:
+        root = math.sqrt(delta_n)
+        elastic = stiffness * delta_n * root  # elastic_force without its clamp: delta_n >= 0 here
+        normal_stiffness = 1.5 * stiffness * root
+    return closed, side, sin_alpha, stiffness, elastic, normal_stiffness, geometric
+
+
+@numba.njit(**SCALAR)
+def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, centre_distance, radial_0, axial_0,
+                    sin_alpha_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h, loaded_balls,
+                    contact_model, linear_stiffness):
     """Axial force of the screw on one nut (Eqs. 9.4-9.6, 7.28, 7.29, 7.54, 5.5).
 
     Parameters
@@ -99,9 +147,11 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
         Total axial play ``b`` of the nut [m].
     cos_helix : float
         ``cos(alpha_e)``.
-    centre_distance, contact_angle_0 : float
-        ``A0`` [m], ``alpha_0`` [rad].
-    stiffness_coefficients : 1-D array
+    centre_distance : float
+        ``A0`` [m].
+    radial_0, axial_0, sin_alpha_0 : float
+        ``A0 cos(alpha_0)``, ``A0 sin(alpha_0)`` [m] and ``sin(alpha_0)`` of the design contact angle.
+    stiffness_coefficients : array or tuple
         Polynomial fit of the series Hertz stiffness ``K`` [N/m^1.5] (:func:`stiffness_at`).
     sin_alpha_min, sin_alpha_span : float
         Range of ``sin(alpha)`` covered by the fit.
@@ -120,23 +170,35 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
     -------
     (force, normal_load, sin_alpha)
         ``force`` acts on the nut along ``+x`` (and its reaction on the screw);
-        ``normal_load`` is ``P`` per sphere [N].
+        ``normal_load`` is ``P`` per sphere [N]; all zero but ``sin(alpha_0)`` in the gap.
     """
-    gap = abs(relative_position) - 0.5 * backlash
-    if gap <= 0.0:
-        return 0.0, 0.0, math.sin(contact_angle_0)
-    side = 1.0 if relative_position > 0.0 else -1.0
-    delta_a = gap * cos_helix
-    if contact_model == 1:
-        delta_n, sin_alpha = contact_geometry(delta_a, centre_distance, contact_angle_0)
-    else:
-        sin_alpha = math.sin(contact_angle_0)
-        delta_n = delta_a * sin_alpha
-    stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
-    elastic = linear_stiffness * delta_n if contact_model == 2 else elastic_force(stiffness, delta_n)
+    closed, side, sin_alpha, stiffness, elastic, _, _ = _contact_deflection(
+        relative_position, backlash, cos_helix, centre_distance, radial_0, axial_0, sin_alpha_0,
+        stiffness_coefficients, sin_alpha_min, sin_alpha_span, contact_model, linear_stiffness)
     approach_rate = side * relative_velocity * cos_helix * sin_alpha
     normal = elastic + saturated_damping_force(elastic, damping_coefficient(damping_b_h, stiffness), approach_rate)
-    return side * loaded_balls * normal * sin_alpha * cos_helix, normal, sin_alpha
+    force = side * loaded_balls * normal * sin_alpha * cos_helix
+    return (force if closed else 0.0), (normal if closed else 0.0), (sin_alpha if closed else sin_alpha_0)
+
+
+@numba.njit(**SCALAR)
+def nut_elastic_force(relative_position, backlash, cos_helix, centre_distance, radial_0, axial_0, sin_alpha_0,
+                      stiffness_coefficients, sin_alpha_min, sin_alpha_span, loaded_balls, contact_model,
+                      linear_stiffness):
+    """The elastic part of :func:`nut_axial_force` (no damping) and its tangent ``dF_el/d(dx)`` [N, N/m]
+    (same arguments): what the quasi-static screw-axial balance solves with (:mod:`twin.engine.plant`).
+
+    ``dF_el/d(dx) = Z cos(alpha_e)^2 [dP/d(delta_n) sin(alpha)^2 + P d(sin alpha)/d(delta_a)]`` with the angle's
+    effect on ``K(alpha)`` left out (as in :func:`nut_axial_tangent`): Newton's iteration converges with any
+    positive slope, only more slowly with an approximate one. Zero in the gap.
+    """
+    closed, side, sin_alpha, _, elastic, normal_stiffness, geometric = _contact_deflection(
+        relative_position, backlash, cos_helix, centre_distance, radial_0, axial_0, sin_alpha_0,
+        stiffness_coefficients, sin_alpha_min, sin_alpha_span, contact_model, linear_stiffness)
+    force = side * loaded_balls * elastic * sin_alpha * cos_helix
+    scale = loaded_balls * cos_helix * cos_helix
+    slope = scale * (normal_stiffness * sin_alpha * sin_alpha + elastic * geometric)
+    return (force if closed else 0.0), (slope if closed else 0.0)
 
 
 def effective_loaded_balls(total_balls: float, loaded_fraction: float) -> int:
@@ -154,17 +216,16 @@ def helix_angle(lead: float, pitch_radius: float) -> float:
     return math.atan(lead / (2.0 * math.pi * pitch_radius))
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix, centre_distance, radial_0, axial_0,
-                      stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h, loaded_balls, contact_model,
-                      linear_stiffness):
+                      sin_alpha_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h, loaded_balls,
+                      contact_model, linear_stiffness):
     """Tangent stiffness ``dF/d(dx)`` [N/m] and damping ``dF/d(dx')`` [N s/m] of :func:`nut_axial_force`.
 
-    Same arguments as :func:`nut_axial_force`, but the design contact angle as ``radial_0 = A0 cos(alpha_0)``
-    and ``axial_0 = A0 sin(alpha_0)`` (computed once for both nuts). The linearly implicit integrators
-    need these only for stability (a W-method is consistent for any matrix: Hairer & Wanner, *Solving
-    ODEs II*, Sec. IV.7), so the variation of ``K(alpha)`` with the angle is left out. With
-    ``F = Z P sin(alpha) cos(alpha_e)`` and ``delta_a = (|dx| - b/2) cos(alpha_e)``:
+    Same arguments as :func:`nut_axial_force`. The linearly implicit integrators need these only for stability
+    (a W-method is consistent for any matrix: Hairer & Wanner, *Solving ODEs II*, Sec. IV.7), so the variation
+    of ``K(alpha)`` with the angle is left out. With ``F = Z P sin(alpha) cos(alpha_e)`` and
+    ``delta_a = (|dx| - b/2) cos(alpha_e)``:
 
         dF/d(dx) = Z cos(alpha_e)^2 [dP/d(delta_a) sin(alpha) + P d(sin alpha)/d(delta_a)],
 
@@ -179,32 +240,13 @@ def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix,
     (stiffness, damping, elastic_load)
         All zero in the backlash gap; ``elastic_load`` is the elastic part of the per-sphere normal load ``P``.
     """
-    gap = abs(relative_position) - 0.5 * backlash
-    if gap <= 0.0:
-        return 0.0, 0.0, 0.0
-    delta_a = gap * cos_helix
-    geometric = 0.0
-    if contact_model == 1:
-        axial = axial_0 + delta_a
-        distance = math.sqrt(radial_0 * radial_0 + axial * axial)
-        delta_n = distance - centre_distance
-        sin_alpha = axial / distance
-        geometric = radial_0 * radial_0 / (distance * distance * distance)
-    else:
-        sin_alpha = axial_0 / centre_distance
-        delta_n = delta_a * sin_alpha
-    stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
-    if contact_model == 2:
-        elastic = linear_stiffness * delta_n
-        normal_stiffness = linear_stiffness
-    else:
-        root = math.sqrt(delta_n)
-        elastic = stiffness * delta_n * root
-        normal_stiffness = 1.5 * stiffness * root
+    closed, _, sin_alpha, stiffness, elastic, normal_stiffness, geometric = _contact_deflection(
+        relative_position, backlash, cos_helix, centre_distance, radial_0, axial_0, sin_alpha_0,
+        stiffness_coefficients, sin_alpha_min, sin_alpha_span, contact_model, linear_stiffness)
     scale = loaded_balls * cos_helix * cos_helix
     damping_coefficient_h = damping_coefficient(damping_b_h, stiffness)
     approach_rate = relative_velocity * cos_helix * sin_alpha
-    damping = 0.0
-    if damping_coefficient_h * abs(approach_rate) < elastic:
-        damping = scale * sin_alpha * sin_alpha * damping_coefficient_h
-    return scale * (normal_stiffness * sin_alpha * sin_alpha + elastic * geometric), damping, elastic
+    damping = scale * sin_alpha * sin_alpha * damping_coefficient_h
+    damping = damping if damping_coefficient_h * abs(approach_rate) < elastic else 0.0
+    tangent = scale * (normal_stiffness * sin_alpha * sin_alpha + elastic * geometric)
+    return (tangent if closed else 0.0), (damping if closed else 0.0), (elastic if closed else 0.0)

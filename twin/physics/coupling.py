@@ -2,10 +2,11 @@
 
 import numba
 
+from numerics.jit import SCALAR
 from twin.physics.hertz import saturated_damping_force
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def elasto_backlash(deflection, deflection_rate, stiffness, damping, backlash):
     """Torque (or force) of a linear spring-damper with a total play ``backlash`` (Eq. 5.9 form).
 
@@ -26,14 +27,10 @@ def elasto_backlash(deflection, deflection_rate, stiffness, damping, backlash):
         Transmitted torque/force, positive when the input side leads. Zero in the gap.
     """
     half = 0.5 * backlash
-    if deflection > half:
-        elastic = stiffness * (deflection - half)
-    elif deflection < -half:
-        elastic = stiffness * (deflection + half)
-    else:
-        return 0.0
+    elastic = stiffness * (deflection - half) if deflection > half else stiffness * (deflection + half)
     # damping saturated to the elastic force as in Eq. 7.29 (no force jump at re-engagement)
-    return elastic + saturated_damping_force(abs(elastic), damping, deflection_rate)
+    torque = elastic + saturated_damping_force(abs(elastic), damping, deflection_rate)
+    return torque if abs(deflection) > half else 0.0
 
 
 @numba.njit(cache=True)

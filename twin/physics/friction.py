@@ -1,11 +1,12 @@
 """Coulomb-Stribeck-viscous friction of supports (Eqs. 7.63 and 7.64)."""
 
-import math
-
 import numba
 
+from numerics import elementary
+from numerics.jit import SCALAR
 
-@numba.njit(cache=True)
+
+@numba.njit(**SCALAR)
 def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
     """Support friction force (Eq. 7.63) or torque (Eq. 7.64).
 
@@ -33,11 +34,11 @@ def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
     float
         Friction force/torque, opposing ``v`` (positive for ``v > 0``).
     """
-    coulomb = dynamic + (static - dynamic) * math.exp(-stribeck_rate * abs(v))
-    return coulomb * math.tanh(v / v_threshold) + viscous * v
+    coulomb = dynamic + (static - dynamic) * elementary.exp(-stribeck_rate * abs(v))
+    return coulomb * elementary.tanh(v / v_threshold) + viscous * v
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def stribeck_slope(v, static, dynamic, viscous, v_threshold):
     """Dissipative part of ``d/dv`` of :func:`stribeck_friction` [N s/m or N m s/rad], >= 0.
 
@@ -50,13 +51,9 @@ def stribeck_slope(v, static, dynamic, viscous, v_threshold):
     return max(static, dynamic) * sech_squared(v / v_threshold) / v_threshold + viscous
 
 
-SECH_SQUARED_CUTOFF = 20.0  # |z| beyond which 1 - tanh(z)^2 < 1.7e-17: zero, without calling tanh
-
-
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def sech_squared(z):
-    """``1 - tanh(z)^2``, the slope of the ``tanh`` regularisation; exactly 0 for ``|z| > SECH_SQUARED_CUTOFF``
-    (the sliding speeds of most steps), which saves the ``tanh`` call."""
-    if abs(z) > SECH_SQUARED_CUTOFF:
-        return 0.0
-    return 1.0 - math.tanh(z) ** 2
+    """``1 - tanh(z)^2``, the slope of the ``tanh`` regularisation; exactly 0 for ``|z|`` above ~19.1, where
+    ``tanh`` rounds to 1 (the sliding speeds of most steps)."""
+    t = elementary.tanh(z)
+    return 1.0 - t * t

@@ -35,6 +35,7 @@ from numba import njit
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipkm1
 
+from numerics.jit import SCALAR
 from twin.errors import InputError
 from twin.physics.groove import (
     nut_curvature_radius,
@@ -300,12 +301,11 @@ def max_pressure(force, a, b):
     return 1.5 * mean_pressure(force, a, b)
 
 
-@njit(cache=True)
+@njit(**SCALAR)
 def elastic_force(k_h, delta):
     """Elastic normal force ``K_H delta^1.5`` (Eq. 7.28), zero without interpenetration (Eq. 7.30) [N]."""
-    if delta <= 0.0:
-        return 0.0
-    return k_h * delta * math.sqrt(delta)  # delta**1.5, without the slower pow()
+    d = max(delta, 0.0)
+    return k_h * d * math.sqrt(d)  # delta**1.5, without the slower pow(); branch-free (k * 0 * 0 == 0)
 
 
 @njit(cache=True)
@@ -314,7 +314,7 @@ def contact_deflection(force, k_h):
     return (force / k_h) ** (2.0 / 3.0)
 
 
-@njit(cache=True)
+@njit(**SCALAR)
 def damping_coefficient(b_h, k_h):
     """Contact damping ``C_H = b_h sqrt(K_H)`` (Eq. 7.54) [N s/m].
 
@@ -324,7 +324,7 @@ def damping_coefficient(b_h, k_h):
     return b_h * math.sqrt(k_h)
 
 
-@njit(cache=True)
+@njit(**SCALAR)
 def saturated_damping_force(f_elastic, c, delta_dot):
     """Damping force ``C_H delta_dot`` saturated to ``+-F_nk`` (Eq. 7.29).
 

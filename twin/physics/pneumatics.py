@@ -44,6 +44,7 @@ import math
 
 import numba
 
+from numerics.jit import SCALAR
 from twin.errors import ParameterError
 from twin.physics.friction import stribeck_friction
 
@@ -69,30 +70,28 @@ __all__ = [
 # --------------------------------------------------------------------------- #
 # Eq. 9.9 / ISO 6358: mass flow through a valve port
 # --------------------------------------------------------------------------- #
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def _subsonic_factor(ratio, b_crit):
     """ISO 6358 subsonic flow factor ``sqrt(1 - ((r - b) / (1 - b))**2)``, for ``b <= r <= 1``."""
     z = (ratio - b_crit) / (1.0 - b_crit)
     return math.sqrt(max(1.0 - z * z, 0.0))
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def _forward_flow(p_up, p_down, conductance, b_crit, rho0, t_ref, t_up, laminar_ratio):
-    """ISO 6358 mass flow for ``p_up >= p_down`` (see :func:`mass_flow`)."""
-    if p_up <= 0.0:
-        return 0.0
+    """ISO 6358 mass flow for ``p_up >= p_down`` (see :func:`mass_flow`); the three regimes are each computed and
+    one is selected (branch-free)."""
     choked = conductance * rho0 * p_up * math.sqrt(t_ref / t_up)
     ratio = p_down / p_up
-    if ratio <= b_crit:
-        return choked
-    if ratio <= laminar_ratio:
-        return choked * _subsonic_factor(ratio, b_crit)
+    subsonic = choked * _subsonic_factor(ratio, b_crit)
     # Laminar band: linear in (p_up - p_down), matching value at laminar_ratio.
-    return (choked * _subsonic_factor(laminar_ratio, b_crit)
-            * (1.0 - ratio) / (1.0 - laminar_ratio))
+    laminar = choked * _subsonic_factor(laminar_ratio, b_crit) * (1.0 - ratio) / (1.0 - laminar_ratio)
+    flow = laminar if ratio > laminar_ratio else subsonic
+    flow = choked if ratio <= b_crit else flow
+    return flow if p_up > 0.0 else 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def mass_flow(p_up, p_down, conductance, b_crit, rho0, t_ref, t_up, t_down, laminar_ratio):
     """Mass flow rate through a pneumatic restriction, Eq. 9.9 in ISO 6358 form.
 
@@ -161,12 +160,13 @@ def mass_flow(p_up, p_down, conductance, b_crit, rho0, t_ref, t_up, t_down, lami
       the 7 bar supply), where both laws are below ``G(r_lam)`` (5.3 % of the
       choked flow for the defaults).
     """
-    if p_up >= p_down:
-        return _forward_flow(p_up, p_down, conductance, b_crit, rho0, t_ref, t_up, laminar_ratio)
-    return -_forward_flow(p_down, p_up, conductance, b_crit, rho0, t_ref, t_down, laminar_ratio)
+    forward = p_up >= p_down  # the port reversal by selects (branch-free)
+    flow = _forward_flow(p_up if forward else p_down, p_down if forward else p_up, conductance, b_crit, rho0, t_ref,
+                         t_up if forward else t_down, laminar_ratio)
+    return flow if forward else -flow
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def conductance_from_nominal_flow(nominal_flow, p_up, p_down, b_crit, laminar_ratio):
     """Sonic conductance that reproduces a catalogue nominal flow rate.
 
@@ -200,7 +200,7 @@ def conductance_from_nominal_flow(nominal_flow, p_up, p_down, b_crit, laminar_ra
 # --------------------------------------------------------------------------- #
 # Valve: command hysteresis, spool dynamics, port conductances
 # --------------------------------------------------------------------------- #
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def hysteresis_play(command_voltage, held_command, hysteresis, command_min, command_max):
     """Play (backlash) operator modelling the valve hysteresis on the command.
 
@@ -242,7 +242,7 @@ def hysteresis_play(command_voltage, held_command, hysteresis, command_min, comm
     return held_command
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def spool_derivative(x_spool, v_spool, command_voltage, mid_voltage, command_min, command_max,
                      critical_frequency, damping_ratio):
     """Second-order command-to-spool dynamics of the MPYE proportional valve.
@@ -291,7 +291,7 @@ def spool_derivative(x_spool, v_spool, command_voltage, mid_voltage, command_min
     return v_spool, wn * wn * (target - x_spool) - 2.0 * damping_ratio * wn * v_spool
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def port_conductances(x_spool, max_conductance, leakage_fraction):
     """Sonic conductances of the four flow paths of a 5/3 closed-centre valve.
 
@@ -336,7 +336,7 @@ def port_conductances(x_spool, max_conductance, leakage_fraction):
     return positive, negative, negative, positive
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def chamber_mass_flows(x_spool, p1, p2, p_supply, p_exhaust, max_conductance, leakage_fraction,
                        b_crit, rho0, t_ref, t_supply, t_chamber, laminar_ratio):
     """Net mass flow into each cylinder chamber through the valve, Eq. 9.9.
@@ -377,7 +377,7 @@ def chamber_mass_flows(x_spool, p1, p2, p_supply, p_exhaust, max_conductance, le
 # --------------------------------------------------------------------------- #
 # Eq. 9.10: chamber continuity
 # --------------------------------------------------------------------------- #
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def piston_areas(bore_diameter, rod_diameter):
     """Active piston areas of a single-rod cylinder (Eq. 9.11 ``A1``, ``A2``).
 
@@ -395,7 +395,7 @@ def piston_areas(bore_diameter, rod_diameter):
     return a1, a1 - 0.25 * math.pi * rod_diameter * rod_diameter
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def chamber_volumes(x, v, area1, area2, dead_volume1, dead_volume2, stroke):
     """Chamber volumes and their rates, geometry of Eq. 9.10.
 
@@ -426,7 +426,7 @@ def chamber_volumes(x, v, area1, area2, dead_volume1, dead_volume2, stroke):
             dead_volume2 + area2 * (stroke - x), -area2 * v)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def chamber_pressure_derivative(p, mass_flow_in, volume, volume_rate, temperature, gas_constant,
                                 polytropic_exponent):
     """Chamber pressure rate from mass continuity, Eq. 9.10.
@@ -476,7 +476,7 @@ def chamber_pressure_derivative(p, mass_flow_in, volume, volume_rate, temperatur
 # --------------------------------------------------------------------------- #
 # Eq. 9.11: piston equilibrium
 # --------------------------------------------------------------------------- #
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def piston_force(p1, p2, a1, a2, p_atm):
     """Net pneumatic force on the piston-rod assembly, Eq. 9.11.
 
@@ -502,7 +502,7 @@ def piston_force(p1, p2, a1, a2, p_atm):
     return p1 * a1 - p2 * a2 - p_atm * (a1 - a2)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def end_stroke_damper_force(x, v, stroke, travel, stiffness, damping, end_stop_stiffness):
     """End-stroke damper force on the piston (Table B.11), at both stroke ends.
 
@@ -542,18 +542,14 @@ def end_stroke_damper_force(x, v, stroke, travel, stiffness, damping, end_stop_s
         Force on the piston along ``+x`` [N]: positive at the cap end,
         negative at the rod end.
     """
-    if x < travel:
-        delta = travel - x
-        force = stiffness * delta - damping * v + end_stop_stiffness * max(delta - travel, 0.0)
-        return max(force, 0.0)
-    if x > stroke - travel:
-        delta = x - (stroke - travel)
-        force = stiffness * delta + damping * v + end_stop_stiffness * max(delta - travel, 0.0)
-        return -max(force, 0.0)
-    return 0.0
+    cap_delta = travel - x
+    cap = max(stiffness * cap_delta - damping * v + end_stop_stiffness * max(cap_delta - travel, 0.0), 0.0)
+    rod_delta = x - (stroke - travel)
+    rod = -max(stiffness * rod_delta + damping * v + end_stop_stiffness * max(rod_delta - travel, 0.0), 0.0)
+    return cap if x < travel else (rod if x > stroke - travel else 0.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def piston_acceleration(p1, p2, x, v, load_cell_force, a1, a2, p_atm, mass, damping,
                         f_static, f_dynamic, stribeck_coefficient, viscous_coefficient,
                         velocity_threshold, stroke, damper_travel, damper_stiffness,
@@ -617,7 +613,7 @@ def piston_acceleration(p1, p2, x, v, load_cell_force, a1, a2, p_atm, mass, damp
     return force / mass
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def load_cell_spring_force(x_rod, x_nut, v_rod, v_nut, k, c):
     """External-force load cell between rod end and master nut (spring-damper).
 

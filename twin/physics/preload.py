@@ -2,6 +2,7 @@
 
 import numba
 
+from numerics.jit import SCALAR
 from twin.physics.hertz import saturated_damping_force
 
 
@@ -11,7 +12,7 @@ def series_stiffness(k_spring, k_load_cell):
     return 1.0 / (1.0 / k_spring + 1.0 / k_load_cell)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def preload_force(separation, separation_rate, initial_compression, stiffness, damping, orientation):
     """One-directional preload force between the nuts (Sec. 9.3 "Preload load cell").
 
@@ -40,7 +41,6 @@ def preload_force(separation, separation_rate, initial_compression, stiffness, d
         on the slave nut and ``-orientation*F_pr`` on the master (Eq. 9.8).
     """
     compression = initial_compression - orientation * separation
-    if compression <= 0.0:
-        return 0.0
     elastic = stiffness * compression
-    return elastic + saturated_damping_force(elastic, damping, -orientation * separation_rate)
+    force = elastic + saturated_damping_force(elastic, damping, -orientation * separation_rate)
+    return force if compression > 0.0 else 0.0
