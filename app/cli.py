@@ -14,7 +14,7 @@ from pathlib import Path
 import twin
 from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
-from twin.engine.solver_choice import solver_label
+from twin.simulation import solver_label
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import SCENE_PREFIX, split_targets
 from twin.simulation import AUTO, DEFAULT_INTEGRATOR

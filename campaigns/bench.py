@@ -18,7 +18,7 @@ from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.control.margins import LOOPS, METRICS, loop_margins
 from twin.engine.model import load_system_parameters
-from twin.engine.solver_choice import solver_label
+from twin.simulation import solver_label
 from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES

@@ -40,7 +40,7 @@ from campaigns.control_limits import ControlLimits
 from campaigns.distributions import Distribution, DistributionKind
 from campaigns.ranges import resolve, shape_problems
 from twin.errors import InputError
-from twin.fidelity.levels import requested_levels
+from twin.fidelity import requested_levels
 from twin.scenes import split_targets
 from twin.tomlfiles import read_inheriting
 

@@ -1,49 +1,324 @@
-"""Index layouts shared by the model builder and the compiled loop.
+"""The bench's vocabulary: every component's states, constants and signals, declared once.
 
-numba treats ``IntEnum`` members as compile-time integer constants, so the
-compiled right-hand side reads ``x[S.NUT1_POSITION]`` at no cost.
+Each component lists what it contributes (:class:`Component`): its continuous states, the model constants it reads
+(with the parameter each copies, when it is one as it stands) and the signals it records, each with its SI unit
+and meaning. A component with several instances (the two nuts) declares its entries once with ``{n}`` in the
+name. The index layouts the compiled engine uses, :class:`S` (states), :class:`K` (constants) and :class:`Signal`,
+are generated from these tables in declaration order; numba treats ``IntEnum`` members as compile-time constants,
+so the compiled code reads ``x[S.NUT1_POSITION]`` at no cost. ``docs/architecture.md`` shows what adding a
+component touches.
 """
 
+from __future__ import annotations
+
+from dataclasses import dataclass
 from enum import IntEnum
 
 from twin.features import FEATURES as FEATURE_TABLE
 from twin.features import N_ACCUMULATORS
 
 
-class S(IntEnum):
-    """Continuous state vector (SI units)."""
+@dataclass(frozen=True)
+class Entry:
+    """A state, constant or signal: identifier (``{n}``: the instance number), SI unit, meaning, and for a constant
+    the parameter(s) it copies (one per instance; empty when it is derived by :func:`twin.engine.model.build_model`)."""
 
-    CURRENT = 0            # motor current i [A] (Eq. 9.1)
-    WINDING_TEMP = 1       # T_w [K] (Eq. 9.2)
-    REDUCER_ANGLE = 2      # theta_r [rad] (Eq. 9.3)
-    REDUCER_SPEED = 3
-    SCREW_ANGLE = 4        # theta_s [rad] (Eq. 9.7)
-    SCREW_SPEED = 5
-    SCREW_AXIAL = 6        # x_s [m]
-    SCREW_AXIAL_SPEED = 7
-    NUT1_POSITION = 8      # x_n1 [m] (Eq. 9.8, master)
-    NUT1_SPEED = 9
-    NUT1_ANGLE = 10        # theta_n1 [rad]
-    NUT1_ANGULAR_SPEED = 11
-    NUT2_POSITION = 12     # x_n2 [m] (slave)
-    NUT2_SPEED = 13
-    NUT2_ANGLE = 14
-    NUT2_ANGULAR_SPEED = 15
-    HALL_CURRENT = 16      # first-order Hall sensor output [A]
-    CURRENT_PI = 17        # analog current-PI integrator [V]
-    # pneumatic load system (Eqs. 9.9-9.11), integrated only at the "full" pneumatics fidelity
-    SPOOL_POSITION = 18    # normalised valve spool position [-1, 1]
-    SPOOL_SPEED = 19
-    CHAMBER1_PRESSURE = 20  # cap side [Pa, absolute]
-    CHAMBER2_PRESSURE = 21  # rod side
-    PISTON_POSITION = 22   # from the cap-end stop [m]
-    PISTON_SPEED = 23
+    name: str
+    unit: str
+    description: str
+    parameter: str | tuple[str, ...] = ""
 
+
+@dataclass(frozen=True)
+class Component:
+    """A part of the bench and what it contributes to the layouts."""
+
+    name: str
+    states: tuple[Entry, ...] = ()
+    constants: tuple[Entry, ...] = ()
+    signals: tuple[Entry, ...] = ()
+    instances: int = 1
+
+
+def _e(name: str, unit: str, description: str, parameter: str | tuple[str, ...] = "") -> Entry:
+    return Entry(name, unit, description, parameter)
+
+
+COMPONENTS: tuple[Component, ...] = (
+    Component("motor", states=(
+        _e("CURRENT", "A", "motor current i (Eq. 9.1)"),
+        _e("WINDING_TEMP", "K", "winding temperature T_w (Eq. 9.2)"),
+    ), constants=(
+        _e("R20", "ohm", "winding resistance at 20 degC", "motor.winding_resistance_20C"),
+        _e("R_TEMP_COEF", "1/K", "resistance temperature coefficient", "motor.resistance_temperature_coefficient"),
+        _e("INDUCTANCE", "H", "winding inductance", "motor.inductance"),
+        _e("TORQUE_CONSTANT", "N m/A", "torque constant k_t", "motor.torque_constant"),
+        _e("SPEED_CONSTANT", "V s/rad", "back-EMF constant k_e", "motor.speed_constant"),
+        _e("MOTOR_VISCOUS", "N m s/rad", "viscous damping b_mr on the motor shaft", "motor.viscous_damping"),
+        _e("MR_FRICTION_STATIC", "N m", "motor-reducer breakaway friction", "motor.friction_static_torque"),
+        _e("MR_FRICTION_DYNAMIC", "N m", "motor-reducer Coulomb friction", "motor.friction_dynamic_torque"),
+        _e("MR_FRICTION_RATE", "s/rad", "motor-reducer Stribeck rate", "motor.friction_stribeck_rate"),
+        _e("THERMAL_RESISTANCE", "K/W", "winding thermal resistance", "motor.thermal_resistance"),
+        _e("THERMAL_TAU", "s", "winding thermal time constant", "motor.thermal_time_constant"),
+        _e("HEAT_TRANSFER", "W/(m2 K)", "convective heat-transfer coefficient", "motor.heat_transfer_coefficient"),
+        _e("MOTOR_AREA", "m2", "motor surface area", "motor.surface_area"),
+        _e("EMISSIVITY", "1", "motor surface emissivity", "motor.emissivity"),
+        _e("AMBIENT", "K", "room temperature (scene condition)"),
+        _e("MAX_CURRENT", "A", "drive/motor maximum current", "motor.max_current"),
+    ), signals=(
+        _e("MOTOR_CURRENT", "A", "motor current (Eq. 9.1)"),
+        _e("MOTOR_TORQUE", "N m", "motor electromagnetic torque k_t*i"),
+        _e("MOTOR_SPEED", "rad/s", "motor shaft speed"),
+        _e("WINDING_TEMPERATURE", "K", "winding temperature (Eq. 9.2)"),
+    )),
+    Component("reducer", states=(
+        _e("REDUCER_ANGLE", "rad", "reducer output angle theta_r (Eq. 9.3)"),
+        _e("REDUCER_SPEED", "rad/s", "reducer output speed"),
+    ), constants=(
+        _e("RATIO", "1", "reduction ratio tau_mr", "reducer.ratio"),
+        _e("EFFICIENCY", "1", "reducer efficiency", "reducer.efficiency"),
+        _e("J_MOTOR_SIDE", "kg m2", "motor and reducer inertia about the reducer output, (J_m + J_r) tau^2"),
+        _e("REDUCER_BACKLASH", "rad", "torsional play of the reducer", "reducer.backlash"),
+        _e("TORSION_STIFFNESS", "N m/rad", "series torsional stiffness of reducer, couplings and torque meter"),
+        _e("TORSION_DAMPING", "N m s/rad", "torsional damping of the chain", "drivetrain.damping"),
+    ), signals=(
+        _e("TRANSMITTED_TORQUE", "N m", "torque through couplings and torque meter T_tm"),
+    )),
+    Component("screw", states=(
+        _e("SCREW_ANGLE", "rad", "screw angle theta_s (Eq. 9.7)"),
+        _e("SCREW_SPEED", "rad/s", "screw speed"),
+        _e("SCREW_AXIAL", "m", "screw axial displacement x_s"),
+        _e("SCREW_AXIAL_SPEED", "m/s", "screw axial speed"),
+    ), constants=(
+        _e("J_SCREW_SIDE", "kg m2", "screw-side inertia J_s + J_tm + 2 J_tc (Eq. 9.7)"),
+        _e("SCREW_DAMPING", "N m s/rad", "screw rotational damping", "ball_screw.screw_rotational_damping"),
+        _e("SCREW_FRICTION_STATIC", "N m", "support bearings' breakaway friction",
+           "ball_screw.bearing_friction_static_torque"),
+        _e("SCREW_FRICTION_DYNAMIC", "N m", "support bearings' Coulomb friction",
+           "ball_screw.bearing_friction_dynamic_torque"),
+        _e("SCREW_FRICTION_RATE", "s/rad", "support bearings' Stribeck rate",
+           "ball_screw.bearing_friction_stribeck_rate"),
+        _e("SCREW_FRICTION_VISCOUS", "N m s/rad", "support bearings' viscous friction",
+           "ball_screw.bearing_viscous_friction"),
+        _e("SCREW_MASS", "kg", "screw shaft mass"),
+        _e("BEARING_STIFFNESS", "N/m", "rear bearing axial stiffness", "ball_screw.rear_bearing_axial_stiffness"),
+        _e("SHAFT_EA", "N", "shaft axial rigidity E A"),
+        _e("SHAFT_LENGTH_0", "m", "rear bearing to nut distance at zero stroke", "ball_screw.bearing_to_nut_distance"),
+        _e("SCREW_AXIAL_DAMPING", "N s/m", "screw axial damping", "ball_screw.screw_axial_damping"),
+        _e("SHAFT_TWIST_COMPLIANCE", "1/N", "(p/2pi)^2 / (G J_p): the shaft twist as an axial compliance per length"),
+    ), signals=(
+        _e("SCREW_ANGLE", "rad", "screw shaft angle"),
+        _e("SCREW_EQUIVALENT_POSITION", "m", "screw equivalent linear position p*theta_s/(2*pi) (Eq. 9.12)"),
+        _e("SCREW_AXIAL_POSITION", "m", "screw shaft axial displacement"),
+        _e("SCREW_TWIST", "rad", "torsion of the screw shaft between the coupling and the master nut"),
+    )),
+    Component("nut", instances=2, states=(
+        _e("NUT{n}_POSITION", "m", "nut translation x_n (Eq. 9.8; nut 1 the master, the sled)"),
+        _e("NUT{n}_SPEED", "m/s", "nut speed"),
+        _e("NUT{n}_ANGLE", "rad", "nut roll angle on the guides theta_n"),
+        _e("NUT{n}_ANGULAR_SPEED", "rad/s", "nut roll speed"),
+    ), constants=(
+        _e("NUT{n}_MASS", "kg", "translating mass of the nut (the master carries the sled)",
+           ("sled.master_mass", "sled.slave_mass")),
+        _e("NUT{n}_GUIDE_FRICTION_SHARE", "1", "share of the guide friction law the nut carries (1 for the master)"),
+    ), signals=(
+        _e("NUT{n}_POSITION", "m", "nut position (nut 1 the master, the sled)"),
+        _e("NUT{n}_CONTACT_FORCE", "N", "axial contact force of the screw on the nut"),
+    )),
+    Component("guides", constants=(
+        _e("J_NUT", "kg m2", "nut rotational inertia", "sled.nut_rotational_inertia"),
+        _e("GUIDE_ROLL_STIFFNESS", "N m/rad", "guides' roll stiffness", "sled.guide_roll_stiffness"),
+        _e("GUIDE_ROLL_DAMPING", "N m s/rad", "guides' roll damping", "sled.guide_roll_damping"),
+        _e("GUIDE_FRICTION_STATIC", "N", "guide breakaway friction", "sled.guide_friction_static"),
+        _e("GUIDE_FRICTION_DYNAMIC", "N", "guide Coulomb friction", "sled.guide_friction_dynamic"),
+        _e("GUIDE_FRICTION_RATE", "s/m", "guide Stribeck rate", "sled.guide_friction_stribeck_rate"),
+        _e("GUIDE_FRICTION_VISCOUS", "N s/m", "guide viscous friction", "sled.guide_viscous_friction"),
+        _e("STROKE_LIMIT", "m", "sled stroke limit (divergence guard)", "sled.stroke_limit"),
+    ), signals=(
+        _e("NUT1_SPEED", "m/s", "master nut (sled) speed"),
+    )),
+    Component("ball_screw_contact", constants=(
+        _e("LEAD_ARM", "m/rad", "p / (2 pi)"),
+        _e("COS_HELIX", "1", "cos(alpha_e)"),
+        _e("SIN_HELIX", "1", "sin(alpha_e)"),
+        _e("CENTRE_DISTANCE", "m", "A0, distance of the groove curvature centres at first contact (Eq. 9.4)"),
+        _e("CONTACT_ANGLE_0", "rad", "design contact angle alpha_0", "ball_screw.contact_angle"),
+        _e("CONTACT_RADIAL_0", "m", "A0 cos(alpha_0)"),
+        _e("CONTACT_AXIAL_0", "m", "A0 sin(alpha_0)"),
+        _e("SIN_ALPHA_0", "1", "sin(alpha_0)"),
+        _e("SIN_ALPHA_MIN", "1", "lower end of the stiffness fit's sin(alpha) range"),
+        _e("SIN_ALPHA_SPAN", "1", "width of the stiffness fit's sin(alpha) range"),
+        *(_e(f"STIFFNESS_C{k}", "N/m^1.5", f"coefficient {k} of the series Hertz stiffness fit K(sin alpha)")
+          for k in range(7)),
+        _e("CONTACT_DAMPING", "s/m^0.25", "contact damping b_h (Eq. 7.54)", "ball_screw.contact_damping_coefficient"),
+        _e("LOADED_BALLS", "1", "loaded spheres Z_eff (Eq. 5.5)"),
+        _e("BACKLASH", "m", "axial backlash of each nut (scene condition)"),
+        _e("LINEAR_CONTACT_STIFFNESS", "N/m", "normal stiffness per sphere of the linear contact level"),
+        _e("MAX_NORMAL_APPROACH", "m", "Hertzian validity bound of the normal approach (divergence guard)"),
+    )),
+    Component("ball_groove_friction", constants=(
+        *(_e(f"FRICTION_G{k}", unit, f"Eq. 5.16 coefficient g_{k}", f"ball_screw.sliding_friction_g{k}")
+          for k, unit in ((1, "1"), (2, "s/m"), (3, "s/m"), (4, "1"), (5, "s/m"), (6, "s/m"))),
+        _e("ROLLING_K_GC", "m/N^0.26", "rolling load coefficient (Eqs. 5.20-5.23)",
+           "ball_screw.rolling_friction_load_coefficient"),
+        _e("ROLLING_K_RF", "1", "rolling friction multiplier k_rf", "ball_screw.rolling_friction_multiplier"),
+        _e("ROLLING_F_V1", "s2", "rolling speed coefficient (Eqs. 5.19/5.21)",
+           "ball_screw.rolling_friction_speed_coefficient"),
+        _e("ROLLING_THRESHOLD", "m/s", "direction regularisation of the rolling term",
+           "ball_screw.rolling_friction_direction_threshold"),
+        _e("BALL_RADIUS", "m", "ball radius r_b", "ball_screw.ball_radius"),
+        _e("PITCH_RADIUS", "m", "pitch radius r_m", "ball_screw.pitch_radius"),
+    ), signals=(
+        _e("BALL_GROOVE_FRICTION_TORQUE", "N m", "ball-groove friction torque opposing the screw rotation, both nuts "
+                                                 "(Eqs. 5.16-5.24; the drag torque, Eq. 7.85, without external force)"),
+        _e("BALL_SCREW_EFFICIENCY", "1", "ball-screw mechanical efficiency (Eq. 5.25): P_out/P_in driving, "
+                                         "-P_in/P_out back-driving, 0 at rest or when both powers enter"),
+    )),
+    Component("preload", constants=(
+        _e("PRELOAD_STIFFNESS", "N/m", "disc springs in series with the preload load cell"),
+        _e("PRELOAD_DAMPING", "N s/m", "preload damping"),
+        _e("PRELOAD_COMPRESSION", "m", "spring-set compression at the assembled position"),
+        _e("PRELOAD_ORIENTATION", "1", "+1: O configuration (nuts pushed apart), -1: X"),
+    ), signals=(
+        _e("PRELOAD_FORCE", "N", "preload force between the nuts"),
+    )),
+    Component("drive", states=(
+        _e("HALL_CURRENT", "A", "first-order Hall sensor output"),
+        _e("CURRENT_PI", "V", "analog current-PI integrator"),
+    ), constants=(
+        _e("DC_BUS", "V", "DC-bus voltage", "drive.dc_bus_voltage"),
+        _e("HALL_TAU", "s", "Hall sensor time constant", "drive.hall_time_constant"),
+        _e("CURRENT_AW_TIME", "s", "current-PI anti-windup time", "drive.current_antiwindup_time"),
+        _e("CURRENT_KP", "V/A", "current-PI proportional gain", "controller.current_kp"),
+        _e("CURRENT_KI", "V/(A s)", "current-PI integral gain", "controller.current_ki"),
+        _e("CURRENT_LOOP_TAU", "s", "time constant of the ideal current loop, 1 / (2 pi bandwidth)"),
+        _e("SPEED_KP", "A s/rad", "speed-PI proportional gain", "controller.speed_kp"),
+        _e("SPEED_KI", "A/rad", "speed-PI integral gain", "controller.speed_ki"),
+        _e("SPEED_FULL_SCALE", "rad/s", "speed command full scale", "drive.speed_command_full_scale"),
+        _e("SPEED_COMMAND_BITS", "1", "word length (sign incl.) of the drive's analog speed input; 0 = not quantised"),
+        _e("MAX_MOTOR_SPEED", "rad/s", "guard: twice the motor's maximum permissible speed"),
+        _e("MAX_TEMPERATURE", "K", "guard: winding temperature limit"),
+    ), signals=(
+        _e("SPEED_COMMAND", "rad/s", "motor speed command after the drive's analog input"),
+        _e("CURRENT_DEMAND", "A", "current demand of the speed loop"),
+    )),
+    Component("position_loop", constants=(
+        _e("POSITION_KP", "rad/(s m)", "position-PI proportional gain", "controller.position_kp"),
+        _e("POSITION_KI", "rad/(s2 m)", "position-PI integral gain", "controller.position_ki"),
+        _e("NUT1_ZERO", "m", "sled position at which the encoders are zeroed"),
+        _e("SCREW_ANGLE_ZERO", "rad", "screw angle at which the encoders are zeroed"),
+        _e("ENCODER_SCALE_ORIGIN", "m", "scale position of the sled at t = 0", "sensors.linear_encoder_scale_origin"),
+        _e("LINEAR_V_THRESHOLD", "m/s", "sign regularisation of the linear friction laws"),
+        _e("ANGULAR_V_THRESHOLD", "rad/s", "sign regularisation of the angular friction laws"),
+    ), signals=(
+        _e("POSITION_DEMAND", "m", "sled position demand"),
+    )),
+    Component("valve", states=(
+        _e("SPOOL_POSITION", "1", "normalised valve spool position [-1, 1]"),
+        _e("SPOOL_SPEED", "1/s", "spool speed"),
+    ), constants=(
+        _e("VALVE_MID", "V", "valve mid-position command", "pneumatics.valve_mid_voltage"),
+        _e("VALVE_MIN", "V", "lowest valve command"),
+        _e("VALVE_MAX", "V", "highest valve command"),
+        _e("VALVE_FREQUENCY", "Hz", "spool critical frequency"),
+        _e("VALVE_DAMPING", "1", "spool damping ratio"),
+        _e("VALVE_HYSTERESIS", "1", "valve hysteresis, fraction of the command span"),
+        _e("VALVE_COMMAND_BITS", "1", "word length (sign incl.) of the valve-command D/A; 0 = not quantised"),
+        _e("FORCE_KP", "V/N", "force-PI proportional gain", "controller.force_kp"),
+        _e("FORCE_KI", "V/(N s)", "force-PI integral gain", "controller.force_ki"),
+    ), signals=(
+        _e("FORCE_DEMAND", "N", "external force demand"),
+        _e("VALVE_COMMAND", "V", "effective proportional-valve command"),
+    )),
+    Component("cylinder", states=(
+        _e("CHAMBER1_PRESSURE", "Pa", "cap-side chamber pressure, absolute"),
+        _e("CHAMBER2_PRESSURE", "Pa", "rod-side chamber pressure, absolute"),
+        _e("PISTON_POSITION", "m", "piston position from the cap-end stop"),
+        _e("PISTON_SPEED", "m/s", "piston speed"),
+    ), constants=(
+        *(_e(name, unit, description) for name, unit, description in (
+            ("P_SUPPLY", "Pa", "supply pressure (scene condition)"), ("P_ATMOSPHERE", "Pa", "exhaust pressure"),
+            ("AIR_TEMPERATURE", "K", "air temperature (the room's)"), ("GAS_CONSTANT", "J/(kg K)", "air gas constant"),
+            ("POLYTROPIC_EXPONENT", "1", "polytropic exponent"), ("REFERENCE_DENSITY", "kg/m3", "ISO 6358 rho_0"),
+            ("REFERENCE_TEMPERATURE", "K", "ISO 6358 T_0"), ("MAX_CONDUCTANCE", "m3/(s Pa)", "fully open conductance"),
+            ("LEAKAGE_FRACTION", "1", "centre leakage fraction"), ("CRITICAL_RATIO", "1", "critical pressure ratio b"),
+            ("LAMINAR_RATIO", "1", "laminar band ratio"), ("AREA1", "m2", "cap-side area"),
+            ("AREA2", "m2", "rod-side area"),
+            ("DEAD_VOLUME1", "m3", "cap-side dead volume"), ("DEAD_VOLUME2", "m3", "rod-side dead volume"),
+            ("STROKE", "m", "cylinder stroke"), ("PISTON_MASS", "kg", "piston, rod, rod end and load cell"),
+            ("PISTON_DAMPING", "N s/m", "piston damping"), ("CYLINDER_FRICTION_STATIC", "N", "seal breakaway friction"),
+            ("CYLINDER_FRICTION_DYNAMIC", "N", "seal Coulomb friction"),
+            ("CYLINDER_FRICTION_RATE", "s/m", "seal Stribeck rate"),
+            ("CYLINDER_FRICTION_VISCOUS", "N s/m", "seal viscous friction"),
+            ("CYLINDER_V_THRESHOLD", "m/s", "seal friction sign regularisation"),
+            ("DAMPER_STIFFNESS", "N/m", "end-stroke damper stiffness"), ("DAMPER_TRAVEL", "m", "damper travel"),
+            ("DAMPER_DAMPING", "N s/m", "damper damping"), ("END_STOP_STIFFNESS", "N/m", "end-stop stiffness"),
+            ("LOAD_CELL_STIFFNESS", "N/m", "external load cell stiffness"),
+            ("LOAD_CELL_DAMPING", "N s/m", "external load cell damping"),
+            ("LINK_OFFSET", "m", "piston position minus sled position at zero load-cell force"))),
+    ), signals=(
+        _e("EXTERNAL_FORCE", "N", "external force on the master nut"),
+        _e("CHAMBER1_PRESSURE", "Pa", "cylinder cap-side chamber pressure (absolute)"),
+        _e("CHAMBER2_PRESSURE", "Pa", "cylinder rod-side chamber pressure (absolute)"),
+        _e("PISTON_POSITION", "m", "piston position from the cap-end stop"),
+    )),
+    Component("instruments", signals=(
+        # measured signals, held at their last acquisition sample (twin.engine.instrumentation)
+        _e("LINEAR_ENCODER_POSITION", "m", "sled position read by the linear encoder (zeroed at t = 0)"),
+        _e("SCREW_ANGLE_MEASURED", "rad", "screw angle read by the torque-meter encoder (zeroed at t = 0)"),
+        _e("NUT_SPEED_MEASURED", "m/s", "sled speed from the linear encoder (period/frequency method)"),
+        _e("MOTOR_SPEED_MEASURED", "rad/s", "motor speed estimated by the drive from the resolver"),
+        _e("MOTOR_CURRENT_MEASURED", "A", "motor current acquired through the current monitor"),
+        _e("TORQUE_MEASURED", "N m", "torque-meter reading"),
+        _e("PRELOAD_FORCE_MEASURED", "N", "preload load-cell reading"),
+        _e("EXTERNAL_FORCE_MEASURED", "N", "external-force load-cell reading"),
+    )),
+)
+
+
+def _expanded(kind: str) -> list[tuple[Entry, int]]:
+    """Every entry of ``kind`` ("states", "constants", "signals") with its instance (0-based), in declaration order."""
+    return [(entry, n) for component in COMPONENTS for n in range(component.instances)
+            for entry in getattr(component, kind)]
+
+
+def _layout(name: str, kind: str) -> type[IntEnum]:
+    names = [entry.name.format(n=n + 1) for entry, n in _expanded(kind)]
+    duplicates = sorted({x for x in names if names.count(x) > 1})
+    if duplicates:
+        raise ImportError(f"twin.layout: {kind} declared twice: {', '.join(duplicates)}")
+    return IntEnum(name, {entry: k for k, entry in enumerate(names)})
+
+
+S = _layout("S", "states")
+S.__doc__ = "Continuous state vector (SI units), generated from :data:`COMPONENTS`."
+K = _layout("K", "constants")
+K.__doc__ = "Model constants (SI units), generated from :data:`COMPONENTS`; built by twin.engine.model."
+Signal = _layout("Signal", "signals")
+Signal.__doc__ = "Recorded output signals (one column each in the output buffer), generated from :data:`COMPONENTS`."
 
 N_STATES = len(S)
-# A fidelity level can remove states (twin.fidelity): the integrators then advance only the
-# model's ``active`` indices; the others hold a fixed value (the frozen temperature, a rigid
-# guide's zero roll angle) and the right-hand side does not compute their derivatives.
+N_CONSTANTS = len(K)
+N_SIGNALS = len(Signal)
+
+#: Unit and meaning of every state, constant and signal (``{layout member: (unit, description)}``).
+STATE_META = {S[entry.name.format(n=n + 1)]: (entry.unit, entry.description) for entry, n in _expanded("states")}
+CONSTANT_META = {K[entry.name.format(n=n + 1)]: (entry.unit, entry.description)
+                 for entry, n in _expanded("constants")}
+SIGNAL_META = {Signal[entry.name.format(n=n + 1)]: (entry.unit, entry.description)
+               for entry, n in _expanded("signals")}
+
+#: The model constants that are a parameter's value as it stands (``{K member: parameter name}``): the plain part of
+#: the parameter -> model mapping, derived from the declarations. The others are computed by
+#: :func:`twin.engine.model.build_model` (formulas, fidelity levels, scene conditions).
+PARAMETER_CONSTANTS: dict = {
+    K[entry.name.format(n=n + 1)]: (entry.parameter if isinstance(entry.parameter, str) else entry.parameter[n])
+    for entry, n in _expanded("constants") if entry.parameter}
+
+#: Per-nut strides: nut ``i``'s state (constant) is its first nut's member plus ``i * NUT_STATE_STRIDE``
+#: (``i * NUT_CONSTANT_STRIDE``).
+NUT_STATE_STRIDE = S.NUT2_POSITION - S.NUT1_POSITION
+NUT_CONSTANT_STRIDE = K.NUT2_MASS - K.NUT1_MASS
 
 # (position, velocity) pairs: the semi-implicit Euler integrator updates the
 # velocity first and moves the position with the new velocity.
@@ -68,275 +343,10 @@ class U(IntEnum):
 
 N_INPUTS = len(U)
 
-# Pneumatics fidelity codes (constant K.PNEUMATICS).
-PNEUMATICS_ABSENT = 0      # no external force at all
-PNEUMATICS_IDEAL = 1       # ideal force source following the scene's force demand
-PNEUMATICS_FULL = 2        # valve, chambers, piston and load cell under the force loop
-PNEUMATICS_LEVELS = {"absent": PNEUMATICS_ABSENT, "ideal": PNEUMATICS_IDEAL, "full": PNEUMATICS_FULL}
-
-
-class K(IntEnum):
-    """Model constants, derived from the parameter set and the scene (SI units)."""
-
-    # motor and drive
-    R20 = 0
-    R_TEMP_COEF = 1
-    INDUCTANCE = 2
-    TORQUE_CONSTANT = 3
-    SPEED_CONSTANT = 4
-    RATIO = 5
-    EFFICIENCY = 6
-    J_MOTOR_SIDE = 7          # J_mr tau^2, about the reducer output [kg m^2]
-    MOTOR_VISCOUS = 8         # b_mr on the motor shaft
-    MR_FRICTION_STATIC = 9
-    MR_FRICTION_DYNAMIC = 10
-    MR_FRICTION_RATE = 11
-    DC_BUS = 12
-    HALL_TAU = 13
-    CURRENT_KP = 14
-    CURRENT_KI = 15
-    CURRENT_AW_TIME = 16
-    THERMAL_RESISTANCE = 17
-    THERMAL_TAU = 18
-    HEAT_TRANSFER = 19
-    MOTOR_AREA = 20
-    EMISSIVITY = 21
-    AMBIENT = 22
-    # torsional chain
-    TORSION_STIFFNESS = 23
-    TORSION_DAMPING = 24
-    REDUCER_BACKLASH = 25
-    J_SCREW_SIDE = 26         # J_s + J_tm + 2 J_tc (Eq. 9.7)
-    SCREW_DAMPING = 27
-    SCREW_FRICTION_STATIC = 28
-    SCREW_FRICTION_DYNAMIC = 29
-    SCREW_FRICTION_RATE = 30
-    SCREW_FRICTION_VISCOUS = 31
-    # screw axial
-    SCREW_MASS = 32
-    BEARING_STIFFNESS = 33
-    SHAFT_EA = 34
-    SHAFT_LENGTH_0 = 35
-    SCREW_AXIAL_DAMPING = 36
-    # ball screw contact
-    LEAD_ARM = 37             # p / (2 pi)
-    COS_HELIX = 38
-    CENTRE_DISTANCE = 39
-    CONTACT_ANGLE_0 = 40
-    SIN_ALPHA_MIN = 41
-    SIN_ALPHA_SPAN = 42
-    CONTACT_DAMPING = 43
-    LOADED_BALLS = 44
-    BACKLASH = 45
-    CONTACT_MODEL = 46        # CONTACT_* code below (fidelity "contact")
-    # nuts and guides
-    MASS_NUT1 = 47
-    MASS_NUT2 = 48
-    J_NUT = 49
-    GUIDE_ROLL_STIFFNESS = 50
-    GUIDE_ROLL_DAMPING = 51
-    GUIDE_FRICTION_STATIC = 52
-    GUIDE_FRICTION_DYNAMIC = 53
-    GUIDE_FRICTION_RATE = 54
-    GUIDE_FRICTION_VISCOUS = 55
-    SLAVE_FRICTION_FRACTION = 56
-    # preload
-    PRELOAD_STIFFNESS = 57
-    PRELOAD_DAMPING = 58
-    PRELOAD_COMPRESSION = 59
-    PRELOAD_ORIENTATION = 60
-    # friction regularisation
-    LINEAR_V_THRESHOLD = 61
-    ANGULAR_V_THRESHOLD = 62
-    # digital loops
-    SPEED_KP = 63
-    SPEED_KI = 64
-    MAX_CURRENT = 65
-    POSITION_KP = 66
-    POSITION_KI = 67
-    SPEED_FULL_SCALE = 68
-    SPEED_COMMAND_BITS = 69   # word length (sign incl.) of the drive's analog speed input; 0 = not quantised
-    VALVE_COMMAND_BITS = 70   # word length (sign incl.) of the valve-command D/A; 0 = not quantised
-    # divergence guard
-    STROKE_LIMIT = 71
-    MAX_MOTOR_SPEED = 72
-    MAX_TEMPERATURE = 73
-    MAX_NORMAL_APPROACH = 74
-    # feature zeroing
-    NUT1_ZERO = 75
-    SCREW_ANGLE_ZERO = 76
-    # pneumatic load system (Eqs. 9.9-9.11, Tables B.11-B.13, pneumatics.toml)
-    PNEUMATICS = 77
-    P_SUPPLY = 78
-    P_ATMOSPHERE = 79
-    AIR_TEMPERATURE = 80
-    GAS_CONSTANT = 81
-    POLYTROPIC_EXPONENT = 82
-    REFERENCE_DENSITY = 83
-    REFERENCE_TEMPERATURE = 84
-    MAX_CONDUCTANCE = 85
-    LEAKAGE_FRACTION = 86
-    CRITICAL_RATIO = 87
-    LAMINAR_RATIO = 88
-    VALVE_MID = 89
-    VALVE_MIN = 90
-    VALVE_MAX = 91
-    VALVE_FREQUENCY = 92
-    VALVE_DAMPING = 93
-    VALVE_HYSTERESIS = 94
-    AREA1 = 95
-    AREA2 = 96
-    DEAD_VOLUME1 = 97
-    DEAD_VOLUME2 = 98
-    STROKE = 99
-    PISTON_MASS = 100
-    PISTON_DAMPING = 101
-    CYLINDER_FRICTION_STATIC = 102
-    CYLINDER_FRICTION_DYNAMIC = 103
-    CYLINDER_FRICTION_RATE = 104
-    CYLINDER_FRICTION_VISCOUS = 105
-    CYLINDER_V_THRESHOLD = 106
-    DAMPER_STIFFNESS = 107
-    DAMPER_TRAVEL = 108
-    DAMPER_DAMPING = 109
-    END_STOP_STIFFNESS = 110
-    LOAD_CELL_STIFFNESS = 111
-    LOAD_CELL_DAMPING = 112
-    LINK_OFFSET = 113         # piston position minus sled position at zero load-cell force [m]
-    FORCE_KP = 114
-    FORCE_KI = 115
-
-    ENCODER_SCALE_ORIGIN = 116  # m, scale position of the sled at t = 0 (sensors.linear_encoder_scale_origin)
-    # fidelity levels of the plant (twin.fidelity)
-    THERMAL_DYNAMIC = 117     # 1.0 = Eq. 9.2 integrated, 0.0 = winding frozen at the start temperature
-    CURRENT_LOOP_FULL = 118   # 1.0 = RL winding, Hall sensor and analog PI; 0.0 = ideal torque source
-    CURRENT_LOOP_TAU = 119    # s, time constant of the ideal current loop (1 / (2 pi bandwidth))
-    NUT_ROTATION = 120        # 1.0 = nut roll on the guides integrated, 0.0 = rigid guides
-    LINEAR_CONTACT_STIFFNESS = 121  # N/m per sphere along the normal, the "linear" contact level
-    # ball-groove friction of the reduced Ch. 5 model (twin.physics.ball_groove_friction)
-    BALL_GROOVE_FRICTION = 122  # BALL_GROOVE_FRICTION_* code below (fidelity "ball_groove_friction")
-    FRICTION_G1 = 123         # Eq. 5.16 coefficients g_1 ... g_6
-    FRICTION_G2 = 124
-    FRICTION_G3 = 125
-    FRICTION_G4 = 126
-    FRICTION_G5 = 127
-    FRICTION_G6 = 128
-    ROLLING_K_GC = 129        # m/N^0.26, Eqs. 5.20-5.23
-    ROLLING_K_RF = 130        # friction multiplier k_rf
-    ROLLING_F_V1 = 131        # s^2, Eqs. 5.19/5.21
-    ROLLING_THRESHOLD = 132   # m/s, direction regularisation of the rolling term
-    BALL_RADIUS = 133         # r_b [m]
-    PITCH_RADIUS = 134        # r_m [m]
-    SIN_HELIX = 135           # sin(alpha_e)
-    # screw torsion between the coupling and the nuts (fidelity "screw_torsion")
-    SHAFT_TWIST_COMPLIANCE = 136  # (p/2pi)^2 / (G J_p) [1/N]: the shaft twist as an axial compliance per length
-    # the design contact angle's trigonometry, computed once (twin.physics.ball_screw.contact_geometry)
-    CONTACT_RADIAL_0 = 137    # A0 cos(alpha_0) [m]
-    CONTACT_AXIAL_0 = 138     # A0 sin(alpha_0) [m]
-    SIN_ALPHA_0 = 139         # sin(alpha_0)
-
-N_CONSTANTS = len(K)
-
-# Contact-model codes (constant K.CONTACT_MODEL).
-CONTACT_CONSTANT_ANGLE = 0  # Hertz at the design angle alpha_0
-CONTACT_VARIABLE_ANGLE = 1  # Hertz with the Eq. 9.4 load-dependent angle
-CONTACT_LINEAR = 2          # linear normal stiffness at the design angle (elasto-backlash of Ch. 5)
-CONTACT_LEVELS = {"constant_angle": CONTACT_CONSTANT_ANGLE, "variable_angle": CONTACT_VARIABLE_ANGLE,
-                  "linear": CONTACT_LINEAR}
-
-# Ball-groove friction codes (constant K.BALL_GROOVE_FRICTION).
-BALL_GROOVE_FRICTION_LUMPED = 0     # no ball-groove friction; the support bearings' lumped term only
-BALL_GROOVE_FRICTION_CHAPTER5 = 1   # sliding (Eq. 5.16) and rolling (Eqs. 5.17-5.24) friction on both nuts
-BALL_GROOVE_FRICTION_LEVELS = {"lumped": BALL_GROOVE_FRICTION_LUMPED, "chapter5": BALL_GROOVE_FRICTION_CHAPTER5}
-
-
-class Signal(IntEnum):
-    """Recorded output signals (one column each in the output buffer)."""
-
-    POSITION_DEMAND = 0
-    NUT1_POSITION = 1
-    NUT2_POSITION = 2
-    SCREW_ANGLE = 3
-    SCREW_EQUIVALENT_POSITION = 4
-    SCREW_AXIAL_POSITION = 5
-    MOTOR_CURRENT = 6
-    MOTOR_TORQUE = 7
-    MOTOR_SPEED = 8
-    WINDING_TEMPERATURE = 9
-    PRELOAD_FORCE = 10
-    EXTERNAL_FORCE = 11
-    TRANSMITTED_TORQUE = 12
-    NUT1_CONTACT_FORCE = 13
-    NUT2_CONTACT_FORCE = 14
-    SPEED_COMMAND = 15
-    CURRENT_DEMAND = 16
-    NUT1_SPEED = 17
-    FORCE_DEMAND = 18
-    CHAMBER1_PRESSURE = 19
-    CHAMBER2_PRESSURE = 20
-    VALVE_COMMAND = 21
-    PISTON_POSITION = 22
-    # measured signals (sensors), held at their last acquisition sample
-    LINEAR_ENCODER_POSITION = 23
-    SCREW_ANGLE_MEASURED = 24
-    NUT_SPEED_MEASURED = 25
-    MOTOR_SPEED_MEASURED = 26
-    MOTOR_CURRENT_MEASURED = 27
-    TORQUE_MEASURED = 28
-    PRELOAD_FORCE_MEASURED = 29
-    EXTERNAL_FORCE_MEASURED = 30
-    # reduced Ch. 5 ball screw outputs (twin.physics.ball_groove_friction)
-    BALL_GROOVE_FRICTION_TORQUE = 31
-    BALL_SCREW_EFFICIENCY = 32
-    SCREW_TWIST = 33
-
-
-N_SIGNALS = len(Signal)
-
 # Scalar features of a run (twin.features), computed by the loop alongside the signals.
 FEATURES = tuple(FEATURE_TABLE)
 # Everything a scene or a campaign may ask a run to produce.
 OUTPUT_NAMES = tuple(signal.name.lower() for signal in Signal) + FEATURES
-
-# name -> (units, long name) for the xarray Dataset (CF-style attributes).
-SIGNAL_META = {
-    Signal.POSITION_DEMAND: ("m", "sled position demand"),
-    Signal.NUT1_POSITION: ("m", "master nut (sled) position"),
-    Signal.NUT2_POSITION: ("m", "slave nut position"),
-    Signal.SCREW_ANGLE: ("rad", "screw shaft angle"),
-    Signal.SCREW_EQUIVALENT_POSITION: ("m", "screw equivalent linear position p*theta_s/(2*pi) (Eq. 9.12)"),
-    Signal.SCREW_AXIAL_POSITION: ("m", "screw shaft axial displacement"),
-    Signal.MOTOR_CURRENT: ("A", "motor current (Eq. 9.1)"),
-    Signal.MOTOR_TORQUE: ("N m", "motor electromagnetic torque k_t*i"),
-    Signal.MOTOR_SPEED: ("rad/s", "motor shaft speed"),
-    Signal.WINDING_TEMPERATURE: ("K", "winding temperature (Eq. 9.2)"),
-    Signal.PRELOAD_FORCE: ("N", "preload force between the nuts"),
-    Signal.EXTERNAL_FORCE: ("N", "external force on the master nut"),
-    Signal.TRANSMITTED_TORQUE: ("N m", "torque through couplings and torque meter T_tm"),
-    Signal.NUT1_CONTACT_FORCE: ("N", "axial contact force of the screw on the master nut"),
-    Signal.NUT2_CONTACT_FORCE: ("N", "axial contact force of the screw on the slave nut"),
-    Signal.SPEED_COMMAND: ("rad/s", "motor speed command after the drive's analog input"),
-    Signal.CURRENT_DEMAND: ("A", "current demand of the speed loop"),
-    Signal.NUT1_SPEED: ("m/s", "master nut (sled) speed"),
-    Signal.FORCE_DEMAND: ("N", "external force demand"),
-    Signal.CHAMBER1_PRESSURE: ("Pa", "cylinder cap-side chamber pressure (absolute)"),
-    Signal.CHAMBER2_PRESSURE: ("Pa", "cylinder rod-side chamber pressure (absolute)"),
-    Signal.VALVE_COMMAND: ("V", "effective proportional-valve command"),
-    Signal.PISTON_POSITION: ("m", "piston position from the cap-end stop"),
-    Signal.LINEAR_ENCODER_POSITION: ("m", "sled position read by the linear encoder (zeroed at t = 0)"),
-    Signal.SCREW_ANGLE_MEASURED: ("rad", "screw angle read by the torque-meter encoder (zeroed at t = 0)"),
-    Signal.NUT_SPEED_MEASURED: ("m/s", "sled speed from the linear encoder (period/frequency method)"),
-    Signal.MOTOR_SPEED_MEASURED: ("rad/s", "motor speed estimated by the drive from the resolver"),
-    Signal.MOTOR_CURRENT_MEASURED: ("A", "motor current acquired through the current monitor"),
-    Signal.TORQUE_MEASURED: ("N m", "torque-meter reading"),
-    Signal.PRELOAD_FORCE_MEASURED: ("N", "preload load-cell reading"),
-    Signal.EXTERNAL_FORCE_MEASURED: ("N", "external-force load-cell reading"),
-    Signal.BALL_GROOVE_FRICTION_TORQUE: ("N m", "ball-groove friction torque opposing the screw rotation, both nuts "
-                                                "(Eqs. 5.16-5.24; the drag torque, Eq. 7.85, without external force)"),
-    Signal.BALL_SCREW_EFFICIENCY: ("1", "ball-screw mechanical efficiency (Eq. 5.25): P_out/P_in driving, "
-                                        "-P_in/P_out back-driving, 0 at rest or when both powers enter"),
-    Signal.SCREW_TWIST: ("rad", "torsion of the screw shaft between the coupling and the master nut"),
-}
 
 
 class M(IntEnum):
@@ -387,8 +397,5 @@ BOUND_REASONS = {
     6: "ball-groove normal approach beyond the Hertzian validity bound",
     7: "chamber pressure outside [0, 2 x supply] (absolute)",
     8: "finite but wrong: the step-doubling local-error estimate exceeds its tolerance (step beyond stability)",
-    9: "a nut's contact load fell below the held-contact premise of the implicit drive-period step",
+    9: "the quasi-static screw-axial balance did not converge",
 }
-#: Bound code of a broken held-contact premise (twin.engine.solver_choice): not a failure of the run, the
-#: automatic integrator's signal to solve the scene again with the explicit method.
-BOUND_CONTACT_RELEASED = 9

@@ -1,53 +1,56 @@
-"""``simulate``: the single entry point that runs one bench test and returns an xarray Dataset."""
+"""``simulate``: the single entry point that runs one bench test (and ``simulate_batch``, many, in lock-step lanes)."""
 
 from __future__ import annotations
 
-import copy
-import dataclasses
 import json
 import math
 import time
+from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
-from twin.engine.instrumentation import build_instruments, instrument_levels
+from twin.engine.group import group_key, solve_group
+from twin.engine.instrumentation import build_instruments
 from twin.engine.integrators import INTEGRATORS
-from twin.engine.loop import run_loop
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.engine.reference import local_error_tolerance, run_reference
-from twin.engine.solver_choice import (
-    IMPLICIT_METHOD,
-    RELEASE_BUDGET,
-    choice_statement,
-    held_interference,
-    rk4_limit_at_start,
-)
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
-from twin.layout import (
-    BOUND_REASONS,
-    N_MEMORY,
-    N_SIGNALS,
-    SIGNAL_META,
-    STATUS_OK,
-    STATUS_TEXT,
-    M,
-    S,
-    Signal,
-)
+from twin.layout import BOUND_REASONS, N_MEMORY, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, M, S, Signal
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
 
-DEFAULT_INTEGRATOR = "rk4"  # "auto" (twin.engine.solver_choice) is opt-in: docs/accuracy.md says why
-DEFAULT_DT = 6.25e-5  # s; chosen by the speed-versus-accuracy study (docs/accuracy.md)
-AUTO = "auto"
+DEFAULT_INTEGRATOR = "rk4"
+#: The step of the full model [s]: RK4's stability limit along a run with both nuts loaded is 109 us, set by the
+#: screw's axial mode (the ``dynamic`` screw-axial level) and, at full fidelity, 122 us by the analog current loop
+#: (docs/accuracy.md); 62.5 us divides the drive period.
+DEFAULT_DT = 6.25e-5
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
+#: Lanes of a group (:func:`simulate_batch`): a multiple of the vector width (4 doubles with AVX2, 8 with AVX-512)
+#: that fills two registers; the results do not depend on it.
+DEFAULT_LANES = 8
+
+
+def solver_label(integrator: str, dt: float) -> str:
+    """How results, reports and statements name the solver of a run: the method and, for a fixed-step method of the
+    compiled loop, its step (``"rk4 at 125 us"``); an adaptive reference method by its name alone."""
+    return integrator if integrator in REFERENCE_METHODS or not integrator else f"{integrator} at {dt * 1e6:g} us"
+
+
+def default_step(integrator: str, fidelity: Fidelity, drive_period: float) -> float:
+    """The step [s] a method takes when none is given: RK4 at the drive period where neither of the two modes beyond
+    its reach there is modelled (the screw's axial mode at the ``quasi_static`` screw-axial level, the analog
+    current loop at the ``ideal`` current-loop level), else :data:`DEFAULT_DT` (docs/accuracy.md, "The default")."""
+    if (integrator == "rk4" and fidelity.level("screw_axial") == "quasi_static"
+            and fidelity.level("current_loop") == "ideal"):
+        return drive_period
+    return DEFAULT_DT
 
 
 def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
@@ -72,18 +75,15 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"auto", "rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau",
-                  "scipy_lsoda", "scipy_bdf", "scipy_rk45"}
-        A fixed-step method of the compiled loop (default ``rk4`` at 62.5 us), a ``scipy_*`` adaptive method
-        of the reference path (:mod:`twin.engine.reference`), which ignores ``dt``, or ``"auto"``
-        (:mod:`twin.engine.solver_choice`, opt-in): ``imex_euler`` at the 125 us drive period while both nuts
-        are held on a flank, else the whole run again with ``rk4``, at 125 us if that run stays stable and its
-        local-error estimate never exceeds the tolerance, else at 62.5 us; the method used and why are in
-        ``attrs["integrator"]``, ``attrs["dt"]`` and ``attrs["integrator_choice"]``. About 3x faster where the
-        implicit step is kept, but not accurate everywhere the premise holds (docs/accuracy.md).
+    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau", "scipy_lsoda",
+                  "scipy_bdf", "scipy_rk45"}
+        A fixed-step method of the compiled loop (default ``rk4``) or a ``scipy_*`` adaptive method of the
+        reference path (:mod:`twin.engine.reference`), which ignores ``dt``. ``imex_euler`` integrates the screw's
+        axial mode implicitly and needs the ``dynamic`` screw-axial level.
     dt : float, optional
-        Integration step [s]; must divide the speed- and position-loop periods. Default 62.5 us;
-        ``"auto"`` chooses its own.
+        Integration step [s]; must divide the speed- and position-loop periods. Default: :func:`default_step`
+        (RK4 at the 125 us drive period at the campaign's fidelity, 62.5 us where the screw's axial mode or the
+        analog current loop is modelled).
     output_dt : float
         Spacing of the recorded signals [s]; a multiple of ``dt``.
     duration : float, optional
@@ -108,8 +108,7 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Relative tolerance of the ``scipy_*`` reference path.
     local_error_guard : bool
         The finite-but-wrong guard (:func:`twin.engine.loop.local_error`); switch it off
-        only to demonstrate what it catches (``"auto"`` keeps it on for its RK4 attempt at the
-        drive period, which it judges by it).
+        only to demonstrate what it catches.
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -129,8 +128,8 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
     OptionError, SceneError, ParameterError
         On invalid input, before anything runs.
     """
-    return _package(_simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature,
-                               rtol, local_error_guard, throw))
+    run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
+    return _package(_thrown(_solved([_prepared(run, rng, local_error_guard, record=True)])[0], throw))
 
 
 def simulate_features(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
@@ -141,8 +140,33 @@ def simulate_features(scene: Scene | str = "nominal", params: ParameterSet | str
                       local_error_guard: bool = True, throw: bool = True) -> RunSummary:
     """:func:`simulate` without the Dataset: the run's scalar features and status, for callers that
     need nothing else (a Monte Carlo campaign's runs). Same options, same numbers as ``simulate``."""
-    return _summary(_simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature,
-                               rtol, local_error_guard, throw))
+    return simulate_batch([(scene, params, rng)], integrator=integrator, dt=dt, output_dt=output_dt,
+                          duration=duration, fidelity=fidelity, outputs=outputs, curvature=curvature, rtol=rtol,
+                          local_error_guard=local_error_guard, throw=throw)[0]
+
+
+def simulate_batch(runs: Sequence[tuple[Scene | str, ParameterSet | str | None, np.random.Generator | int | None]],
+                   *, integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None,
+                   output_dt: float = DEFAULT_OUTPUT_DT, duration: float | None = None,
+                   fidelity: str | Mapping[str, str] = "auto", outputs: Sequence[str] | None = None,
+                   curvature: str = "thesis", rtol: float = 1e-10, local_error_guard: bool = True,
+                   throw: bool = True, lanes: int = DEFAULT_LANES) -> list[RunSummary]:
+    """:func:`simulate_features` of many runs ``(scene, params, rng)`` with the same options, advanced in lock-step
+    lanes: runs whose model configuration agrees (fidelity levels, integrated states, demand profiles) share
+    groups of up to ``lanes`` lanes. Each summary equals that of the run alone, bit for bit, whatever the
+    grouping (tests/engine/test_lanes.py). Returned in the order of ``runs``.
+
+    Raises
+    ------
+    OptionError, SceneError, ParameterError
+        On invalid input of any run, before anything runs.
+    """
+    if not (isinstance(lanes, int) and lanes >= 1):
+        raise OptionError([f"lanes: {lanes!r} must be an int >= 1"])
+    prepared = [_prepared(_validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng,
+                                     curvature, rtol), rng, local_error_guard, record=False)
+                for scene, params, rng in runs]
+    return [_summary(_thrown(done, throw)) for done in _solved(prepared, lanes)]
 
 
 @dataclass(frozen=True)
@@ -156,84 +180,6 @@ class RunSummary:
     features: dict[str, float]  # every feature of twin.features.FEATURES (NaN unless the run is ok)
     integrator: str = ""    # attrs["integrator"]: the method that solved the run
     dt: float = math.nan    # attrs["dt"]: its step [s]
-
-
-@dataclass(frozen=True)
-class _Simulated:
-    """A finished run before packaging: the request, the model and the loop's buffers."""
-
-    run: _Run
-    model: object
-    x: np.ndarray
-    output: np.ndarray
-    memory: np.ndarray
-    status: int
-    bound: int
-    reason: str
-    t_reached: float
-    solver_stats: dict
-    wall_time: float
-    rng: object
-    choice: str  # the automatic integrator's statement (twin.engine.solver_choice), "" for a named method
-
-
-def _simulated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol,
-               local_error_guard, throw) -> _Simulated:
-    """Validate, build, solve (the steps :func:`simulate` and :func:`simulate_features` share)."""
-    run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
-    model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
-    attempts = [run]  # a named method: one; the automatic integrator: its branches in order (solver_choice)
-    while attempts[-1].fallback is not None:
-        attempts.append(attempts[-1].fallback)
-    # every attempt of the automatic integrator draws the same noise as its first
-    pristine = copy.deepcopy(rng) if len(attempts) > 1 and isinstance(rng, np.random.Generator) else None
-    stopped, wall_time = [], 0.0
-    for k, attempt in enumerate(attempts):
-        first, last = k == 0, k == len(attempts) - 1
-        explicit_drive_period = not (first or last)  # solver_choice: judged by its stability and local error
-        if explicit_drive_period and (limit := rk4_limit_at_start(model)) < attempt.dt:
-            stopped.append((attempt.integrator, attempt.dt, None, 0,
-                            f"RK4's stability limit at the initial state is {limit * 1e6:.1f} us"))
-            continue
-        done = _attempt(attempt, model, rng if pristine is None or first else copy.deepcopy(pristine),
-                        local_error_guard or explicit_drive_period,
-                        held_interference(model) if first and not last else 0.0)
-        wall_time += done.wall_time
-        if explicit_drive_period and done.status == STATUS_OK and done.memory[M.LOCAL_ERROR] > 1.0:
-            # kept only if no local-error check ever exceeded its tolerance (the guard waits for three in a row)
-            stopped.append((attempt.integrator, attempt.dt, done.t_reached, 0,
-                            f"its local-error estimate reached {done.memory[M.LOCAL_ERROR]:.2f} times the tolerance"))
-            continue
-        if done.status == STATUS_OK or last:
-            break
-        # the premise broke, or the branch failed: a failure of the branch, not of the run
-        stopped.append((attempt.integrator, attempt.dt, done.t_reached, done.bound, done.reason))
-    if len(attempts) > 1:
-        done = dataclasses.replace(done, wall_time=wall_time,
-                                   choice=choice_statement(done.run.integrator, done.run.dt, stopped))
-    if done.status != STATUS_OK and throw:
-        raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
-    return done
-
-
-def _attempt(run: _Run, model, rng, local_error_guard: bool, held: float) -> _Simulated:
-    """Solve ``run`` once on ``model``; with ``held`` > 0 [m] the loop stops once the nuts have spent more than the
-    release budget below that interference (:mod:`twin.engine.solver_choice`)."""
-    generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
-        DEFAULT_NOISE_SEED if rng is None else rng)
-    n_steps = int(round(run.scene.duration / run.dt))
-    instruments = build_instruments(run.params.values(), run.scene.condition("room_temperature"),
-                                    instrument_levels(run.fidelity), generator, n_steps // run.position_every + 1,
-                                    run.dt,
-                                    torque_meter_refresh=run.fidelity.level("torque_meter_refresh") == "modelled")
-    output = np.full((n_steps // run.output_every + 1, N_SIGNALS), np.nan)
-    memory = np.zeros(N_MEMORY)
-    x = model.initial_state.copy()
-    start = time.perf_counter()
-    status, bound, t_reached, rows, reason, solver_stats = _solve(run, model, instruments, n_steps, x, output, memory,
-                                                                  local_error_guard, held)
-    return _Simulated(run, model, x, output[:rows], memory, status, bound, reason, t_reached, solver_stats,
-                      time.perf_counter() - start, rng, "")
 
 
 @dataclass(frozen=True)
@@ -252,7 +198,112 @@ class _Run:
     speed_every: int
     position_every: int
     output_every: int
-    fallback: _Run | None = None  # the automatic integrator's explicit branch; None for a named method
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.scene.duration / self.dt))
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """A run ready for the loop: its model, instruments and options."""
+
+    run: _Run
+    model: object
+    instruments: object
+    rng: object
+    tolerance: np.ndarray
+    record: bool
+
+
+@dataclass(frozen=True)
+class _Simulated:
+    """A finished run before packaging: the request, the model and the loop's buffers."""
+
+    run: _Run
+    model: object
+    x: np.ndarray
+    output: np.ndarray
+    memory: np.ndarray
+    status: int
+    bound: int
+    reason: str
+    t_reached: float
+    solver_stats: dict
+    wall_time: float
+    rng: object
+
+
+def _prepared(run: _Run, rng, local_error_guard: bool, record: bool) -> _Prepared:
+    """Build the run's model and instruments (the noise drawn from its generator)."""
+    generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
+        DEFAULT_NOISE_SEED if rng is None else rng)
+    model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
+    instruments = build_instruments(run.params.values(), run.scene.condition("room_temperature"), run.fidelity.levels,
+                                    generator, run.n_steps // run.position_every + 1, run.dt)
+    tolerance = local_error_tolerance() * (1.0 if local_error_guard else np.inf)
+    return _Prepared(run, model, instruments, rng, tolerance, record)
+
+
+def _solved(prepared: list[_Prepared], lanes: int = 1) -> list[_Simulated]:
+    """Solve every prepared run: the reference path one by one, the compiled loop in groups of up to ``lanes``
+    runs that share a configuration. In the order given."""
+    done: list[_Simulated | None] = [None] * len(prepared)
+    groups: dict[tuple, list[int]] = defaultdict(list)
+    for k, p in enumerate(prepared):
+        if p.run.reference:
+            done[k] = _reference(p)
+        else:
+            run = p.run
+            groups[(group_key(p.model), run.integrator, run.dt, run.n_steps, run.speed_every, run.position_every,
+                    run.output_every if p.record else 0, p.tolerance.tobytes())].append(k)
+    for members in groups.values():
+        for first in range(0, len(members), lanes):
+            chunk = members[first:first + lanes]
+            for k, simulated in zip(chunk, _compiled([prepared[k] for k in chunk]), strict=True):
+                done[k] = simulated
+    return done
+
+
+def _compiled(prepared: list[_Prepared]) -> list[_Simulated]:
+    """One lane group on the compiled loop."""
+    run = prepared[0].run
+    start = time.perf_counter()
+    solved = solve_group([p.model for p in prepared], [p.instruments for p in prepared], n_steps=run.n_steps,
+                         dt=run.dt, speed_every=run.speed_every, position_every=run.position_every,
+                         output_every=run.output_every if prepared[0].record else 0,
+                         jacobian_every=run.position_every, method=INTEGRATORS[run.integrator],
+                         tolerance=prepared[0].tolerance)
+    wall_time = (time.perf_counter() - start) / len(prepared)  # a lane's share of the group's wall time
+    out = []
+    for lane, p in enumerate(prepared):
+        rows = int(solved.rows_written[lane])
+        bound = int(solved.bound[lane])
+        out.append(_Simulated(p.run, p.model, solved.state[:, lane].copy(), solved.output[:rows, :, lane],
+                              solved.memory[:, lane].copy(), int(solved.status[lane]), bound, BOUND_REASONS[bound],
+                              int(solved.steps_done[lane]) * p.run.dt, {}, wall_time, p.rng))
+    return out
+
+
+def _reference(p: _Prepared) -> _Simulated:
+    """One run on the adaptive reference path (scipy's solve_ivp)."""
+    run, model = p.run, p.model
+    n_speed = int(round(run.scene.duration / run.speed_sample_time))
+    output = np.full((n_speed // run.output_every + 1, N_SIGNALS), np.nan)
+    memory = np.zeros(N_MEMORY)
+    x = model.initial_state.copy()
+    start = time.perf_counter()
+    status, bound, t_reached, rows, reason, solver_stats = run_reference(
+        model, p.instruments, n_speed, run.speed_sample_time, run.position_every, run.output_every, output, memory,
+        REFERENCE_METHODS[run.integrator], run.rtol, x)
+    return _Simulated(run, model, x, output[:rows], memory, status, bound, reason or BOUND_REASONS[bound], t_reached,
+                      solver_stats, time.perf_counter() - start, p.rng)
+
+
+def _thrown(done: _Simulated, throw: bool) -> _Simulated:
+    if done.status != STATUS_OK and throw:
+        raise SimulationFailed(STATUS_TEXT[done.status], done.reason, done.t_reached)
+    return done
 
 
 def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol) -> _Run:
@@ -264,28 +315,16 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
         scene = scene.with_duration(duration)
     problems: list[str] = []
     reference = integrator in REFERENCE_METHODS
-    auto = integrator == AUTO
-    if integrator not in INTEGRATORS and not (reference or auto):
-        problems.append(f"integrator: {integrator!r} is not one of "
-                        f"{', '.join([AUTO, *INTEGRATORS, *REFERENCE_METHODS])}")
-    if auto and dt is not None:
-        problems.append(f"dt: {dt!r} with integrator 'auto', which chooses its own steps ({IMPLICIT_METHOD} at the "
-                        f"drive period, {DEFAULT_INTEGRATOR} at the drive period or at {DEFAULT_DT * 1e6:g} us); leave "
-                        "dt unset or name a method")
-    if auto and output_dt == 0:
-        problems.append("output_dt: 0 (every step) with integrator 'auto', whose step depends on the run; give a "
-                        "spacing, e.g. 1e-3 s")
+    if integrator not in INTEGRATORS and not reference:
+        problems.append(f"integrator: {integrator!r} is not one of {', '.join([*INTEGRATORS, *REFERENCE_METHODS])}")
     speed_ts = params.value("drive.speed_loop_sample_time")
-    method = IMPLICIT_METHOD if auto else integrator
-    if dt is None or auto:
-        dt = speed_ts if auto else DEFAULT_DT
     if not (isinstance(rtol, float) and 1e-14 <= rtol < 1e-2):
         problems.append(f"rtol: {rtol!r} must be a float in [1e-14, 1e-2)")
     if curvature not in CURVATURE_FORMULAS:
         problems.append(f"curvature: {curvature!r} is not one of {', '.join(CURVATURE_FORMULAS)}")
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
+    if dt is not None and not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
         problems.append(f"dt: {dt!r} must be a step in (0, 1e-3] s")
-        dt = 1e-3
+        dt = DEFAULT_DT
     resolved = None
     if curvature in CURVATURE_FORMULAS:
         try:
@@ -294,43 +333,22 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
             problems += exc.problems
     if rng is not None and not isinstance(rng, (np.random.Generator, int)):
         problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
+    if integrator == "imex_euler" and resolved is not None and resolved.level("screw_axial") != "dynamic":
+        problems.append("integrator: 'imex_euler' integrates the screw's axial mode implicitly and needs "
+                        "fidelity screw_axial = 'dynamic' (the resolved level is "
+                        f"{resolved.level('screw_axial')!r}); pass fidelity={{'screw_axial': 'dynamic'}}")
+    if dt is None:
+        dt = default_step(integrator, resolved, speed_ts) if resolved is not None else DEFAULT_DT
     if reference:
         dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
-
-    def stepped(name: str, step: float, fallback: _Run | None = None) -> _Run:
-        speed_every = _steps_per(speed_ts, step, "speed-loop period", problems)
-        position_every = _steps_per(params.value("controller.position_loop_sample_time"), step,
-                                    "position-loop period", problems)
-        output_every = _steps_per(output_dt, step, "output spacing output_dt", problems) if output_dt > 0 else 1
-        return _Run(scene, params, resolved, name, reference, step, rtol, curvature, speed_ts, speed_every,
-                    position_every, output_every, fallback)
-
-    explicit = stepped(DEFAULT_INTEGRATOR, DEFAULT_DT) if auto else None
-    if auto and speed_ts > DEFAULT_DT:  # the explicit branch tries the drive period first (solver_choice)
-        explicit = stepped(DEFAULT_INTEGRATOR, speed_ts, explicit)
-    run = stepped(method, dt, explicit)
+    speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
+    position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period",
+                                problems)
+    output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
-        raise OptionError(list(dict.fromkeys(problems)))  # the two branches of 'auto' may repeat a problem
-    return run
-
-
-def _solve(run: _Run, model, instruments, n_steps: int, x: np.ndarray, output: np.ndarray, memory: np.ndarray,
-           local_error_guard: bool, held: float) -> tuple[int, int, float, int, str, dict]:
-    """Integrate on the compiled loop, or on the adaptive reference path; ``x``, ``output`` and ``memory`` are
-    filled in place. Returns ``(status, bound code, t_reached, rows of output written, failure reason, solver
-    statistics)``."""
-    if run.reference:
-        status, bound, t_reached, rows, reason, solver_stats = run_reference(
-            model, instruments, n_steps, run.speed_sample_time, run.position_every, run.output_every, output, memory,
-            REFERENCE_METHODS[run.integrator], run.rtol, x)
-        return status, bound, t_reached, rows, reason or BOUND_REASONS[bound], solver_stats
-    status, bound, steps_done, rows = run_loop(
-        x, model.constants, model.position_table, model.force_table, model.stiffness_poly, model.active,
-        model.pairs, n_steps, run.dt, run.speed_every, run.position_every, run.output_every, run.position_every,
-        INTEGRATORS[run.integrator], instruments.parameters, instruments.levels, instruments.lookback,
-        instruments.noise, memory, output, local_error_tolerance() * (1.0 if local_error_guard else np.inf), held,
-        round(RELEASE_BUDGET / run.dt))
-    return status, bound, steps_done * run.dt, rows, BOUND_REASONS[bound], {}
+        raise OptionError(list(dict.fromkeys(problems)))
+    return _Run(scene, params, resolved, integrator, reference, dt, rtol, curvature, speed_ts, speed_every,
+                position_every, output_every)
 
 
 def _features(done: _Simulated) -> dict[str, float]:
@@ -387,7 +405,6 @@ def _package(done: _Simulated) -> xr.Dataset:
             "screw_lead": params.value("ball_screw.lead"),
             "integrator": run.integrator,
             "dt": dt,
-            **({"integrator_choice": done.choice} if done.choice else {}),
             **({"rtol": run.rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if run.reference else {}),
             "curvature": run.curvature,
             "fidelity": resolved.summary(),

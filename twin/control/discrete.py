@@ -2,8 +2,10 @@
 
 import numba
 
+from numerics.jit import SCALAR
 
-@numba.njit(cache=True)
+
+@numba.njit(**SCALAR)
 def pi_step(error, integral, kp, ki, sample_time, limit):
     """One sample of a PI controller with output saturation and conditional-integration anti-windup.
 

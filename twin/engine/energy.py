@@ -5,47 +5,52 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import quad
 
+from twin.engine.codes import CONTACT
 from twin.engine.model import contact_force
-from twin.engine.plant import nut_relative_position, screw_axial_stiffness
+from twin.engine.plant import W, internal_forces, work_rows
 from twin.layout import K, S
 from twin.physics.coupling import elasto_backlash_energy
 
 
-def contact_energy(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
+def contact_energy(c: np.ndarray, contact_model: int, relative_position: float) -> float:
     """Elastic energy of one nut's contact: the integral of its static axial force over ``dx`` [J]."""
     half_gap = 0.5 * c[K.BACKLASH]
     if abs(relative_position) <= half_gap:
         return 0.0
     side = np.sign(relative_position)
-    value, _ = quad(lambda d: side * contact_force(c, stiffness_poly, side * d), half_gap, abs(relative_position),
+    value, _ = quad(lambda d: side * contact_force(c, contact_model, side * d), half_gap, abs(relative_position),
                     epsabs=1e-14, epsrel=1e-11, limit=200)
     return value
 
 
-def mechanical_energy(x: np.ndarray, c: np.ndarray, stiffness_poly: np.ndarray) -> float:
-    """Kinetic plus elastic energy of the drivetrain, screw, nuts and preload spring [J].
+def mechanical_energy(x: np.ndarray, model) -> float:
+    """Kinetic plus elastic energy of the drivetrain, screw, nuts and preload spring of one run [J].
 
     Covers every spring of :func:`twin.engine.plant.rhs` (torsional elasto-backlash,
     screw axial support and shaft twist, ball-groove contacts, guides' roll stiffness, preload set).
     The preload damping/saturation and the external force are not included:
-    use it with those inactive.
+    use it with those inactive. ``x`` is the run's full state.
     """
+    c = model.constants
+    lane_x = np.array(x, dtype=float).reshape(-1, 1)
+    w = work_rows(1)
+    internal_forces(0.0, lane_x, c.reshape(-1, 1), w, 1, model.levels, model.force_table)
     kinetic = 0.5 * (
         c[K.J_MOTOR_SIDE] * x[S.REDUCER_SPEED] ** 2
         + c[K.J_SCREW_SIDE] * x[S.SCREW_SPEED] ** 2
         + c[K.SCREW_MASS] * x[S.SCREW_AXIAL_SPEED] ** 2
-        + c[K.MASS_NUT1] * x[S.NUT1_SPEED] ** 2
-        + c[K.MASS_NUT2] * x[S.NUT2_SPEED] ** 2
+        + c[K.NUT1_MASS] * x[S.NUT1_SPEED] ** 2
+        + c[K.NUT2_MASS] * x[S.NUT2_SPEED] ** 2
         + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
     )
-    axial_stiffness, _ = screw_axial_stiffness(x, c)
     compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     elastic = (
         elasto_backlash_energy(x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], c[K.TORSION_STIFFNESS], c[K.REDUCER_BACKLASH])
-        + 0.5 * axial_stiffness * x[S.SCREW_AXIAL] ** 2
+        + 0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
         + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
         + 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
     )
+    contact_model = int(model.levels[CONTACT])
     for nut in (0, 1):
-        elastic += contact_energy(c, stiffness_poly, nut_relative_position(x, c, nut))
+        elastic += contact_energy(c, contact_model, w[W.NUT_DX + nut, 0])
     return float(kinetic + elastic)

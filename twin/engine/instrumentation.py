@@ -1,16 +1,17 @@
-"""The bench's instruments inside the compiled loop: what the controller and the DAQ read.
+"""The bench's instruments inside the compiled loop, over a group of lanes: what the controller and the DAQ read.
 
-Wires the measurement models of :mod:`sensors` to the bench state. Every
-instrument has a fidelity level (Sec. 9.3, Table 9.5):
+Wires the measurement models of :mod:`sensors` (their lane form: ``(state, params, l, ...)``, branch-free) to the
+bench state. Every instrument has a fidelity level (Sec. 9.3, Table 9.5; the ``encoders`` and ``analog_sensors``
+subsystems of :mod:`twin.levels`, shared by a group):
 
-``ideal`` (0)
+``ideal``
     the true signal.
-``quantized`` (1)
+``quantized``
     resolutions, converters and refresh/filters, no errors and no noise.
-``full`` (2)
-    edge-accurate encoders with their phase/asymmetry/precision errors, the
-    sensitivity, offset and temperature errors of the analog channels, and the
-    electrical noise of Table 9.5 drawn from the caller's Generator.
+``full``
+    edge-accurate encoders with their phase/asymmetry/precision errors and mounting phases, the sensitivity,
+    offset and temperature errors of the analog channels, and the electrical noise of Table 9.5 drawn from the
+    run's Generator.
 
 Instruments and what they measure:
 
@@ -25,6 +26,11 @@ preload load cell        preload force               acquisition
 load cell                external force              force loop, acquisition
 current monitor          Hall-sensor current         acquisition
 =======================  ==========================  ==========================================
+
+A group's instruments are two arrays: ``parameters[instrument, row, lane]`` and ``states[instrument, row, lane]``
+(each instrument's rows in its sensor module's layout, ``ENC_*``, ``AN_*``, ``AS_*``, ``RES_*``), and the pre-drawn
+noise ``noise[sample, instrument, lane]``. The encoders and the analog channels are stepped after every
+integration step (every lane computes its count and its channels: a select is cheaper than a branch here).
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from numerics.jit import KERNEL, SCALAR
 from sensors.acquisition import draw_uniform_noise
 from sensors.analog import (
     AN_GAIN,
@@ -42,11 +49,12 @@ from sensors.analog import (
     AN_OFFSET,
     AN_REFRESH_PERIOD,
     AN_SIZE,
-    AN_TAU,
     AS_SIZE,
     analog_init,
     analog_parameters,
     analog_read,
+    analog_step,
+    with_integration_step,
 )
 from sensors.encoder import (
     ENC_SIZE,
@@ -54,14 +62,17 @@ from sensors.encoder import (
     encoder_init,
     encoder_reading,
     encoder_speed,
+    encoder_step,
     linear_encoder_parameters,
     torque_meter_encoder_parameters,
 )
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
-from twin.engine.plant import sensed_current
-from twin.layout import K, S
+from twin.engine.codes import ANALOG_SENSORS, CURRENT_LOOP, ENCODERS
+from twin.engine.plant import W, sensed_current
+from twin.layout import K, M, S
+from twin.levels import SUBSYSTEMS
 
 LINEAR_ENCODER = 0
 TORQUE_METER_ENCODER = 1
@@ -74,39 +85,28 @@ INSTRUMENTS = ("linear_encoder", "torque_meter_encoder", "resolver", "torque_met
                "load_cell", "current_monitor")
 N_INSTRUMENTS = len(INSTRUMENTS)
 ANALOG = (TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR)
-LEVELS = {"ideal": 0, "quantized": 1, "full": 2}
 ROW = max(ENC_SIZE, AN_SIZE, RES_SIZE)
 STATE_ROW = max(ENC_STATE_SIZE, AS_SIZE)
+#: Readings an acquisition instant keeps (layout twin.layout.M, from M.SLED on).
+N_MEASURED = M.EXTERNAL - M.SLED + 1
 
+#: Level codes of the instrument subsystems (twin.levels: full first) and the sensors' own fidelity numbers.
+FULL, QUANTIZED, IDEAL = (SUBSYSTEMS["encoders"].level_names.index(name) for name in ("full", "quantized", "ideal"))
+SENSOR_FIDELITY = {"full": 2, "quantized": 1, "ideal": 0}
+if SUBSYSTEMS["analog_sensors"].level_names != SUBSYSTEMS["encoders"].level_names:
+    raise ImportError("twin.engine.instrumentation reads the encoders' and the analog sensors' levels alike")
 
 
 @dataclass(frozen=True)
 class Instruments:
-    """Packed parameters (one row per instrument), levels and pre-drawn noise for one run."""
+    """One run's instruments: packed parameters (one row block per instrument) and pre-drawn noise."""
 
-    parameters: np.ndarray   # (len(INSTRUMENTS), ROW)
-    levels: np.ndarray       # (len(INSTRUMENTS),) int codes
-    lookback: np.ndarray     # (len(INSTRUMENTS),) steps before an acquisition in which a channel must be stepped
-    noise: np.ndarray        # (n_samples, len(INSTRUMENTS)) [V]; zero columns for digital instruments
-    names: dict[str, str]    # instrument -> level name
-
-
-# Fidelity subsystem (twin.fidelity) -> the instruments whose level it sets.
-INSTRUMENT_GROUPS = {
-    "encoders": ("linear_encoder", "torque_meter_encoder", "resolver"),
-    "analog_sensors": ("torque_meter", "preload_load_cell", "load_cell", "current_monitor"),
-}
-
-
-def instrument_levels(fidelity) -> dict[str, str]:
-    """Instrument -> level name, from the ``encoders`` and ``analog_sensors`` levels of a
-    :class:`twin.fidelity.Fidelity`."""
-    return {name: fidelity.level(group) for group, names in INSTRUMENT_GROUPS.items() for name in names}
+    parameters: np.ndarray   # (N_INSTRUMENTS, ROW)
+    noise: np.ndarray        # (n_samples, N_INSTRUMENTS) [V]; zero columns for digital instruments
 
 
 def build_instruments(p: Mapping[str, float], room_temperature: float, levels: Mapping[str, str],
-                      rng: np.random.Generator, n_samples: int, dt: float,
-                      torque_meter_refresh: bool = True) -> Instruments:
+                      rng: np.random.Generator, n_samples: int, dt: float) -> Instruments:
     """Pack the instruments of one run (parameters from the ``sensors`` group of ``p``).
 
     Parameters
@@ -116,144 +116,145 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     room_temperature : float
         Scene room temperature [K]: drives every temperature effect.
     levels : mapping
-        Instrument -> level name (see :func:`instrument_levels`).
+        The run's fidelity levels (``encoders``, ``analog_sensors``, ``torque_meter_refresh``).
     rng : numpy.random.Generator
         Source of the electrical noise (one column per analog channel, drawn in a fixed order).
     n_samples : int
         Number of acquisition samples of the run.
     dt : float
-        Integration step [s] (sets how many steps before a reading a memoryless channel is stepped).
-    torque_meter_refresh : bool
-        Model the torque meter's 1 kHz sample-and-hold (True) or read it continuously.
+        Integration step [s] (the analog conditioners' lag coefficients are computed for it).
     """
-    codes = np.array([LEVELS[levels[name]] for name in INSTRUMENTS], dtype=np.int64)
-    rows = np.zeros((len(INSTRUMENTS), ROW))
-    rows[LINEAR_ENCODER, :ENC_SIZE] = linear_encoder_parameters(p, fidelity=int(codes[LINEAR_ENCODER]))
-    rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(
-        p, fidelity=int(codes[TORQUE_METER_ENCODER]))
+    encoders = SENSOR_FIDELITY[levels["encoders"]]
+    analog = levels["analog_sensors"]
+    rows = np.zeros((N_INSTRUMENTS, ROW))
+    rows[LINEAR_ENCODER, :ENC_SIZE] = linear_encoder_parameters(p, fidelity=encoders)
+    rows[TORQUE_METER_ENCODER, :ENC_SIZE] = torque_meter_encoder_parameters(p, fidelity=encoders)
     rows[RESOLVER, :RES_SIZE] = resolver_parameters(p)
     rows[TORQUE_METER, :AN_SIZE] = torque_meter_parameters(p, room_temperature=room_temperature)
-    if not torque_meter_refresh:
+    if levels["torque_meter_refresh"] == "ideal":
         rows[TORQUE_METER, AN_REFRESH_PERIOD] = 0.0
     rows[PRELOAD_CELL, :AN_SIZE] = preload_load_cell_parameters(p, room_temperature=room_temperature)
     rows[LOAD_CELL, :AN_SIZE] = load_cell_parameters(p, room_temperature=room_temperature)
     rows[CURRENT_MONITOR, :AN_SIZE] = analog_parameters(
         full_scale=p["motor.max_current"], output_full_scale=p["sensors.current_monitor_full_scale"], gain=1.0,
-        offset=0.0,
-        tau=0.0, refresh_period=0.0, output_bits=0.0, daq_full_scale=p["sensors.daq_full_scale"],
+        offset=0.0, tau=0.0, refresh_period=0.0, output_bits=0.0, daq_full_scale=p["sensors.daq_full_scale"],
         daq_bits=p["sensors.daq_bits"],
         noise_half_width=p["sensors.electrical_noise_half_width"] * p["sensors.current_monitor_full_scale"])
-    if codes[RESOLVER] < LEVELS["full"]:
+    if encoders < SENSOR_FIDELITY["full"]:
         rows[RESOLVER, RES_ACCURACY] = 0.0
         rows[RESOLVER, RES_OFFSET] = 0.0
-    noise = np.zeros((n_samples, len(INSTRUMENTS)))
+    noise = np.zeros((n_samples, N_INSTRUMENTS))
     for channel in ANALOG:
-        if codes[channel] < LEVELS["full"]:
+        if analog != "full":
             rows[channel, AN_GAIN] = 1.0
             rows[channel, AN_OFFSET] = 0.0
             rows[channel, AN_NOISE_HALF_WIDTH] = 0.0
+        rows[channel, :AN_SIZE] = with_integration_step(rows[channel, :AN_SIZE], dt)
         noise[:, channel] = draw_uniform_noise(rng, n_samples, rows[channel, AN_NOISE_HALF_WIDTH])
-    return Instruments(rows, codes, _lookback(rows, dt), noise, dict(levels))
+    return Instruments(rows, noise)
 
 
-def _lookback(rows: np.ndarray, dt: float) -> np.ndarray:
-    """Steps before each acquisition instant in which an instrument must be stepped.
-
-    Encoders and filtered channels carry state from step to step: every step.
-    A channel without a filter only needs its value at the last refresh before
-    the reading, which falls within the last ``ceil(refresh / dt)`` steps; one
-    more step gives the interpolation its start value. Skipping the other steps
-    gives the same readings at a fraction of the cost (when a refresh instant
-    ties with the end of a step, floating-point rounding of the accumulated
-    refresh time decides which side it falls on, dense or lazy alike).
-    """
-    every_step = np.iinfo(np.int64).max
-    lookback = np.full(len(INSTRUMENTS), every_step, dtype=np.int64)
-    for channel in ANALOG:
-        if rows[channel, AN_TAU] == 0.0:
-            lookback[channel] = int(np.ceil(rows[channel, AN_REFRESH_PERIOD] / dt - 1e-9)) + 1
-    return lookback
-
-
-@numba.njit(cache=True)
-def sled_measurand(x, c):
+@numba.njit(**SCALAR)
+def sled_measurand(x, c, lane):
     """Position on the linear encoder's scale [m]."""
-    return c[K.ENCODER_SCALE_ORIGIN] + x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
+    return c[K.ENCODER_SCALE_ORIGIN, lane] + x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
 
 
-@numba.njit(cache=True)
-def screw_angle_measurand(x, c):
+@numba.njit(**SCALAR)
+def screw_angle_measurand(x, c, lane):
     """Screw angle seen by the torque meter's encoder [rad]."""
-    return x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]
+    return x[S.SCREW_ANGLE, lane] - c[K.SCREW_ANGLE_ZERO, lane]
 
 
-@numba.njit(cache=True)
-def instruments_init(state, rows, x, c, t, torque, preload, external):
-    """Zero the encoders and settle the analog channels on the initial state."""
-    encoder_init(state[LINEAR_ENCODER], sled_measurand(x, c), t, rows[LINEAR_ENCODER])
-    encoder_init(state[TORQUE_METER_ENCODER], screw_angle_measurand(x, c), t, rows[TORQUE_METER_ENCODER])
-    analog_init(state[TORQUE_METER], torque, t, rows[TORQUE_METER])
-    analog_init(state[PRELOAD_CELL], preload, t, rows[PRELOAD_CELL])
-    analog_init(state[LOAD_CELL], external, t, rows[LOAD_CELL])
-    analog_init(state[CURRENT_MONITOR], sensed_current(x, c), t, rows[CURRENT_MONITOR])
+@numba.njit(**SCALAR)
+def _analog_measurand(x, c, w, lane, channel, current_loop):
+    """What analog channel ``channel`` measures in lane ``lane``, from the work rows of
+    :func:`twin.engine.plant.measurands` (or :func:`~twin.engine.plant.internal_forces`)."""
+    if channel == TORQUE_METER:
+        return w[W.TORQUE, lane]
+    if channel == PRELOAD_CELL:
+        return w[W.PRELOAD, lane]
+    if channel == LOAD_CELL:
+        return w[W.EXTERNAL, lane]
+    return sensed_current(x, c, lane, current_loop)
 
 
-@numba.njit(cache=True)
-def analog_due(level, lookback, steps_to_sample, tau, refresh_period, next_refresh, t, dt):
-    """Whether an analog channel (its ``level``, :func:`_lookback` entry, ``AN_TAU``, ``AN_REFRESH_PERIOD`` and
-    ``AS_NEXT_REFRESH``) must be stepped at the end ``t`` of a step of ``dt``, ``steps_to_sample`` steps
-    before the next acquisition instant (0 at the instant itself).
-
-    Dense stepping gives the same readings as: the steps in the channel's look-back window
-    (:func:`_lookback`) and, for a channel with a sample-and-hold output and no filter, of those only
-    the step that contains a refresh instant and the step before it (which gives the
-    interpolation its start value); between refreshes the output is held whatever the input.
-    """
-    if level == 0 or steps_to_sample >= lookback:
-        return False
-    if tau > 0.0 or refresh_period == 0.0:
-        return True
-    # The next step ends at about t + dt: half a step of margin absorbs the rounding of both clocks.
-    return t + 1.5 * dt >= next_refresh
+@numba.njit(**KERNEL)
+def instruments_init(t, x, c, w, levels, parameters, states):
+    """Zero the encoders and settle the analog channels on the initial state of every lane (``w`` holds the
+    initial forces)."""
+    lanes = x.shape[1]
+    for lane in range(lanes):
+        encoder_init(states[LINEAR_ENCODER], parameters[LINEAR_ENCODER], lane, sled_measurand(x, c, lane), t)
+        encoder_init(states[TORQUE_METER_ENCODER], parameters[TORQUE_METER_ENCODER], lane,
+                     screw_angle_measurand(x, c, lane), t)
+        for channel in ANALOG:
+            analog_init(states[channel], parameters[channel], lane,
+                        _analog_measurand(x, c, w, lane, channel, levels[CURRENT_LOOP]), t)
 
 
-@numba.njit(cache=True)
-def linear_encoder_position(state, rows, levels, x, c):
-    """Sled position read by the linear encoder, zeroed at the start [m]."""
-    if levels[LINEAR_ENCODER] == 0:
-        return x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
-    return encoder_reading(state[LINEAR_ENCODER], rows[LINEAR_ENCODER])
+@numba.njit(**KERNEL)
+def _encoders_advance(t, x, c, parameters, states, lanes):
+    linear, linear_state = parameters[LINEAR_ENCODER], states[LINEAR_ENCODER]
+    for lane in range(lanes):
+        encoder_step(linear_state, linear, lane, sled_measurand(x, c, lane), t)
+    rotary, rotary_state = parameters[TORQUE_METER_ENCODER], states[TORQUE_METER_ENCODER]
+    for lane in range(lanes):
+        encoder_step(rotary_state, rotary, lane, screw_angle_measurand(x, c, lane), t)
 
 
-@numba.njit(cache=True)
-def screw_angle_measured(state, rows, levels, x, c):
-    """Screw angle read by the torque meter's encoder, zeroed at the start [rad]."""
-    if levels[TORQUE_METER_ENCODER] == 0:
-        return x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]
-    return encoder_reading(state[TORQUE_METER_ENCODER], rows[TORQUE_METER_ENCODER])
+@numba.njit(**KERNEL)
+def _channel_advance(t, x, c, w, parameters, states, lanes, channel, current_loop):
+    p, state = parameters[channel], states[channel]
+    for lane in range(lanes):
+        analog_step(state, p, lane, _analog_measurand(x, c, w, lane, channel, current_loop), t)
 
 
-@numba.njit(cache=True)
-def sled_speed_measured(state, rows, levels, x, t):
-    """Sled speed by the period/frequency method of the linear encoder [m/s]."""
-    if levels[LINEAR_ENCODER] == 0:
-        return x[S.NUT1_SPEED]
-    return encoder_speed(state[LINEAR_ENCODER], t, rows[LINEAR_ENCODER])
+@numba.njit(**KERNEL)
+def instruments_advance(t, x, c, w, levels, parameters, states):
+    """Advance every lane's instruments to time ``t``, the end of an integration step (``w`` holds the measurands
+    at ``t``: :func:`twin.engine.plant.measurands`)."""
+    lanes = x.shape[1]
+    if levels[ENCODERS] != IDEAL:
+        _encoders_advance(t, x, c, parameters, states, lanes)
+    if levels[ANALOG_SENSORS] != IDEAL:
+        for channel in ANALOG:
+            _channel_advance(t, x, c, w, parameters, states, lanes, channel, levels[CURRENT_LOOP])
 
 
-@numba.njit(cache=True)
-def motor_angle_measured(rows, levels, x, c):
-    """Motor angle read by the resolver [rad]."""
-    angle = c[K.RATIO] * x[S.REDUCER_ANGLE]
-    if levels[RESOLVER] == 0:
+@numba.njit(**SCALAR)
+def motor_angle_measured(x, c, lane, levels, parameters):
+    """Motor angle read by the resolver in lane ``lane`` [rad] (the true one at the ideal level)."""
+    angle = c[K.RATIO, lane] * x[S.REDUCER_ANGLE, lane]
+    if levels[ENCODERS] == IDEAL:
         return angle
-    return resolver_angle(angle, rows[RESOLVER])
+    return resolver_angle(parameters[RESOLVER], lane, angle)
 
 
-@numba.njit(cache=True)
-def analog_measured(state, rows, levels, channel, true_value, noise):
-    """DAQ reading of an analog channel (true value at the ideal level)."""
-    if levels[channel] == 0:
-        return true_value
-    return analog_read(state[channel], noise, rows[channel])
-
+@numba.njit(**SCALAR)
+def acquire(t, x, c, w, lane, levels, memory, parameters, states, noise, n):
+    """Read every channel of lane ``lane`` at an acquisition instant (sample ``n``) into its memory rows
+    ``M.SLED`` ... ``M.EXTERNAL`` (``w`` holds this instant's forces)."""
+    encoders_ideal = levels[ENCODERS] == IDEAL
+    if encoders_ideal:
+        memory[M.SLED, lane] = x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
+        memory[M.SCREW_ANGLE, lane] = x[S.SCREW_ANGLE, lane] - c[K.SCREW_ANGLE_ZERO, lane]
+        memory[M.SLED_SPEED, lane] = x[S.NUT1_SPEED, lane]
+    else:
+        memory[M.SLED, lane] = encoder_reading(states[LINEAR_ENCODER], parameters[LINEAR_ENCODER], lane)
+        memory[M.SCREW_ANGLE, lane] = encoder_reading(states[TORQUE_METER_ENCODER], parameters[TORQUE_METER_ENCODER],
+                                                      lane)
+        memory[M.SLED_SPEED, lane] = encoder_speed(states[LINEAR_ENCODER], parameters[LINEAR_ENCODER], lane, t)
+    analog_ideal = levels[ANALOG_SENSORS] == IDEAL
+    for channel in ANALOG:
+        true_value = _analog_measurand(x, c, w, lane, channel, levels[CURRENT_LOOP])
+        reading = true_value if analog_ideal else analog_read(states[channel], parameters[channel], lane,
+                                                              noise[n, channel, lane])
+        if channel == TORQUE_METER:
+            memory[M.TORQUE, lane] = reading
+        elif channel == PRELOAD_CELL:
+            memory[M.PRELOAD, lane] = reading
+        elif channel == LOAD_CELL:
+            memory[M.EXTERNAL, lane] = reading
+        else:
+            memory[M.CURRENT, lane] = reading

@@ -1,27 +1,31 @@
-"""Fixed-step integrators for the compiled loop.
+"""Fixed-step integrators of the compiled loop, over a group of lanes.
 
-Each advances the plant of :mod:`twin.engine.plant` by one step ``h`` with the
-controller outputs held (zero-order hold). Selected by integer code so the
-compiled loop can branch without Python objects. Only the states listed in
-``active`` are integrated (the model's fidelity removes the others); the rest
-of ``x`` holds fixed values the right-hand side reads.
+Each advances the plant of :mod:`twin.engine.plant` by one step ``h`` with the controller outputs held
+(zero-order hold). Selected by integer code so the compiled loop can branch without Python objects. Only the
+states listed in ``active`` are integrated (the model's fidelity removes the others); the rest of ``x`` holds
+values the right-hand side reads (or, at the quasi-static screw-axial level, writes).
+
+Every array is ``[row, lane]`` (:mod:`twin.engine.plant`). RK4 and the semi-implicit Euler step update each lane
+with loops over the lanes (vectorised); the W-method and the linearly implicit step solve a small linear system
+per lane, lane after lane. Either way a lane's numbers depend only on its own rows.
 """
 
 import numba
 import numpy as np
 
+from numerics.jit import KERNEL
 from numerics.linalg import inverse
-from twin.engine.plant import (
+from twin.engine.codes import CURRENT_LOOP, CURRENT_LOOP_FULL, PNEUMATICS, PNEUMATICS_FULL
+from twin.engine.implicit import (
     CURRENT_LOOP_STATES,
     DOF_POSITIONS,
     N_DOFS,
     current_loop_jacobian,
     dof_active,
-    held_input_propagators,
-    rhs,
     stiff_velocity_system,
 )
-from twin.layout import PNEUMATICS_FULL, K, S, U
+from twin.engine.plant import N_WORK, held_input_propagators, rhs
+from twin.layout import K, S
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
@@ -32,93 +36,145 @@ INTEGRATORS = {"rk4": RK4, "semi_implicit_euler": SEMI_IMPLICIT_EULER, "rosenbro
 ORDER = {"rk4": 4, "semi_implicit_euler": 1, "rosenbrock_w2": 2, "imex_euler": 1}
 EXPLICIT = ("rk4", "semi_implicit_euler")
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
-WORK_VECTORS = 6  # scratch vectors in front of the W-method's matrix in the work array
+#: Scratch state vectors of a step (RK4's four slopes and stage state, the W-method's, the step-doubling check's).
+WORK_VECTORS = 8
+#: Rows of the per-lane cache of the held-input propagators (:func:`twin.engine.plant.held_input_propagators`).
+CACHE_ROWS = 9
 
 
-def work_array(n_states: int) -> np.ndarray:
-    """Scratch space of :func:`step`: ``WORK_VECTORS`` vectors, then the W-method's ``n x n`` matrix."""
-    return np.zeros((WORK_VECTORS + n_states, n_states))
+class Workspace:
+    """The scratch arrays of a group of ``lanes`` lanes of ``n_states`` states (allocated once per run)."""
+
+    def __init__(self, n_states: int, lanes: int):
+        self.vectors = np.zeros((WORK_VECTORS, n_states, lanes))
+        self.work = np.zeros((N_WORK, lanes))
+        self.matrices = np.zeros((n_states, n_states, lanes))   # the W-method's (I - gamma h J)^-1, per lane
+        self.cache = np.zeros((CACHE_ROWS, lanes))
+        self.small = np.zeros((N_DOFS + 5, N_DOFS))              # one lane's implicit systems at a time
+
+    def arrays(self) -> tuple:
+        return self.vectors, self.work, self.matrices, self.cache, self.small
 
 
-@numba.njit(cache=True)
-def rk4_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
+@numba.njit(**KERNEL)
+def _stage(x, k, h, out, active):
+    """``out[active] = x[active] + h k[active]`` in every lane (the other rows of ``out`` are left as they are)."""
+    lanes = x.shape[1]
+    for j in active:
+        for lane in range(lanes):
+            out[j, lane] = x[j, lane] + h * k[j, lane]
+
+
+@numba.njit(**KERNEL)
+def _rk4_update(x, k1, k2, k3, k4, h, active):
+    lanes = x.shape[1]
+    for j in active:
+        for lane in range(lanes):
+            x[j, lane] += h / 6.0 * (k1[j, lane] + 2.0 * k2[j, lane] + 2.0 * k3[j, lane] + k4[j, lane])
+
+
+@numba.njit(**KERNEL)
+def _copy(source, target):
+    for j in range(source.shape[0]):
+        for lane in range(source.shape[1]):
+            target[j, lane] = source[j, lane]
+
+
+@numba.njit(**KERNEL)
+def rk4_step(t, x, h, c, u, levels, force_table, vectors, w, active):
     """Classical 4th-order Runge-Kutta (Hairer, Norsett & Wanner, *Solving ODEs I*, Table 1.2).
 
-    ``work`` is the scratch array of :func:`work_array`: k1..k4 and the stage state.
+    ``vectors[0:4]`` receive k1..k4, ``vectors[4]`` the stage state. The stage state starts as a copy of ``x``
+    (the rows the fidelity holds, and at the quasi-static screw-axial level the balance's warm start, carried from
+    stage to stage).
     """
-    k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
-    xs[:] = x
-    rhs(t, x, c, u, force_table, stiffness_poly, k1)
-    for j in active:
-        xs[j] = x[j] + 0.5 * h * k1[j]
-    rhs(t + 0.5 * h, xs, c, u, force_table, stiffness_poly, k2)
-    for j in active:
-        xs[j] = x[j] + 0.5 * h * k2[j]
-    rhs(t + 0.5 * h, xs, c, u, force_table, stiffness_poly, k3)
-    for j in active:
-        xs[j] = x[j] + h * k3[j]
-    rhs(t + h, xs, c, u, force_table, stiffness_poly, k4)
-    for j in active:
-        x[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+    k1, k2, k3, k4, xs = vectors[0], vectors[1], vectors[2], vectors[3], vectors[4]
+    _copy(x, xs)
+    rhs(t, x, c, u, levels, force_table, k1, w)
+    _stage(x, k1, 0.5 * h, xs, active)
+    rhs(t + 0.5 * h, xs, c, u, levels, force_table, k2, w)
+    _stage(x, k2, 0.5 * h, xs, active)
+    rhs(t + 0.5 * h, xs, c, u, levels, force_table, k3, w)
+    _stage(x, k3, h, xs, active)
+    rhs(t + h, xs, c, u, levels, force_table, k4, w)
+    _rk4_update(x, k1, k2, k3, k4, h, active)
 
 
-@numba.njit(cache=True)
-def semi_implicit_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active, pairs):
+@numba.njit(**KERNEL)
+def semi_implicit_euler_step(t, x, h, c, u, levels, force_table, vectors, w, active, pairs):
     """Symplectic (semi-implicit) Euler: velocities and first-order states explicit,
     then positions with the *new* velocities (Hairer, Lubich & Wanner, *Geometric
     Numerical Integration*, Thm. VI.3.3). First order; for undamped mechanics it
     conserves a modified energy, so oscillations neither grow nor decay spuriously.
     """
-    k1 = work[0]
-    rhs(t, x, c, u, force_table, stiffness_poly, k1)
+    k1 = vectors[0]
+    rhs(t, x, c, u, levels, force_table, k1, w)
+    lanes = x.shape[1]
     for j in active:
-        x[j] += h * k1[j]
+        for lane in range(lanes):
+            x[j, lane] += h * k1[j, lane]
     for m in range(pairs.shape[0]):
         # undo the explicit position update and redo it with the updated velocity
         p, v = pairs[m, 0], pairs[m, 1]
-        x[p] += h * (x[v] - k1[p])
+        for lane in range(lanes):
+            x[p, lane] += h * (x[v, lane] - k1[p, lane])
 
 
-@numba.njit(cache=True)
-def w_matrix(t, x, h, c, u, force_table, stiffness_poly, work, active):
-    """``(I - gamma h J)^-1`` with ``J`` by forward differences of the right-hand side,
-    over the integrated states ``active`` (matrix index ``i`` is state ``active[i]``).
+@numba.njit(**KERNEL)
+def w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, active):
+    """``(I - gamma h J)^-1`` of every lane with ``J`` by forward differences of the right-hand side, over the
+    integrated states ``active`` (matrix index ``i`` is state ``active[i]``), into ``matrices[:n, :n, lane]``.
 
-    Each perturbation is ``sqrt(eps)`` relative to the state's magnitude, with a
-    floor of 1e-12 absolute: the ball-groove deflections are micrometres, so the
-    floor must sit far below them.
+    Each perturbation is ``sqrt(eps)`` relative to the state's magnitude in its lane, with a floor of 1e-12
+    absolute: the ball-groove deflections are micrometres, so the floor must sit far below them. Every lane's
+    state ``j`` is perturbed at once (one right-hand side for all lanes).
     """
     n = active.shape[0]
-    f0 = work[5]
-    matrix = work[WORK_VECTORS:WORK_VECTORS + n, :n]
-    rhs(t, x, c, u, force_table, stiffness_poly, f0)
-    column = work[4]
-    for j in range(n):
-        state = active[j]
-        saved = x[state]
-        delta = 1.5e-8 * max(abs(saved), 1e-4)
-        x[state] = saved + delta
-        rhs(t, x, c, u, force_table, stiffness_poly, column)
-        x[state] = saved
-        for i in range(n):
-            matrix[i, j] = -ROS2_GAMMA * h * (column[active[i]] - f0[active[i]]) / delta
-        matrix[j, j] += 1.0
-    matrix[:, :] = inverse(matrix)  # fixed operation order: not LAPACK, whose bits depend on the BLAS kernel
+    lanes = x.shape[1]
+    f0, column = vectors[5], vectors[6]
+    rhs(t, x, c, u, levels, force_table, f0, w)
+    delta = np.empty(lanes)
+    saved = np.empty(lanes)
+    for jj in range(n):
+        state = active[jj]
+        for lane in range(lanes):
+            saved[lane] = x[state, lane]
+            delta[lane] = 1.5e-8 * max(abs(saved[lane]), 1e-4)
+            x[state, lane] = saved[lane] + delta[lane]
+        rhs(t, x, c, u, levels, force_table, column, w)
+        for lane in range(lanes):
+            x[state, lane] = saved[lane]
+            for ii in range(n):
+                matrices[ii, jj, lane] = (-ROS2_GAMMA * h * (column[active[ii], lane] - f0[active[ii], lane])
+                                          / delta[lane])
+            matrices[jj, jj, lane] += 1.0
+    single = np.empty((n, n))
+    for lane in range(lanes):
+        for ii in range(n):
+            for jj in range(n):
+                single[ii, jj] = matrices[ii, jj, lane]
+        # fixed operation order (numerics.linalg): not LAPACK, whose bits depend on the BLAS kernel
+        inverted = inverse(single)
+        for ii in range(n):
+            for jj in range(n):
+                matrices[ii, jj, lane] = inverted[ii, jj]
 
 
-@numba.njit(cache=True)
-def _matvec(matrix, vector, out, active):
-    """``out[active] = matrix @ vector[active]`` without allocating (the W-method's stages)."""
+@numba.njit(**KERNEL)
+def _matvec(matrices, vector, out, active):
+    """``out[active] = matrix @ vector[active]`` in every lane (the W-method's stages)."""
     n = active.shape[0]
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += matrix[i, j] * vector[active[j]]
-        out[active[i]] = acc
+    lanes = vector.shape[1]
+    for lane in range(lanes):
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += matrices[i, j, lane] * vector[active[j], lane]
+            out[active[i], lane] = acc
 
 
-@numba.njit(cache=True)
-def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
+@numba.njit(**KERNEL)
+def rosenbrock_w2_step(t, x, h, c, u, levels, force_table, vectors, w, matrices, active):
     """Two-stage Rosenbrock W-method ROS2 (Verwer, Spee, Blom & Hundsdorfer, SIAM J. Sci. Comput. 20, 1999):
 
         (I - gamma h J) k1 = f(x),   (I - gamma h J) k2 = f(x + h k1) - 2 k1,
@@ -126,26 +182,26 @@ def rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
 
     Second order for *any* matrix ``J`` (a W-method), L-stable with the exact
     Jacobian: the stiff contact, load-cell, Hall-filter and friction-regularisation
-    modes are damped instead of limiting the step. The matrix
-    ``(I - gamma h J)^-1`` is refreshed by :func:`w_matrix` when the loop asks.
+    modes are damped instead of limiting the step. The matrices
+    ``(I - gamma h J)^-1`` are refreshed by :func:`w_matrix` when the loop asks.
     """
-    n = active.shape[0]
-    k1, k2, xs, f = work[0], work[1], work[2], work[3]
-    matrix = work[WORK_VECTORS:WORK_VECTORS + n, :n]
-    rhs(t, x, c, u, force_table, stiffness_poly, f)
-    _matvec(matrix, f, k1, active)
-    xs[:] = x
+    k1, k2, xs, f = vectors[0], vectors[1], vectors[2], vectors[3]
+    lanes = x.shape[1]
+    rhs(t, x, c, u, levels, force_table, f, w)
+    _matvec(matrices, f, k1, active)
+    _copy(x, xs)
+    _stage(x, k1, h, xs, active)
+    rhs(t + h, xs, c, u, levels, force_table, f, w)
     for i in active:
-        xs[i] = x[i] + h * k1[i]
-    rhs(t + h, xs, c, u, force_table, stiffness_poly, f)
+        for lane in range(lanes):
+            f[i, lane] -= 2.0 * k1[i, lane]
+    _matvec(matrices, f, k2, active)
     for i in active:
-        f[i] -= 2.0 * k1[i]
-    _matvec(matrix, f, k2, active)
-    for i in active:
-        x[i] += h * (1.5 * k1[i] + 0.5 * k2[i])
+        for lane in range(lanes):
+            x[i, lane] += h * (1.5 * k1[i, lane] + 0.5 * k2[i, lane])
 
 
-@numba.njit(cache=True)
+@numba.njit(**KERNEL)
 def solve_in_place(matrix, b, n):
     """Solve ``matrix[:n, :n] y = b[:n]`` by Gaussian elimination without pivoting; ``y`` replaces ``b``
     and ``matrix`` is overwritten. For the small systems of :func:`imex_euler_step`: symmetric positive
@@ -166,12 +222,12 @@ def solve_in_place(matrix, b, n):
         b[i] = acc / matrix[i, i]
 
 
-@numba.njit(cache=True)
-def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
+@numba.njit(**KERNEL)
+def imex_euler_step(t, x, h, c, u, levels, force_table, vectors, w, cache, small, active):
     """Linearly implicit (IMEX) symplectic Euler: one right-hand side per step, the stiff springs implicit.
 
     With ``F`` the mechanical generalised forces at the current state and ``K``, ``D`` the analytic
-    tangent stiffness and damping of the stiff elements only (:func:`twin.engine.plant.stiff_velocity_system`:
+    tangent stiffness and damping of the stiff elements only (:func:`twin.engine.implicit.stiff_velocity_system`:
     ball-groove contacts, springs, friction slopes), the velocities of the mechanical DOFs take
 
         (M + h D + h^2 K) dv = h (F - h K v),   v+ = v + dv,   q+ = q + h v+,
@@ -182,7 +238,7 @@ def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
 
     * the full current loop (winding, Hall filter, analog PI: linear, with a -2.3e4 1/s mode) takes one
       linearly implicit Euler step ``(I - h J) dy = h f`` with its exact Jacobian
-      (:func:`twin.engine.plant.current_loop_jacobian`);
+      (:func:`twin.engine.implicit.current_loop_jacobian`);
     * the ideal current loop's lag and the valve spool are linear with a held input: exact propagators
       (:func:`twin.engine.plant.held_input_propagators`);
     * the chamber pressures and the winding temperature: explicit Euler.
@@ -193,61 +249,67 @@ def imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active):
     the velocity with the symplectic position update: stable for any ``h``, never adding energy
     (tests/engine/test_imex_euler.py). The price is numerical damping, about ``h w^2 / 2`` [1/s] on a
     mode ``w``: on the contact mode at 125 us it suppresses a self-excited 255 Hz oscillation that the
-    model has on some data sets (docs/accuracy.md).
+    model has on some data sets (docs/accuracy.md). It needs the ``dynamic`` screw-axial level (the simulation
+    refuses it otherwise).
 
-    ``work``: rows 0-3 scratch vectors, row 5 the propagators' cache, the 8 x 8 and 3 x 3 matrices from
-    row ``WORK_VECTORS`` on (:func:`work_array`).
+    ``small`` holds one lane's 8 x 8 mechanical and 3 x 3 current-loop systems at a time, ``cache`` the
+    propagators of every lane.
     """
-    f, b, velocity, cache = work[0], work[1], work[2], work[5]
-    held_input_propagators(c, h, cache)
-    matrix = work[WORK_VECTORS:WORK_VECTORS + N_DOFS, :N_DOFS]
-    rhs(t, x, c, u, force_table, stiffness_poly, f)
-    stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity)
-    solve_in_place(matrix, b, N_DOFS)
-    loop = work[WORK_VECTORS + N_DOFS:WORK_VECTORS + N_DOFS + 3, :3]
-    current = work[3]
-    full_loop = c[K.CURRENT_LOOP_FULL] > 0.5
-    if full_loop:
-        current_loop_jacobian(x, c, u[U.CURRENT_DEMAND], loop)
-        for i in range(3):
-            for j in range(3):
-                loop[i, j] = (1.0 if i == j else 0.0) - h * loop[i, j]
-            current[i] = h * f[CURRENT_LOOP_STATES[i]]
-        solve_in_place(loop, current, 3)
-    for j in active:
-        x[j] += h * f[j]
-    # replace the explicit update of the implicit states; f still holds the old velocities for the positions
-    for i in range(N_DOFS):
-        if dof_active(c, i):
-            p = DOF_POSITIONS[i]
-            x[p + 1] += b[i] - h * f[p + 1]
-            x[p] += h * (x[p + 1] - f[p])
-    if full_loop:
-        for i in range(3):
-            x[CURRENT_LOOP_STATES[i]] += current[i] - h * f[CURRENT_LOOP_STATES[i]]
-    else:
-        # dx/dt = (demand - x) / tau: the exact step moves the fraction cache[8] of the way to the demand
-        x[S.CURRENT] += f[S.CURRENT] * c[K.CURRENT_LOOP_TAU] * cache[8] - h * f[S.CURRENT]
-    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
-        # spool: y = (x - s, v) with the held target s = x + (a + 2 zeta w v) / w^2 follows y+ = Phi y
-        omega, zeta = cache[1], cache[2]
-        position, speed = x[S.SPOOL_POSITION] - h * f[S.SPOOL_POSITION], x[S.SPOOL_SPEED] - h * f[S.SPOOL_SPEED]
-        offset = -(f[S.SPOOL_SPEED] + 2.0 * zeta * omega * speed) / (omega * omega)
-        x[S.SPOOL_POSITION] = position + (cache[4] - 1.0) * offset + cache[5] * speed
-        x[S.SPOOL_SPEED] = cache[6] * offset + cache[7] * speed
+    f = vectors[0]
+    lanes = x.shape[1]
+    rhs(t, x, c, u, levels, force_table, f, w)
+    matrix = small[:N_DOFS, :N_DOFS]
+    b, velocity = small[N_DOFS], small[N_DOFS + 1]
+    loop = small[N_DOFS + 2:N_DOFS + 5, :3]
+    current = small[N_DOFS + 4, 3:6]
+    full_loop = levels[CURRENT_LOOP] == CURRENT_LOOP_FULL
+    for lane in range(lanes):
+        held_input_propagators(c, h, lane, cache)
+        stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity)
+        solve_in_place(matrix, b, N_DOFS)
+        if full_loop:
+            current_loop_jacobian(x, c, u, lane, loop)
+            for i in range(3):
+                for j in range(3):
+                    loop[i, j] = (1.0 if i == j else 0.0) - h * loop[i, j]
+                current[i] = h * f[CURRENT_LOOP_STATES[i], lane]
+            solve_in_place(loop, current, 3)
+        for j in active:
+            x[j, lane] += h * f[j, lane]
+        # replace the explicit update of the implicit states; f still holds the old velocities for the positions
+        for i in range(N_DOFS):
+            if dof_active(levels, i):
+                p = DOF_POSITIONS[i]
+                x[p + 1, lane] += b[i] - h * f[p + 1, lane]
+                x[p, lane] += h * (x[p + 1, lane] - f[p, lane])
+        if full_loop:
+            for i in range(3):
+                x[CURRENT_LOOP_STATES[i], lane] += current[i] - h * f[CURRENT_LOOP_STATES[i], lane]
+        else:
+            # dx/dt = (demand - x) / tau: the exact step moves the fraction cache[8] of the way to the demand
+            x[S.CURRENT, lane] += (f[S.CURRENT, lane] * c[K.CURRENT_LOOP_TAU, lane] * cache[8, lane]
+                                   - h * f[S.CURRENT, lane])
+        if levels[PNEUMATICS] == PNEUMATICS_FULL:
+            # spool: y = (x - s, v) with the held target s = x + (a + 2 zeta w v) / w^2 follows y+ = Phi y
+            omega, zeta = cache[1, lane], cache[2, lane]
+            position = x[S.SPOOL_POSITION, lane] - h * f[S.SPOOL_POSITION, lane]
+            speed = x[S.SPOOL_SPEED, lane] - h * f[S.SPOOL_SPEED, lane]
+            offset = -(f[S.SPOOL_SPEED, lane] + 2.0 * zeta * omega * speed) / (omega * omega)
+            x[S.SPOOL_POSITION, lane] = position + (cache[4, lane] - 1.0) * offset + cache[5, lane] * speed
+            x[S.SPOOL_SPEED, lane] = cache[6, lane] * offset + cache[7, lane] * speed
 
 
-@numba.njit(cache=True)
-def step(method, t, x, h, c, u, force_table, stiffness_poly, work, refresh, active, pairs):
-    """Advance the ``active`` states of ``x`` by one step ``h``; ``refresh`` asks the W-method to
-    rebuild its matrix; ``pairs`` are the (position, velocity) pairs of the semi-implicit Euler step."""
+@numba.njit(**KERNEL)
+def step(method, t, x, h, c, u, levels, force_table, vectors, w, matrices, cache, small, refresh, active, pairs):
+    """Advance the ``active`` states of every lane of ``x`` by one step ``h``; ``refresh`` asks the W-method to
+    rebuild its matrices; ``pairs`` are the (position, velocity) pairs of the semi-implicit Euler step."""
     if method == RK4:
-        rk4_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
+        rk4_step(t, x, h, c, u, levels, force_table, vectors, w, active)
     elif method == SEMI_IMPLICIT_EULER:
-        semi_implicit_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active, pairs)
+        semi_implicit_euler_step(t, x, h, c, u, levels, force_table, vectors, w, active, pairs)
     elif method == IMEX_EULER:
-        imex_euler_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
+        imex_euler_step(t, x, h, c, u, levels, force_table, vectors, w, cache, small, active)
     else:
         if refresh:
-            w_matrix(t, x, h, c, u, force_table, stiffness_poly, work, active)
-        rosenbrock_w2_step(t, x, h, c, u, force_table, stiffness_poly, work, active)
+            w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, active)
+        rosenbrock_w2_step(t, x, h, c, u, levels, force_table, vectors, w, matrices, active)

@@ -4,26 +4,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from twin.engine.plant import rhs
+from twin.engine.plant import rhs, work_rows
 from twin.layout import N_INPUTS
 
 
 def jacobian(model, y: np.ndarray, t: float = 0.0, u: np.ndarray | None = None) -> np.ndarray:
     """Central-difference Jacobian ``df/dy`` of the integrated states ``y`` (``model.active``) at ``t``
-    with held inputs ``u`` (default zero)."""
-    u = np.zeros(N_INPUTS) if u is None else u
+    with held inputs ``u`` (default zero), one run as a one-lane group."""
+    u = np.zeros((N_INPUTS, 1)) if u is None else np.asarray(u, dtype=float).reshape(N_INPUTS, 1)
     active = model.active
-    probe = model.full_state(y)
-    plus, minus = np.zeros(probe.size), np.zeros(probe.size)
+    c = model.constants.reshape(-1, 1)
+    probe = model.full_state(y).reshape(-1, 1)
+    plus, minus = np.zeros_like(probe), np.zeros_like(probe)
+    w = work_rows(1)
     matrix = np.zeros((active.size, active.size))
     for j, state in enumerate(active):
         delta = 1e-7 * max(abs(y[j]), 1e-5)
-        probe[state] = y[j] + delta
-        rhs(t, probe, model.constants, u, model.force_table, model.stiffness_poly, plus)
-        probe[state] = y[j] - delta
-        rhs(t, probe, model.constants, u, model.force_table, model.stiffness_poly, minus)
-        probe[state] = y[j]
-        matrix[:, j] = (plus[active] - minus[active]) / (2 * delta)
+        probe[state, 0] = y[j] + delta
+        rhs(t, probe, c, u, model.levels, model.force_table, plus, w)
+        probe[state, 0] = y[j] - delta
+        rhs(t, probe, c, u, model.levels, model.force_table, minus, w)
+        probe[state, 0] = y[j]
+        matrix[:, j] = (plus[active, 0] - minus[active, 0]) / (2 * delta)
     return matrix
 
 

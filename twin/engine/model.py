@@ -13,22 +13,13 @@ from scipy.optimize import brentq
 from numerics.linalg import lstsq
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
-from twin.layout import (
-    BALL_GROOVE_FRICTION_LEVELS,
-    CONTACT_LEVELS,
-    CONTACT_LINEAR,
-    N_CONSTANTS,
-    N_STATES,
-    PNEUMATICS_FULL,
-    PNEUMATICS_LEVELS,
-    POSITION_VELOCITY_PAIRS,
-    K,
-    S,
-)
+from twin.layout import N_CONSTANTS, N_STATES, PARAMETER_CONSTANTS, POSITION_VELOCITY_PAIRS, K, S
+from twin.levels import level_code, level_codes
 from twin.parameters import ParameterSet
 from twin.physics import hertz
 from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import (
+    CONTACT_LINEAR,
     STIFFNESS_FIT_DEGREE,
     effective_loaded_balls,
     groove_centre_distance,
@@ -59,97 +50,29 @@ MAX_NORMAL_APPROACH = 60.0e-6        # m: ~3x the Hertz approach at the screw's 
 
 @dataclass(frozen=True)
 class Model:
-    """Everything the compiled loop needs for one run."""
+    """Everything the compiled loop needs for one run.
+
+    The lanes of a group share ``levels``, ``active``, ``pairs`` and the two demand tables (one scene and one
+    model configuration); ``constants`` and ``initial_state`` are the run's own (:mod:`twin.engine.group`)."""
 
     constants: np.ndarray
     initial_state: np.ndarray
     position_table: np.ndarray
     force_table: np.ndarray
-    stiffness_poly: np.ndarray
+    levels: np.ndarray   # level code of every subsystem (twin.levels.level_codes)
     active: np.ndarray   # indices (layout S) of the integrated states; the others hold their initial value
     pairs: np.ndarray    # (m, 2) integrated (position, velocity) index pairs, for the semi-implicit Euler step
+
+    @property
+    def stiffness_poly(self) -> np.ndarray:
+        """The coefficients of the series Hertz stiffness fit (``K.STIFFNESS_C0`` ...), lowest power first."""
+        return self.constants[K.STIFFNESS_C0:K.STIFFNESS_C0 + STIFFNESS_FIT_DEGREE + 1]
 
     def full_state(self, integrated: np.ndarray) -> np.ndarray:
         """The full-layout state with the integrated states set to ``integrated``."""
         x = self.initial_state.copy()
         x[self.active] = integrated
         return x
-
-
-#: The model constants that are a parameter's value as it stands (layout :class:`twin.layout.K` -> parameter
-#: name): the plain part of the parameter -> model mapping, as data. The constants derived by a formula, a
-#: fidelity level or a scene condition are computed in :func:`build_model`.
-PARAMETER_CONSTANTS: dict[K, str] = {
-    # motor.toml
-    K.R20: "motor.winding_resistance_20C",
-    K.R_TEMP_COEF: "motor.resistance_temperature_coefficient",
-    K.INDUCTANCE: "motor.inductance",
-    K.TORQUE_CONSTANT: "motor.torque_constant",
-    K.SPEED_CONSTANT: "motor.speed_constant",
-    K.MOTOR_VISCOUS: "motor.viscous_damping",
-    K.MR_FRICTION_STATIC: "motor.friction_static_torque",
-    K.MR_FRICTION_DYNAMIC: "motor.friction_dynamic_torque",
-    K.MR_FRICTION_RATE: "motor.friction_stribeck_rate",
-    K.THERMAL_RESISTANCE: "motor.thermal_resistance",
-    K.THERMAL_TAU: "motor.thermal_time_constant",
-    K.HEAT_TRANSFER: "motor.heat_transfer_coefficient",
-    K.MOTOR_AREA: "motor.surface_area",
-    K.EMISSIVITY: "motor.emissivity",
-    K.MAX_CURRENT: "motor.max_current",
-    # drive.toml
-    K.DC_BUS: "drive.dc_bus_voltage",
-    K.HALL_TAU: "drive.hall_time_constant",
-    K.CURRENT_AW_TIME: "drive.current_antiwindup_time",
-    K.SPEED_FULL_SCALE: "drive.speed_command_full_scale",
-    # controller.toml
-    K.CURRENT_KP: "controller.current_kp",
-    K.CURRENT_KI: "controller.current_ki",
-    K.SPEED_KP: "controller.speed_kp",
-    K.SPEED_KI: "controller.speed_ki",
-    K.POSITION_KP: "controller.position_kp",
-    K.POSITION_KI: "controller.position_ki",
-    # reducer.toml
-    K.RATIO: "reducer.ratio",
-    K.EFFICIENCY: "reducer.efficiency",
-    K.REDUCER_BACKLASH: "reducer.backlash",
-    # drivetrain.toml
-    K.TORSION_DAMPING: "drivetrain.damping",
-    # ball_screw.toml
-    K.SCREW_DAMPING: "ball_screw.screw_rotational_damping",
-    K.SCREW_FRICTION_STATIC: "ball_screw.bearing_friction_static_torque",
-    K.SCREW_FRICTION_DYNAMIC: "ball_screw.bearing_friction_dynamic_torque",
-    K.SCREW_FRICTION_RATE: "ball_screw.bearing_friction_stribeck_rate",
-    K.SCREW_FRICTION_VISCOUS: "ball_screw.bearing_viscous_friction",
-    K.BEARING_STIFFNESS: "ball_screw.rear_bearing_axial_stiffness",
-    K.SHAFT_LENGTH_0: "ball_screw.bearing_to_nut_distance",
-    K.SCREW_AXIAL_DAMPING: "ball_screw.screw_axial_damping",
-    K.FRICTION_G1: "ball_screw.sliding_friction_g1",  # Eq. 5.16 coefficients
-    K.FRICTION_G2: "ball_screw.sliding_friction_g2",
-    K.FRICTION_G3: "ball_screw.sliding_friction_g3",
-    K.FRICTION_G4: "ball_screw.sliding_friction_g4",
-    K.FRICTION_G5: "ball_screw.sliding_friction_g5",
-    K.FRICTION_G6: "ball_screw.sliding_friction_g6",
-    K.ROLLING_K_GC: "ball_screw.rolling_friction_load_coefficient",  # Eqs. 5.19-5.24
-    K.ROLLING_K_RF: "ball_screw.rolling_friction_multiplier",
-    K.ROLLING_F_V1: "ball_screw.rolling_friction_speed_coefficient",
-    K.ROLLING_THRESHOLD: "ball_screw.rolling_friction_direction_threshold",
-    K.BALL_RADIUS: "ball_screw.ball_radius",
-    K.PITCH_RADIUS: "ball_screw.pitch_radius",
-    # sled.toml
-    K.MASS_NUT1: "sled.master_mass",
-    K.MASS_NUT2: "sled.slave_mass",
-    K.J_NUT: "sled.nut_rotational_inertia",
-    K.GUIDE_ROLL_STIFFNESS: "sled.guide_roll_stiffness",
-    K.GUIDE_ROLL_DAMPING: "sled.guide_roll_damping",
-    K.GUIDE_FRICTION_STATIC: "sled.guide_friction_static",
-    K.GUIDE_FRICTION_DYNAMIC: "sled.guide_friction_dynamic",
-    K.GUIDE_FRICTION_RATE: "sled.guide_friction_stribeck_rate",
-    K.GUIDE_FRICTION_VISCOUS: "sled.guide_viscous_friction",
-    K.SLAVE_FRICTION_FRACTION: "sled.slave_friction_fraction",
-    K.STROKE_LIMIT: "sled.stroke_limit",
-    # sensors.toml
-    K.ENCODER_SCALE_ORIGIN: "sensors.linear_encoder_scale_origin",
-}
 
 
 class Levels(Protocol):
@@ -186,9 +109,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     ratio = p["reducer.ratio"]
     # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3)
     c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
-    c[K.CURRENT_LOOP_FULL] = 1.0 if fidelity.level("current_loop") == "full" else 0.0
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
-    c[K.THERMAL_DYNAMIC] = 1.0 if fidelity.level("motor_thermal") == "dynamic" else 0.0
     c[K.AMBIENT] = scene.condition("room_temperature")
     # torsional chain (Sec. 9.3 "Torque meter", Eq. 9.7)
     c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
@@ -198,13 +119,15 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.SHAFT_EA] = p["ball_screw.elastic_modulus"] * math.pi * p["ball_screw.screw_root_diameter"] ** 2 / 4.0
     # ball-screw contact (Eqs. 9.4-9.6, 5.5, Sec. 7.3)
     stiffness_poly = contact_constants(c, p, curvature)
-    c[K.CONTACT_MODEL] = CONTACT_LEVELS[fidelity.level("contact")]
-    if c[K.CONTACT_MODEL] == CONTACT_LINEAR:
+    levels = level_codes(fidelity.levels)
+    contact_model = level_code("contact", fidelity.level("contact"))
+    if contact_model == CONTACT_LINEAR:
         c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
     c[K.BACKLASH] = scene.condition("backlash")
     ball_groove_friction_constants(c, p, fidelity)
-    # nuts, guides (Eq. 9.8, Eq. 7.63)
-    c[K.NUT_ROTATION] = 1.0 if fidelity.level("nut_rotation") == "on" else 0.0
+    # nuts, guides (Eq. 9.8, Eq. 7.63): the slave nut carries a share of the guide friction law
+    c[K.NUT1_GUIDE_FRICTION_SHARE] = 1.0
+    c[K.NUT2_GUIDE_FRICTION_SHARE] = p["sled.slave_friction_fraction"]
     # preload (Secs. 9.2-9.3)
     preload = scene.condition("preload")
     c[K.PRELOAD_STIFFNESS] = (series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"])
@@ -222,19 +145,18 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.MAX_TEMPERATURE] = MAX_WINDING_TEMPERATURE
     c[K.MAX_NORMAL_APPROACH] = MAX_NORMAL_APPROACH
 
-    c[K.PNEUMATICS] = PNEUMATICS_LEVELS[fidelity.level("pneumatics")]
     if converters:
         c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
 
-    x0 = initial_state(c, stiffness_poly, preload, scene.condition("zero_procedure"))
+    x0 = initial_state(c, contact_model, preload, scene.condition("zero_procedure"), fidelity.level("nut_rotation"))
     # The encoders are zeroed on the initial state, whatever the procedure (docs/model.md).
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
-    if c[K.PNEUMATICS] == PNEUMATICS_FULL:
+    if fidelity.level("pneumatics") == "full":
         x0[S.SPOOL_POSITION:] = pneumatic_constants(c, p, scene)
     active = fidelity.active_states
     pairs = np.array([pair for pair in POSITION_VELOCITY_PAIRS if pair[0] in active], dtype=np.int64).reshape(-1, 2)
-    return Model(c, x0, scene.position_table(), scene.force_table(), stiffness_poly, active, pairs)
+    return Model(c, x0, scene.position_table(), scene.force_table(), levels, active, pairs)
 
 
 def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.ndarray:
@@ -258,6 +180,7 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
                                           p["ball_screw.ogival_offset"], curvature).copy()
     c[K.SIN_ALPHA_MIN] = sin_min
     c[K.SIN_ALPHA_SPAN] = SIN_ALPHA_MAX - sin_min
+    c[K.STIFFNESS_C0:K.STIFFNESS_C0 + STIFFNESS_FIT_DEGREE + 1] = stiffness_poly
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
     return stiffness_poly
@@ -284,7 +207,6 @@ def ball_groove_friction_constants(c: np.ndarray, p: dict[str, float], fidelity:
     :mod:`twin.physics.ball_groove_friction`; its coefficients are rows of :data:`PARAMETER_CONSTANTS`) and of
     the screw's torsion between the coupling and the nuts (:func:`twin.engine.plant.screw_axial_stiffness`) at
     their fidelity levels."""
-    c[K.BALL_GROOVE_FRICTION] = BALL_GROOVE_FRICTION_LEVELS[fidelity.level("ball_groove_friction")]
     c[K.SIN_HELIX] = math.sin(helix_angle(p["ball_screw.lead"], p["ball_screw.pitch_radius"]))
     polar_moment = math.pi * p["ball_screw.screw_root_diameter"] ** 4 / 32.0
     torsion = fidelity.level("screw_torsion") == "static"
@@ -394,28 +316,31 @@ def fit_stiffness(sin_grid: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     return coefficients
 
 
-def contact_force(c: np.ndarray, stiffness_poly: np.ndarray, relative_position: float) -> float:
-    """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N]."""
+def contact_force(c: np.ndarray, contact_model: int, relative_position: float) -> float:
+    """Static axial force of the screw on one nut at relative position ``dx`` (no damping) [N], with the contact
+    law ``contact_model`` (:data:`twin.physics.ball_screw.CONTACT_VARIABLE_ANGLE` ...)."""
     return nut_axial_force(relative_position, 0.0, c[K.BACKLASH], c[K.COS_HELIX], c[K.CENTRE_DISTANCE],
                            c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
-        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-                           0.0, c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])[0]
+                           c[K.STIFFNESS_C0:K.STIFFNESS_C0 + STIFFNESS_FIT_DEGREE + 1], c[K.SIN_ALPHA_MIN],
+                           c[K.SIN_ALPHA_SPAN], 0.0, c[K.LOADED_BALLS], contact_model,
+                           c[K.LINEAR_CONTACT_STIFFNESS])[0]
 
 
-def contact_position_for_force(c: np.ndarray, stiffness_poly: np.ndarray, force: float) -> float:
+def contact_position_for_force(c: np.ndarray, contact_model: int, force: float) -> float:
     """Relative position ``dx`` at which the static contact force equals ``force`` (brentq)."""
     if force == 0.0:
         return 0.0
     side = math.copysign(1.0, force)
     half_gap = 0.5 * c[K.BACKLASH]
     upper = half_gap + 1e-6
-    while abs(contact_force(c, stiffness_poly, side * upper)) < abs(force):
+    while abs(contact_force(c, contact_model, side * upper)) < abs(force):
         upper = half_gap + 2.0 * (upper - half_gap)
-    return side * brentq(lambda d: abs(contact_force(c, stiffness_poly, side * d)) - abs(force), half_gap, upper,
+    return side * brentq(lambda d: abs(contact_force(c, contact_model, side * d)) - abs(force), half_gap, upper,
                          xtol=1e-15, rtol=1e-13)
 
 
-def initial_state(c: np.ndarray, stiffness_poly: np.ndarray, preload: float, zero_procedure: str) -> np.ndarray:
+def initial_state(c: np.ndarray, contact_model: int, preload: float, zero_procedure: str,
+                  nut_rotation: str) -> np.ndarray:
     """State at t = 0 under the scene's zero procedure (:data:`twin.scenes.ZERO_PROCEDURES`); sets
     ``K.PRELOAD_COMPRESSION``.
 
@@ -427,14 +352,14 @@ def initial_state(c: np.ndarray, stiffness_poly: np.ndarray, preload: float, zer
     ``k_pr (b + deflections)``. ``"preloaded"``: :func:`preload_equilibrium`.
     """
     if zero_procedure == "preloaded":
-        return preload_equilibrium(c, stiffness_poly, preload)
+        return preload_equilibrium(c, contact_model, preload, nut_rotation)
     x = np.zeros(N_STATES)
     x[S.WINDING_TEMP] = c[K.AMBIENT]
     c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] if preload > 0.0 else 0.0
     return x
 
 
-def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: float) -> np.ndarray:
+def preload_equilibrium(c: np.ndarray, contact_model: int, preload: float, nut_rotation: str) -> np.ndarray:
     """Static equilibrium at rest with the scene's preload and no external force.
 
     The spring-set compression is chosen so that the preload *at equilibrium*
@@ -452,8 +377,8 @@ def preload_equilibrium(c: np.ndarray, stiffness_poly: np.ndarray, preload: floa
     arm = c[K.LEAD_ARM]
     for force, pos, ang in ((orientation * preload, S.NUT1_POSITION, S.NUT1_ANGLE),
                             (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
-        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS] if c[K.NUT_ROTATION] > 0.5 else 0.0
-        x[pos] = -arm * x[ang] - contact_position_for_force(c, stiffness_poly, force)
+        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS] if nut_rotation == "on" else 0.0
+        x[pos] = -arm * x[ang] - contact_position_for_force(c, contact_model, force)
     c[K.PRELOAD_COMPRESSION] = (preload / c[K.PRELOAD_STIFFNESS]
                                 + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION]))
     return x

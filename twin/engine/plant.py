@@ -1,113 +1,103 @@
-"""Continuous-time right-hand side of the bench (Eqs. 9.1-9.8), compiled with numba.
+"""Continuous-time right-hand side of the bench (Eqs. 9.1-9.11) for a group of lanes, compiled with numba.
 
-The digital controllers are outside: the speed loop's current demand enters as
-a held input (zero-order hold between drive samples).
+A lane is one Monte Carlo sample; a group of lanes shares the scene and the model configuration (the fidelity
+levels) and advances in lock-step (:mod:`twin.engine.loop`). Every array is ``[row, lane]``: the state ``x``
+(layout :class:`twin.layout.S`), the constants ``c`` (:class:`twin.layout.K`), the held inputs ``u``
+(:class:`twin.layout.U`), the derivatives ``dxdt`` and the work rows ``w`` (:class:`W`: the forces the rest of
+the engine reads). The right-hand side is a sequence of *stages*, each one loop over the lanes whose body calls a
+scalar physics law of :mod:`twin.physics` (branch-free, inlined), so LLVM vectorises it; a lane's numbers depend
+only on its own row entries, never on its lane mates or on the lane count (tests/engine/test_lanes.py).
+A stage takes the work rows through the ``w`` argument and never aliases it with another array argument (the
+``noalias`` promise of :data:`numerics.jit.KERNEL`).
+
+The digital controllers are outside: the speed loop's current demand and the valve command enter as held inputs
+(zero-order hold between controller samples).
 """
 
-import cmath
 import math
+from enum import IntEnum
 
 import numba
 import numpy as np
 
-from twin.layout import (
+from numerics.jit import KERNEL, SCALAR
+from twin.engine.codes import (
+    BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
+    CONTACT,
+    CURRENT_LOOP,
+    CURRENT_LOOP_FULL,
+    MOTOR_THERMAL,
+    NUT_ROTATION,
+    NUT_ROTATION_ON,
+    PNEUMATICS,
     PNEUMATICS_FULL,
     PNEUMATICS_IDEAL,
-    K,
-    S,
-    U,
+    SCREW_AXIAL,
+    SCREW_AXIAL_DYNAMIC,
+    THERMAL_DYNAMIC,
 )
+from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
 from twin.physics import pneumatics as pn
-from twin.physics.ball_groove_friction import (
-    friction_generalised_forces,
-    nut_friction_force,
-    nut_friction_slope,
-    tangential_speed,
-)
-from twin.physics.ball_screw import nut_axial_force, nut_axial_tangent
+from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
+from twin.physics.ball_screw import nut_axial_force, nut_elastic_force
 from twin.physics.coupling import elasto_backlash
-from twin.physics.friction import stribeck_friction, stribeck_slope
+from twin.physics.friction import stribeck_friction
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.physics.preload import preload_force
 from twin.scenes.profiles import profile_value
 
 
-@numba.njit(cache=True)
-def transmitted_torque(x, c):
-    """``T_tm`` through couplings and torque meter (Sec. 9.3, elasto-backlash) [N m]."""
-    return elasto_backlash(
-        x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], x[S.REDUCER_SPEED] - x[S.SCREW_SPEED],
-        c[K.TORSION_STIFFNESS], c[K.TORSION_DAMPING], c[K.REDUCER_BACKLASH],
-    )
+class W(IntEnum):
+    """Work rows of a lane group (``w[row, lane]``): what one right-hand-side evaluation leaves for the rest of the
+    engine (recording, instruments, the guard). Per-nut rows are the first nut's plus the nut index."""
+
+    TORQUE = 0              # T_tm through couplings and torque meter [N m]
+    NUT_FORCE = 1           # 2 rows: axial force of the screw on nut i [N] (Eqs. 9.4-9.6)
+    NUT_NORMAL = 3          # 2 rows: normal load per sphere of nut i [N]
+    NUT_DX = 5              # 2 rows: relative position dx_i (Eq. 9.5) [m]
+    NUT_DV = 7              # 2 rows: its rate [m/s]
+    NUT_FRICTION = 9        # 2 rows: helix friction force of nut i along v_t [N] (reduced Ch. 5)
+    PRELOAD = 11            # preload magnitude [N]
+    EXTERNAL = 12           # external force on the master nut [N]
+    AXIAL_STIFFNESS = 13    # screw axial stiffness seen by the nuts [N/m]
+    AXIAL_GRADIENT = 14     # the axial spring energy's push on the sled [N]
+    NUT_KINEMATIC = 15      # 2 rows: dx_i without the screw's axial displacement [m] (quasi-static balance)
+    NUT_RATE = 17           # 2 rows: its rate [m/s]
+    BALANCE_DONE = 19       # 1.0 once the lane's quasi-static balance has converged in this evaluation
+    BALANCE_FAILED = 20     # 1.0 if a balance of this run ever ran out of iterations (the guard reads it)
 
 
-@numba.njit(cache=True)
-def preload_between_nuts(x, c):
-    """Preload force magnitude between the nuts (Secs. 9.2-9.3) [N]."""
-    return preload_force(
-        x[S.NUT2_POSITION] - x[S.NUT1_POSITION], x[S.NUT2_SPEED] - x[S.NUT1_SPEED],
-        c[K.PRELOAD_COMPRESSION], c[K.PRELOAD_STIFFNESS], c[K.PRELOAD_DAMPING], c[K.PRELOAD_ORIENTATION],
-    )
+N_WORK = W.BALANCE_FAILED + 1  # the per-nut members name their first row only
+
+#: Newton iterations the quasi-static screw-axial balance may take in one evaluation; warm-started from the last
+#: solution it needs 1-3 (measured: docs/accuracy.md); a lane that runs out is flagged (``W.BALANCE_FAILED``).
+BALANCE_ITERATIONS = 30
+#: Newton correction [m] below which the quasi-static balance counts as solved: a femtometre, 1e-9 of the
+#: micrometre features and far below any deflection the model resolves.
+BALANCE_TOLERANCE = 1.0e-15
 
 
-@numba.njit(cache=True)
-def nut_relative_position(x, c, nut):
-    """``dx_i = x_s + p (theta_s - theta_ni) / (2 pi) - x_ni`` of nut ``nut`` (0 master, 1 slave), Eq. 9.5
-    in the sign convention of :mod:`twin.physics.ball_screw`."""
-    position, angle = (S.NUT1_POSITION, S.NUT1_ANGLE) if nut == 0 else (S.NUT2_POSITION, S.NUT2_ANGLE)
-    return x[S.SCREW_AXIAL] + c[K.LEAD_ARM] * (x[S.SCREW_ANGLE] - x[angle]) - x[position]
+def work_rows(lanes: int) -> np.ndarray:
+    """Zeroed work rows for a group of ``lanes`` lanes."""
+    return np.zeros((N_WORK, lanes))
 
 
-@numba.njit(cache=True)
-def nut_interference(x, c, nut):
-    """Axial interference of nut ``nut`` with its flank, ``|dx_i| - b/2`` [m] (Eq. 9.5): positive when the
-    contact is closed."""
-    return abs(nut_relative_position(x, c, nut)) - 0.5 * c[K.BACKLASH]
+@numba.njit(**KERNEL)
+def _nut_kinematics(x, c, w, lanes, rows):
+    """``dx_i`` and its rate without the screw's axial motion (Eq. 9.5): ``p (theta_s - theta_ni) / 2 pi - x_ni``,
+    into ``rows`` and ``rows + 2`` (:data:`W.NUT_KINEMATIC`, or directly :data:`W.NUT_DX` for the dynamic level)."""
+    for nut in range(2):
+        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+        for lane in range(lanes):
+            arm = c[K.LEAD_ARM, lane]
+            w[rows + nut, lane] = arm * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane]) - x[position, lane]
+            w[rows + 2 + nut, lane] = arm * (x[S.SCREW_SPEED, lane] - x[position + 3, lane]) - x[position + 1, lane]
 
 
-@numba.njit(cache=True)
-def nut_relative_velocity(x, c, nut):
-    """Time derivative of :func:`nut_relative_position` (Eq. 9.5, second line)."""
-    speed, angular = (S.NUT1_SPEED, S.NUT1_ANGULAR_SPEED) if nut == 0 else (S.NUT2_SPEED, S.NUT2_ANGULAR_SPEED)
-    return x[S.SCREW_AXIAL_SPEED] + c[K.LEAD_ARM] * (x[S.SCREW_SPEED] - x[angular]) - x[speed]
-
-
-@numba.njit(cache=True)
-def nut_contact(x, c, stiffness_poly, nut):
-    """Axial force on nut ``nut`` and its per-sphere normal load (Eqs. 9.4-9.6) at the contact fidelity
-    ``K.CONTACT_MODEL``."""
-    force, normal, _ = nut_axial_force(
-        nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
-        c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
-        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-        c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
-    return force, normal
-
-
-@numba.njit(cache=True)
-def nut_groove_speed(x, c, nut):
-    """``v_t`` of nut ``nut``: the screw grooves' speed relative to its grooves along the helix [m/s]."""
-    speed, angular = (S.NUT1_SPEED, S.NUT1_ANGULAR_SPEED) if nut == 0 else (S.NUT2_SPEED, S.NUT2_ANGULAR_SPEED)
-    return tangential_speed(x[S.SCREW_SPEED], x[angular], x[S.SCREW_AXIAL_SPEED], x[speed], c[K.PITCH_RADIUS],
-                            c[K.COS_HELIX], c[K.SIN_HELIX])
-
-
-@numba.njit(cache=True)
-def ball_groove_friction(x, c, normal_load, nut):
-    """Helix friction force of nut ``nut`` [N, along ``+v_t`` on the nut] from its per-sphere normal load,
-    at the ``ball_groove_friction`` fidelity (zero at ``lumped``; :mod:`twin.physics.ball_groove_friction`)."""
-    if int(c[K.BALL_GROOVE_FRICTION]) != BALL_GROOVE_FRICTION_CHAPTER5:
-        return 0.0
-    return nut_friction_force(normal_load, nut_groove_speed(x, c, nut), c[K.LOADED_BALLS], c[K.BALL_RADIUS],
-                              c[K.FRICTION_G1], c[K.FRICTION_G2], c[K.FRICTION_G3], c[K.FRICTION_G4],
-                              c[K.FRICTION_G5], c[K.FRICTION_G6], c[K.ROLLING_K_GC], c[K.ROLLING_K_RF],
-                              c[K.ROLLING_F_V1], c[K.ROLLING_THRESHOLD])
-
-
-@numba.njit(cache=True)
-def screw_axial_stiffness(x, c):
-    """Axial stiffness of the screw seen by the nuts [N/m] and its energy-gradient force on the sled [N].
+@numba.njit(**KERNEL)
+def _axial_stiffness(x, c, w, lanes):
+    """Axial stiffness of the screw seen by the nuts [N/m] and its energy-gradient push on the sled [N].
 
     The rear bearing in series with the shaft ``E A / (l0 + x_n1)`` (Sec. 9.3) and, at the ``static``
     ``screw_torsion`` fidelity, the shaft's torsion between the coupling and the nuts. The coupling
@@ -119,20 +109,382 @@ def screw_axial_stiffness(x, c):
     sled position, so the spring energy ``k(x_n1) x_s^2 / 2`` also pushes the sled with
     ``-dE/dx_n1 = k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2``: tiny, but it keeps the model conservative.
     """
-    # written so that a rigid shaft (zero twist compliance) gives the torsion-free model to the last bit
-    length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
-    twist = c[K.SHAFT_TWIST_COMPLIANCE]
-    stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + length / c[K.SHAFT_EA] + length * twist)
-    half_squared = 0.5 * stiffness**2 * x[S.SCREW_AXIAL] ** 2
-    return stiffness, half_squared / c[K.SHAFT_EA] + half_squared * twist
+    for lane in range(lanes):
+        length = c[K.SHAFT_LENGTH_0, lane] + x[S.NUT1_POSITION, lane]
+        twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
+        w[W.AXIAL_STIFFNESS, lane] = 1.0 / (1.0 / c[K.BEARING_STIFFNESS, lane] + length / c[K.SHAFT_EA, lane]
+                                            + length * twist)
+
+
+@numba.njit(**KERNEL)
+def _axial_gradient(x, c, w, lanes):
+    """The axial spring energy's push on the sled, ``k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2`` [N]
+    (:func:`_axial_stiffness`), at the screw's axial displacement of this evaluation."""
+    for lane in range(lanes):
+        stiffness = w[W.AXIAL_STIFFNESS, lane]
+        half_squared = 0.5 * stiffness * stiffness * x[S.SCREW_AXIAL, lane] * x[S.SCREW_AXIAL, lane]
+        twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
+        w[W.AXIAL_GRADIENT, lane] = half_squared / c[K.SHAFT_EA, lane] + half_squared * twist
+
+
+@numba.njit(**KERNEL)
+def _balance_step(x, c, w, lanes, contact_model):
+    """One Newton step of the quasi-static screw-axial balance in every lane not yet solved.
+
+    ``k(x_n1) x_s + f_1^el(x_s + a_1) + f_2^el(x_s + a_2) = 0``: the rear bearing and shaft against the two
+    contacts' elastic forces (:func:`twin.physics.ball_screw.nut_elastic_force`), with ``a_i`` the kinematic part of
+    ``dx_i``. Its left side grows with ``x_s`` (every term does), so the root is unique. The axial speed is the
+    balance's time derivative, ``v_s = -(k_1 b_1 + k_2 b_2 + x_s v_n1 dk/dx_n1) / (k + k_1 + k_2)`` with ``k_i`` the
+    contacts' tangent stiffnesses and ``b_i`` the rates of ``a_i``.
+    """
+    for lane in range(lanes):
+        position = x[S.SCREW_AXIAL, lane]
+        f1, k1 = nut_elastic_force(
+            position + w[W.NUT_KINEMATIC, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+            c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+            c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+            c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
+        f2, k2 = nut_elastic_force(
+            position + w[W.NUT_KINEMATIC + 1, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+            c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+            c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+            c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
+        stiffness = w[W.AXIAL_STIFFNESS, lane]
+        slope = stiffness + k1 + k2
+        correction = (stiffness * position + f1 + f2) / slope
+        done = w[W.BALANCE_DONE, lane] > 0.0
+        x[S.SCREW_AXIAL, lane] = position if done else position - correction
+        # the rate of the balance, from the tangents at the last iterate (dk/dx_n1 = -k^2 (1/EA + twist))
+        gradient = -stiffness * stiffness * (1.0 / c[K.SHAFT_EA, lane] + c[K.SHAFT_TWIST_COMPLIANCE, lane])
+        rate = -(k1 * w[W.NUT_RATE, lane] + k2 * w[W.NUT_RATE + 1, lane]
+                 + position * gradient * x[S.NUT1_SPEED, lane]) / slope
+        x[S.SCREW_AXIAL_SPEED, lane] = x[S.SCREW_AXIAL_SPEED, lane] if done else rate
+        w[W.BALANCE_DONE, lane] = 1.0 if done or abs(correction) <= BALANCE_TOLERANCE else 0.0
+
+
+@numba.njit(**SCALAR)
+def _stiffness(c, lane):
+    """The stiffness fit's coefficients of one lane, as a tuple (:func:`twin.physics.ball_screw.stiffness_at`)."""
+    return (c[K.STIFFNESS_C0, lane], c[K.STIFFNESS_C1, lane], c[K.STIFFNESS_C2, lane], c[K.STIFFNESS_C3, lane],
+            c[K.STIFFNESS_C4, lane], c[K.STIFFNESS_C5, lane], c[K.STIFFNESS_C6, lane])
+
+
+@numba.njit(**KERNEL)
+def _unsolved(w, lanes):
+    """Whether any lane's quasi-static balance is still unsolved."""
+    remaining = 0.0
+    for lane in range(lanes):
+        remaining += 1.0 - w[W.BALANCE_DONE, lane]
+    return remaining > 0.0
+
+
+@numba.njit(**KERNEL)
+def screw_axial_balance(x, c, w, lanes, contact_model):
+    """The quasi-static screw-axial level: solve the balance (:func:`_balance_step`, Newton from the last solution,
+    warm-started by the lane's own ``S.SCREW_AXIAL`` row) in every lane, writing ``S.SCREW_AXIAL`` and
+    ``S.SCREW_AXIAL_SPEED`` of ``x``; a lane still unsolved after :data:`BALANCE_ITERATIONS` is flagged in
+    ``W.BALANCE_FAILED``. Each lane iterates until its own correction is below :data:`BALANCE_TOLERANCE`, so its
+    result does not depend on how long its lane mates need."""
+    for lane in range(lanes):
+        w[W.BALANCE_DONE, lane] = 0.0
+    for _ in range(BALANCE_ITERATIONS):
+        _balance_step(x, c, w, lanes, contact_model)
+        if not _unsolved(w, lanes):
+            return
+    for lane in range(lanes):
+        w[W.BALANCE_FAILED, lane] = 1.0 if w[W.BALANCE_DONE, lane] == 0.0 else w[W.BALANCE_FAILED, lane]
+
+
+@numba.njit(**KERNEL)
+def _relative_motion(x, w, lanes):
+    """``dx_i`` and its rate with the screw's axial displacement (quasi-static level)."""
+    for nut in range(2):
+        for lane in range(lanes):
+            w[W.NUT_DX + nut, lane] = x[S.SCREW_AXIAL, lane] + w[W.NUT_KINEMATIC + nut, lane]
+            w[W.NUT_DV + nut, lane] = x[S.SCREW_AXIAL_SPEED, lane] + w[W.NUT_RATE + nut, lane]
+
+
+@numba.njit(**KERNEL)
+def _dynamic_relative_motion(x, w, lanes):
+    """Add the screw's axial displacement and speed (dynamic level) to the kinematic ``dx_i`` rows."""
+    for nut in range(2):
+        for lane in range(lanes):
+            w[W.NUT_DX + nut, lane] += x[S.SCREW_AXIAL, lane]
+            w[W.NUT_DV + nut, lane] += x[S.SCREW_AXIAL_SPEED, lane]
+
+
+@numba.njit(**KERNEL)
+def _contacts(c, w, lanes, contact_model):
+    """Axial force and per-sphere normal load of both nuts (Eqs. 9.4-9.6, 7.28, 7.29)."""
+    for nut in range(2):
+        for lane in range(lanes):
+            force, normal, _ = nut_axial_force(
+                w[W.NUT_DX + nut, lane], w[W.NUT_DV + nut, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+                c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+                c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+                c[K.CONTACT_DAMPING, lane], c[K.LOADED_BALLS, lane], contact_model,
+                c[K.LINEAR_CONTACT_STIFFNESS, lane])
+            w[W.NUT_FORCE + nut, lane] = force
+            w[W.NUT_NORMAL + nut, lane] = normal
+
+
+@numba.njit(**KERNEL)
+def _couplings(x, c, w, lanes):
+    """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
+    for lane in range(lanes):
+        w[W.TORQUE, lane] = elasto_backlash(
+            x[S.REDUCER_ANGLE, lane] - x[S.SCREW_ANGLE, lane], x[S.REDUCER_SPEED, lane] - x[S.SCREW_SPEED, lane],
+            c[K.TORSION_STIFFNESS, lane], c[K.TORSION_DAMPING, lane], c[K.REDUCER_BACKLASH, lane])
+        w[W.PRELOAD, lane] = preload_force(
+            x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane], x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane],
+            c[K.PRELOAD_COMPRESSION, lane], c[K.PRELOAD_STIFFNESS, lane], c[K.PRELOAD_DAMPING, lane],
+            c[K.PRELOAD_ORIENTATION, lane])
+
+
+@numba.njit(**KERNEL)
+def _external_force(t, x, c, w, lanes, pneumatics, force_table):
+    """External force on the master nut [N, +x]: the load cell's spring force (full pneumatics), the scene's
+    force demand (ideal source) or nothing (absent)."""
+    demand = profile_value(force_table, t) if pneumatics == PNEUMATICS_IDEAL else 0.0
+    for lane in range(lanes):
+        if pneumatics == PNEUMATICS_FULL:
+            w[W.EXTERNAL, lane] = pn.load_cell_spring_force(
+                x[S.PISTON_POSITION, lane] - c[K.LINK_OFFSET, lane], x[S.NUT1_POSITION, lane],
+                x[S.PISTON_SPEED, lane], x[S.NUT1_SPEED, lane], c[K.LOAD_CELL_STIFFNESS, lane],
+                c[K.LOAD_CELL_DAMPING, lane])
+        else:
+            w[W.EXTERNAL, lane] = demand
+
+
+@numba.njit(**KERNEL)
+def _groove_friction(x, c, w, lanes):
+    """Helix friction force of each nut along ``v_t`` [N] (reduced Ch. 5, Eqs. 5.16-5.24)."""
+    for nut in range(2):
+        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+        for lane in range(lanes):
+            speed = tangential_speed(x[S.SCREW_SPEED, lane], x[position + 3, lane], x[S.SCREW_AXIAL_SPEED, lane],
+                                     x[position + 1, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane],
+                                     c[K.SIN_HELIX, lane])
+            w[W.NUT_FRICTION + nut, lane] = nut_friction_force(
+                w[W.NUT_NORMAL + nut, lane], speed, c[K.LOADED_BALLS, lane], c[K.BALL_RADIUS, lane],
+                c[K.FRICTION_G1, lane], c[K.FRICTION_G2, lane], c[K.FRICTION_G3, lane], c[K.FRICTION_G4, lane],
+                c[K.FRICTION_G5, lane], c[K.FRICTION_G6, lane], c[K.ROLLING_K_GC, lane], c[K.ROLLING_K_RF, lane],
+                c[K.ROLLING_F_V1, lane], c[K.ROLLING_THRESHOLD, lane])
+
+
+@numba.njit(**KERNEL)
+def internal_forces(t, x, c, w, lanes, levels, force_table):
+    """The coupling forces of the mechanical chain at state ``x`` into the work rows (:class:`W`): torque
+    through the couplings, the screw-axial balance at the quasi-static level (which writes ``S.SCREW_AXIAL`` and
+    ``S.SCREW_AXIAL_SPEED`` of ``x``), the contacts, the preload, the external force and, at the ``chapter5``
+    level, the ball-groove friction. What the right-hand side, the recorder and the instruments read."""
+    contact_model = levels[CONTACT]
+    _axial_stiffness(x, c, w, lanes)
+    if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
+        _nut_kinematics(x, c, w, lanes, W.NUT_DX)
+        _dynamic_relative_motion(x, w, lanes)
+    else:
+        _nut_kinematics(x, c, w, lanes, W.NUT_KINEMATIC)
+        screw_axial_balance(x, c, w, lanes, contact_model)
+        _relative_motion(x, w, lanes)
+    _axial_gradient(x, c, w, lanes)
+    _contacts(c, w, lanes, contact_model)
+    _couplings(x, c, w, lanes)
+    _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
+    if levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5:
+        _groove_friction(x, c, w, lanes)
+    else:
+        for nut in range(2):
+            for lane in range(lanes):
+                w[W.NUT_FRICTION + nut, lane] = 0.0
+
+
+@numba.njit(**KERNEL)
+def measurands(t, x, c, w, lanes, levels, force_table):
+    """What the analog instruments measure after a step, without the contacts: the torque through the couplings,
+    the preload and the external force into the work rows (the current is read off the state)."""
+    _couplings(x, c, w, lanes)
+    _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
+
+
+@numba.njit(**KERNEL)
+def _drive_electronics(x, c, u, dxdt, lanes):
+    """Full current loop: winding current (Eq. 9.1), Hall sensor and analog PI with back-calculation anti-windup."""
+    for lane in range(lanes):
+        demand = u[U.CURRENT_DEMAND, lane]
+        demand_voltage = c[K.CURRENT_KP, lane] * (demand - x[S.HALL_CURRENT, lane]) + x[S.CURRENT_PI, lane]
+        bus = c[K.DC_BUS, lane]
+        voltage = min(max(demand_voltage, -bus), bus)
+        resistance = winding_resistance(x[S.WINDING_TEMP, lane], c[K.R20, lane], c[K.R_TEMP_COEF, lane])
+        dxdt[S.CURRENT, lane] = current_derivative(voltage, x[S.CURRENT, lane], x[S.REDUCER_SPEED, lane], resistance,
+                                                   c[K.INDUCTANCE, lane], c[K.SPEED_CONSTANT, lane], c[K.RATIO, lane])
+        dxdt[S.CURRENT_PI, lane] = (c[K.CURRENT_KI, lane] * (demand - x[S.HALL_CURRENT, lane])
+                                    + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME, lane])
+        dxdt[S.HALL_CURRENT, lane] = (x[S.CURRENT, lane] - x[S.HALL_CURRENT, lane]) / c[K.HALL_TAU, lane]
+
+
+@numba.njit(**KERNEL)
+def _motor(x, c, u, dxdt, lanes, current_loop, thermal):
+    """The drive's current (the full loop or the ideal lag at the loop's bandwidth) and the winding temperature
+    (Eq. 9.2, or frozen)."""
+    if current_loop == CURRENT_LOOP_FULL:
+        _drive_electronics(x, c, u, dxdt, lanes)
+    else:
+        for lane in range(lanes):
+            dxdt[S.CURRENT, lane] = (u[U.CURRENT_DEMAND, lane] - x[S.CURRENT, lane]) / c[K.CURRENT_LOOP_TAU, lane]
+    if thermal == THERMAL_DYNAMIC:
+        for lane in range(lanes):
+            temperature = x[S.WINDING_TEMP, lane]
+            resistance = winding_resistance(temperature, c[K.R20, lane], c[K.R_TEMP_COEF, lane])
+            dxdt[S.WINDING_TEMP, lane] = winding_temperature_derivative(
+                temperature, c[K.AMBIENT, lane], resistance * x[S.CURRENT, lane] * x[S.CURRENT, lane],
+                c[K.THERMAL_RESISTANCE, lane], c[K.THERMAL_TAU, lane], c[K.HEAT_TRANSFER, lane],
+                c[K.MOTOR_AREA, lane], c[K.EMISSIVITY, lane])
+
+
+@numba.njit(**KERNEL)
+def _rotation(x, c, w, dxdt, lanes):
+    """Motor-reducer (Eq. 9.3, written for the reducer output angle) and screw rotation (Eq. 9.7)."""
+    for lane in range(lanes):
+        ratio = c[K.RATIO, lane]
+        w_r = x[S.REDUCER_SPEED, lane]
+        torque = w[W.TORQUE, lane]
+        friction_mr = stribeck_friction(w_r, c[K.MR_FRICTION_STATIC, lane], c[K.MR_FRICTION_DYNAMIC, lane],
+                                        c[K.MR_FRICTION_RATE, lane], 0.0, c[K.ANGULAR_V_THRESHOLD, lane])
+        drive = (c[K.TORQUE_CONSTANT, lane] * x[S.CURRENT, lane] * c[K.EFFICIENCY, lane]
+                 - c[K.MOTOR_VISCOUS, lane] * ratio * w_r) * ratio
+        dxdt[S.REDUCER_ANGLE, lane] = w_r
+        dxdt[S.REDUCER_SPEED, lane] = (drive - friction_mr - torque) / c[K.J_MOTOR_SIDE, lane]
+        # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
+        w_s = x[S.SCREW_SPEED, lane]
+        friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
+                                       c[K.SCREW_FRICTION_RATE, lane], c[K.SCREW_FRICTION_VISCOUS, lane],
+                                       c[K.ANGULAR_V_THRESHOLD, lane])
+        screw_1, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
+                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+        screw_2, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
+                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+        dxdt[S.SCREW_ANGLE, lane] = w_s
+        dxdt[S.SCREW_SPEED, lane] = (torque - c[K.SCREW_DAMPING, lane] * w_s - friction_s
+                                     - c[K.LEAD_ARM, lane] * (w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
+                                     + screw_1 + screw_2) / c[K.J_SCREW_SIDE, lane]
+
+
+@numba.njit(**KERNEL)
+def _screw_axial(x, c, w, dxdt, lanes):
+    """Screw axial motion at the dynamic level: rear bearing in series with the shaft (and its twist) to the
+    contacts (Sec. 9.3)."""
+    for lane in range(lanes):
+        _, _, axial_1, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
+                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+        _, _, axial_2, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
+                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+        dxdt[S.SCREW_AXIAL, lane] = x[S.SCREW_AXIAL_SPEED, lane]
+        dxdt[S.SCREW_AXIAL_SPEED, lane] = (
+            -(w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
+            - w[W.AXIAL_STIFFNESS, lane] * x[S.SCREW_AXIAL, lane] + axial_1 + axial_2
+            - c[K.SCREW_AXIAL_DAMPING, lane] * x[S.SCREW_AXIAL_SPEED, lane]) / c[K.SCREW_MASS, lane]
+
+
+@numba.njit(**KERNEL)
+def _nuts(x, c, w, dxdt, lanes, rotation):
+    """The nuts (Eq. 9.8): the master carries the external force, the preload acts between them; their roll on the
+    linear guides against the contact torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
+    for nut in range(2):
+        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+        master = 1.0 if nut == 0 else 0.0
+        for lane in range(lanes):
+            _, nut_torque, _, nut_axial = friction_generalised_forces(
+                w[W.NUT_FRICTION + nut, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+            guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
+                x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
+                c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+            # the preload pushes the nuts apart (O, orientation +1) or draws them together (X, -1)
+            preload = (1.0 - 2.0 * master) * c[K.PRELOAD_ORIENTATION, lane] * w[W.PRELOAD, lane]
+            master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
+            dxdt[position, lane] = x[position + 1, lane]
+            dxdt[position + 1, lane] = (w[W.NUT_FORCE + nut, lane] + nut_axial - guide + preload + master_loads
+                                        ) / c[K.NUT1_MASS + NUT_CONSTANT_STRIDE * nut, lane]
+            if rotation == NUT_ROTATION_ON:
+                dxdt[position + 2, lane] = x[position + 3, lane]
+                dxdt[position + 3, lane] = (c[K.LEAD_ARM, lane] * w[W.NUT_FORCE + nut, lane] + nut_torque
+                                            - c[K.GUIDE_ROLL_STIFFNESS, lane] * x[position + 2, lane]
+                                            - c[K.GUIDE_ROLL_DAMPING, lane] * x[position + 3, lane]) / c[K.J_NUT, lane]
+
+
+@numba.njit(**KERNEL)
+def pneumatics_rhs(x, c, u, w, dxdt, lanes):
+    """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11): the one home of the load
+    system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design)."""
+    for lane in range(lanes):
+        dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
+            x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
+            c[K.VALVE_MIN, lane], c[K.VALVE_MAX, lane], c[K.VALVE_FREQUENCY, lane], c[K.VALVE_DAMPING, lane])
+        p1 = x[S.CHAMBER1_PRESSURE, lane]
+        p2 = x[S.CHAMBER2_PRESSURE, lane]
+        temperature = c[K.AIR_TEMPERATURE, lane]
+        g1, g2 = pn.chamber_mass_flows(
+            x[S.SPOOL_POSITION, lane], p1, p2, c[K.P_SUPPLY, lane], c[K.P_ATMOSPHERE, lane],
+            c[K.MAX_CONDUCTANCE, lane], c[K.LEAKAGE_FRACTION, lane], c[K.CRITICAL_RATIO, lane],
+            c[K.REFERENCE_DENSITY, lane], c[K.REFERENCE_TEMPERATURE, lane], temperature, temperature,
+            c[K.LAMINAR_RATIO, lane])
+        v1, dv1, v2, dv2 = pn.chamber_volumes(x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], c[K.AREA1, lane],
+                                              c[K.AREA2, lane], c[K.DEAD_VOLUME1, lane], c[K.DEAD_VOLUME2, lane],
+                                              c[K.STROKE, lane])
+        dxdt[S.CHAMBER1_PRESSURE, lane] = pn.chamber_pressure_derivative(
+            p1, g1, v1, dv1, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
+        dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
+            p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
+        dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
+        dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration(
+            p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
+            c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
+            c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
+            c[K.CYLINDER_FRICTION_RATE, lane], c[K.CYLINDER_FRICTION_VISCOUS, lane],
+            c[K.CYLINDER_V_THRESHOLD, lane], c[K.STROKE, lane], c[K.DAMPER_TRAVEL, lane],
+            c[K.DAMPER_STIFFNESS, lane], c[K.DAMPER_DAMPING, lane], c[K.END_STOP_STIFFNESS, lane])
+
+
+@numba.njit(**KERNEL)
+def rhs(t, x, c, u, levels, force_table, dxdt, w):
+    """Write ``dx/dt`` of every lane of a group into ``dxdt``.
+
+    Only the derivatives of the states the group's fidelity levels keep are written; the integrators advance only
+    those (:attr:`twin.engine.model.Model.active`). At the quasi-static screw-axial level the balance writes
+    ``S.SCREW_AXIAL`` and ``S.SCREW_AXIAL_SPEED`` of ``x`` (states it removes from integration; each lane's row
+    is also its Newton warm start).
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    x, c, u : 2-D arrays ``[row, lane]``
+        State (layout :class:`twin.layout.S`), model constants (:class:`twin.layout.K`) and the inputs held by the
+        digital loops (:class:`twin.layout.U`).
+    levels : 1-D int array
+        The group's level code of every subsystem (:func:`twin.levels.level_codes`).
+    force_table : 2-D array
+        The scene's compiled external-force profile.
+    dxdt, w : 2-D arrays
+        Outputs: the derivatives and the work rows (:class:`W`).
+    """
+    lanes = x.shape[1]
+    internal_forces(t, x, c, w, lanes, levels, force_table)
+    _motor(x, c, u, dxdt, lanes, levels[CURRENT_LOOP], levels[MOTOR_THERMAL])
+    _rotation(x, c, w, dxdt, lanes)
+    if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
+        _screw_axial(x, c, w, dxdt, lanes)
+    _nuts(x, c, w, dxdt, lanes, levels[NUT_ROTATION])
+    if levels[PNEUMATICS] == PNEUMATICS_FULL:
+        pneumatics_rhs(x, c, u, w, dxdt, lanes)
 
 
 EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)
 
 
-@numba.njit(cache=True)
-def ball_screw_outputs(x, c, f1, f2, p1, p2):
-    """Ball-screw output signals at state ``x`` from the nuts' axial forces and per-sphere normal loads.
+@numba.njit(**SCALAR)
+def ball_screw_outputs(x, c, w, lane):
+    """Ball-screw output signals of one lane from the work rows of :func:`internal_forces`.
 
     Returns
     -------
@@ -140,7 +492,7 @@ def ball_screw_outputs(x, c, f1, f2, p1, p2):
         Ball-groove friction torque opposing the screw rotation, both nuts [N m] (Eqs. 5.17-5.18 in the
         reduced form; without external force, the drag torque of Eq. 7.85); the efficiency of Eq. 5.25
         (below); the shaft twist between the coupling and the nuts [rad]; the screw's axial
-        displacement without the twist's share of ``x_s`` [m] (:func:`screw_axial_stiffness`).
+        displacement without the twist's share of ``x_s`` [m] (:func:`_axial_stiffness`).
 
     Notes
     -----
@@ -153,377 +505,46 @@ def ball_screw_outputs(x, c, f1, f2, p1, p2):
     negative sign", Sec. 5.5). Powers of opposite signs (both enter the screw: a reversal, a gap
     crossing) or an input below ``EFFICIENCY_POWER_FLOOR`` give 0, where Fig. 5.18 drops to zero.
     """
-    fr1 = ball_groove_friction(x, c, p1, 0)
-    fr2 = ball_groove_friction(x, c, p2, 1)
-    screw_torque_1, _, _, nut_axial_1 = friction_generalised_forces(fr1, c[K.PITCH_RADIUS], c[K.COS_HELIX],
-                                                                     c[K.SIN_HELIX])
-    screw_torque_2, _, _, nut_axial_2 = friction_generalised_forces(fr2, c[K.PITCH_RADIUS], c[K.COS_HELIX],
-                                                                     c[K.SIN_HELIX])
-    friction_torque = -(screw_torque_1 + screw_torque_2)
-    power_in = (c[K.LEAD_ARM] * (f1 + f2) + friction_torque) * x[S.SCREW_SPEED]
-    power_out = (f1 + nut_axial_1) * x[S.NUT1_SPEED] + (f2 + nut_axial_2) * x[S.NUT2_SPEED]
+    screw_1, _, _, nut_axial_1 = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
+                                                             c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    screw_2, _, _, nut_axial_2 = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
+                                                             c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    f1, f2 = w[W.NUT_FORCE, lane], w[W.NUT_FORCE + 1, lane]
+    friction_torque = -(screw_1 + screw_2)
+    power_in = (c[K.LEAD_ARM, lane] * (f1 + f2) + friction_torque) * x[S.SCREW_SPEED, lane]
+    power_out = (f1 + nut_axial_1) * x[S.NUT1_SPEED, lane] + (f2 + nut_axial_2) * x[S.NUT2_SPEED, lane]
     efficiency = 0.0
     if power_in > EFFICIENCY_POWER_FLOOR and power_out >= 0.0:
         efficiency = power_out / power_in
     elif power_in < -EFFICIENCY_POWER_FLOOR and power_out < 0.0:
         efficiency = -power_in / power_out
-    stiffness, _ = screw_axial_stiffness(x, c)
-    length = c[K.SHAFT_LENGTH_0] + x[S.NUT1_POSITION]
+    stiffness = w[W.AXIAL_STIFFNESS, lane]
+    length = c[K.SHAFT_LENGTH_0, lane] + x[S.NUT1_POSITION, lane]
     # series springs carry the same force -k x_s: each share of x_s is its compliance times that force
-    twist = -stiffness * x[S.SCREW_AXIAL] * length * c[K.SHAFT_TWIST_COMPLIANCE] / c[K.LEAD_ARM]
-    axial = stiffness * x[S.SCREW_AXIAL] * (1.0 / c[K.BEARING_STIFFNESS] + length / c[K.SHAFT_EA])
+    twist = -stiffness * x[S.SCREW_AXIAL, lane] * length * c[K.SHAFT_TWIST_COMPLIANCE, lane] / c[K.LEAD_ARM, lane]
+    axial = stiffness * x[S.SCREW_AXIAL, lane] * (1.0 / c[K.BEARING_STIFFNESS, lane] + length / c[K.SHAFT_EA, lane])
     return friction_torque, efficiency, twist, axial
 
 
-@numba.njit(cache=True)
-def sensed_current(x, c):
+@numba.njit(**SCALAR)
+def sensed_current(x, c, lane, current_loop):
     """Current seen by the Hall sensor [A]: its filter state, or the current itself when the ideal
     current loop has no sensor dynamics."""
-    return x[S.HALL_CURRENT] if c[K.CURRENT_LOOP_FULL] > 0.5 else x[S.CURRENT]
+    return x[S.HALL_CURRENT, lane] if current_loop == CURRENT_LOOP_FULL else x[S.CURRENT, lane]
 
 
-@numba.njit(cache=True)
-def internal_forces(t, x, c, force_table, stiffness_poly):
-    """Coupling forces of the mechanical chain at state ``x``.
-
-    Returns
-    -------
-    (transmitted_torque, f_nut1, f_nut2, preload, external, p_nut1, p_nut2)
-        ``T_tm`` [N m] (Sec. 9.3), screw-on-nut axial forces [N] (Eqs. 9.4-9.6),
-        preload magnitude [N], external force [N], per-sphere normal loads [N].
-    """
-    f1, p1 = nut_contact(x, c, stiffness_poly, 0)
-    f2, p2 = nut_contact(x, c, stiffness_poly, 1)
-    return (transmitted_torque(x, c), f1, f2, preload_between_nuts(x, c), external_force(t, x, c, force_table),
-            p1, p2)
+@numba.njit(**SCALAR)
+def nut_interference(w, c, lane, nut):
+    """Axial interference of nut ``nut`` with its flank, ``|dx_i| - b/2`` [m] (Eq. 9.5), from the work rows:
+    positive when the contact is closed."""
+    return abs(w[W.NUT_DX + nut, lane]) - 0.5 * c[K.BACKLASH, lane]
 
 
-@numba.njit(cache=True)
-def external_force(t, x, c, force_table):
-    """External force on the master nut [N, +x]: the load cell's spring force (full pneumatics),
-    the scene's force demand (ideal source) or nothing (absent)."""
-    level = int(c[K.PNEUMATICS])
-    if level == PNEUMATICS_FULL:
-        return pn.load_cell_spring_force(x[S.PISTON_POSITION] - c[K.LINK_OFFSET], x[S.NUT1_POSITION],
-                                         x[S.PISTON_SPEED], x[S.NUT1_SPEED],
-                                         c[K.LOAD_CELL_STIFFNESS], c[K.LOAD_CELL_DAMPING])
-    if level == PNEUMATICS_IDEAL:
-        return profile_value(force_table, t)
-    return 0.0
-
-
-@numba.njit(cache=True)
-def pneumatics_rhs(x, c, valve_command, load_cell_force, dxdt):
-    """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11)."""
-    dxdt[S.SPOOL_POSITION], dxdt[S.SPOOL_SPEED] = pn.spool_derivative(
-        x[S.SPOOL_POSITION], x[S.SPOOL_SPEED], valve_command, c[K.VALVE_MID], c[K.VALVE_MIN], c[K.VALVE_MAX],
-        c[K.VALVE_FREQUENCY], c[K.VALVE_DAMPING])
-    p1 = x[S.CHAMBER1_PRESSURE]
-    p2 = x[S.CHAMBER2_PRESSURE]
-    temperature = c[K.AIR_TEMPERATURE]
-    g1, g2 = pn.chamber_mass_flows(
-        x[S.SPOOL_POSITION], p1, p2, c[K.P_SUPPLY], c[K.P_ATMOSPHERE], c[K.MAX_CONDUCTANCE], c[K.LEAKAGE_FRACTION],
-        c[K.CRITICAL_RATIO], c[K.REFERENCE_DENSITY], c[K.REFERENCE_TEMPERATURE], temperature, temperature,
-        c[K.LAMINAR_RATIO])
-    v1, dv1, v2, dv2 = pn.chamber_volumes(x[S.PISTON_POSITION], x[S.PISTON_SPEED], c[K.AREA1], c[K.AREA2],
-                                          c[K.DEAD_VOLUME1], c[K.DEAD_VOLUME2], c[K.STROKE])
-    dxdt[S.CHAMBER1_PRESSURE] = pn.chamber_pressure_derivative(p1, g1, v1, dv1, temperature, c[K.GAS_CONSTANT],
-                                                               c[K.POLYTROPIC_EXPONENT])
-    dxdt[S.CHAMBER2_PRESSURE] = pn.chamber_pressure_derivative(p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT],
-                                                               c[K.POLYTROPIC_EXPONENT])
-    dxdt[S.PISTON_POSITION] = x[S.PISTON_SPEED]
-    dxdt[S.PISTON_SPEED] = pn.piston_acceleration(
-        p1, p2, x[S.PISTON_POSITION], x[S.PISTON_SPEED], load_cell_force, c[K.AREA1], c[K.AREA2],
-        c[K.P_ATMOSPHERE], c[K.PISTON_MASS], c[K.PISTON_DAMPING], c[K.CYLINDER_FRICTION_STATIC],
-        c[K.CYLINDER_FRICTION_DYNAMIC], c[K.CYLINDER_FRICTION_RATE], c[K.CYLINDER_FRICTION_VISCOUS],
-        c[K.CYLINDER_V_THRESHOLD], c[K.STROKE], c[K.DAMPER_TRAVEL], c[K.DAMPER_STIFFNESS], c[K.DAMPER_DAMPING],
-        c[K.END_STOP_STIFFNESS])
-
-
-@numba.njit(cache=True)
-def current_loop_voltage(x, c, current_demand):
-    """Analog PI output (unsaturated) and the voltage after the DC-bus duty-cycle limit."""
-    demand_voltage = c[K.CURRENT_KP] * (current_demand - x[S.HALL_CURRENT]) + x[S.CURRENT_PI]
-    bus = c[K.DC_BUS]
-    return demand_voltage, min(max(demand_voltage, -bus), bus)
-
-
-@numba.njit(cache=True)
-def drive_electronics_rhs(x, c, current_demand, dxdt):
-    """Full current loop: winding current (Eq. 9.1), Hall sensor and analog PI with back-calculation anti-windup."""
-    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
-    resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
-    dxdt[S.CURRENT] = current_derivative(voltage, x[S.CURRENT], x[S.REDUCER_SPEED], resistance,
-                                         c[K.INDUCTANCE], c[K.SPEED_CONSTANT], c[K.RATIO])
-    dxdt[S.CURRENT_PI] = (c[K.CURRENT_KI] * (current_demand - x[S.HALL_CURRENT])
-                          + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME])
-    dxdt[S.HALL_CURRENT] = (x[S.CURRENT] - x[S.HALL_CURRENT]) / c[K.HALL_TAU]
-
-
-@numba.njit(cache=True)
-def rhs(t, x, c, u, force_table, stiffness_poly, dxdt):
-    """Write ``dx/dt`` of the bench into ``dxdt``.
-
-    Only the derivatives of the states the fidelity levels keep (``K.CURRENT_LOOP_FULL``,
-    ``K.THERMAL_DYNAMIC``, ``K.NUT_ROTATION``, ``K.PNEUMATICS``) are written; the
-    integrators advance only those (:attr:`twin.engine.model.Model.active`).
-
-    Parameters
-    ----------
-    t : float
-        Time [s].
-    x : 1-D array
-        State (layout :class:`twin.layout.S`).
-    c : 1-D array
-        Model constants (layout :class:`twin.layout.K`).
-    u : 1-D array
-        Inputs held by the digital loops (layout :class:`twin.layout.U`).
-    force_table, stiffness_poly : arrays
-        Compiled external-force profile and the contact stiffness table.
-    dxdt : 1-D array
-        Output.
-    """
-    ratio = c[K.RATIO]
-    if c[K.CURRENT_LOOP_FULL] > 0.5:
-        drive_electronics_rhs(x, c, u[U.CURRENT_DEMAND], dxdt)
-    else:
-        # ideal torque source: a first-order lag at the loop's closed-loop bandwidth
-        dxdt[S.CURRENT] = (u[U.CURRENT_DEMAND] - x[S.CURRENT]) / c[K.CURRENT_LOOP_TAU]
-    if c[K.THERMAL_DYNAMIC] > 0.5:
-        resistance = winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF])
-        dxdt[S.WINDING_TEMP] = winding_temperature_derivative(
-            x[S.WINDING_TEMP], c[K.AMBIENT], resistance * x[S.CURRENT] ** 2, c[K.THERMAL_RESISTANCE],
-            c[K.THERMAL_TAU], c[K.HEAT_TRANSFER], c[K.MOTOR_AREA], c[K.EMISSIVITY],
-        )
-
-    torque, f1, f2, preload, external, p1, p2 = internal_forces(t, x, c, force_table, stiffness_poly)
-    # ball-groove friction of each nut along the helix (reduced Ch. 5) and its generalised forces
-    screw_fr_1, nut_fr_torque_1, screw_fr_axial_1, nut_fr_axial_1 = friction_generalised_forces(
-        ball_groove_friction(x, c, p1, 0), c[K.PITCH_RADIUS], c[K.COS_HELIX], c[K.SIN_HELIX])
-    screw_fr_2, nut_fr_torque_2, screw_fr_axial_2, nut_fr_axial_2 = friction_generalised_forces(
-        ball_groove_friction(x, c, p2, 1), c[K.PITCH_RADIUS], c[K.COS_HELIX], c[K.SIN_HELIX])
-
-    # --- motor-reducer mechanics (Eq. 9.3), written for the reducer output angle
-    w_r = x[S.REDUCER_SPEED]
-    friction_mr = stribeck_friction(w_r, c[K.MR_FRICTION_STATIC], c[K.MR_FRICTION_DYNAMIC],
-                                    c[K.MR_FRICTION_RATE], 0.0, c[K.ANGULAR_V_THRESHOLD])
-    drive = (c[K.TORQUE_CONSTANT] * x[S.CURRENT] * c[K.EFFICIENCY] - c[K.MOTOR_VISCOUS] * ratio * w_r) * ratio
-    dxdt[S.REDUCER_ANGLE] = w_r
-    dxdt[S.REDUCER_SPEED] = (drive - friction_mr - torque) / c[K.J_MOTOR_SIDE]
-
-    # --- screw rotation (Eq. 9.7): the nuts' reaction is -(p/2pi) * sum of their axial forces
-    arm = c[K.LEAD_ARM]
-    w_s = x[S.SCREW_SPEED]
-    friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC], c[K.SCREW_FRICTION_DYNAMIC],
-                                   c[K.SCREW_FRICTION_RATE], c[K.SCREW_FRICTION_VISCOUS], c[K.ANGULAR_V_THRESHOLD])
-    dxdt[S.SCREW_ANGLE] = w_s
-    dxdt[S.SCREW_SPEED] = (torque - c[K.SCREW_DAMPING] * w_s - friction_s - arm * (f1 + f2) + screw_fr_1 + screw_fr_2
-                           ) / c[K.J_SCREW_SIDE]
-
-    # --- screw axial motion: rear bearing in series with the shaft (and its twist) to the sled (Sec. 9.3)
-    axial_stiffness, stiffness_gradient_force = screw_axial_stiffness(x, c)
-    dxdt[S.SCREW_AXIAL] = x[S.SCREW_AXIAL_SPEED]
-    dxdt[S.SCREW_AXIAL_SPEED] = (-(f1 + f2) - axial_stiffness * x[S.SCREW_AXIAL] + screw_fr_axial_1 + screw_fr_axial_2
-                                 - c[K.SCREW_AXIAL_DAMPING] * x[S.SCREW_AXIAL_SPEED]) / c[K.SCREW_MASS]
-
-    # --- nuts (Eq. 9.8): master carries the external force, preload acts between the nuts
-    orientation = c[K.PRELOAD_ORIENTATION]
-    guide_1 = stribeck_friction(x[S.NUT1_SPEED], c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC],
-                                c[K.GUIDE_FRICTION_RATE], c[K.GUIDE_FRICTION_VISCOUS], c[K.LINEAR_V_THRESHOLD])
-    guide_2 = c[K.SLAVE_FRICTION_FRACTION] * stribeck_friction(
-        x[S.NUT2_SPEED], c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC],
-        c[K.GUIDE_FRICTION_RATE], c[K.GUIDE_FRICTION_VISCOUS], c[K.LINEAR_V_THRESHOLD])
-    dxdt[S.NUT1_POSITION] = x[S.NUT1_SPEED]
-    dxdt[S.NUT1_SPEED] = (f1 + nut_fr_axial_1 - guide_1 - orientation * preload + external + stiffness_gradient_force
-                          ) / c[K.MASS_NUT1]
-    dxdt[S.NUT2_POSITION] = x[S.NUT2_SPEED]
-    dxdt[S.NUT2_SPEED] = (f2 + nut_fr_axial_2 - guide_2 + orientation * preload) / c[K.MASS_NUT2]
-
-    # --- nut rotation restrained by the linear guides (Sec. 9.3): contact torque (p/2pi) f_i
-    if c[K.NUT_ROTATION] > 0.5:
-        k_roll = c[K.GUIDE_ROLL_STIFFNESS]
-        c_roll = c[K.GUIDE_ROLL_DAMPING]
-        dxdt[S.NUT1_ANGLE] = x[S.NUT1_ANGULAR_SPEED]
-        dxdt[S.NUT1_ANGULAR_SPEED] = (arm * f1 + nut_fr_torque_1 - k_roll * x[S.NUT1_ANGLE]
-                                      - c_roll * x[S.NUT1_ANGULAR_SPEED]) / c[K.J_NUT]
-        dxdt[S.NUT2_ANGLE] = x[S.NUT2_ANGULAR_SPEED]
-        dxdt[S.NUT2_ANGULAR_SPEED] = (arm * f2 + nut_fr_torque_2 - k_roll * x[S.NUT2_ANGLE]
-                                      - c_roll * x[S.NUT2_ANGULAR_SPEED]) / c[K.J_NUT]
-
-    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
-        pneumatics_rhs(x, c, u[U.VALVE_COMMAND], external, dxdt)
-
-
-
-# Mechanical degrees of freedom of the linearly implicit integrator. The DOFs coupled to one other only
-# (reducer, piston, nut rolls) come first, so Gaussian elimination in this order creates no fill-in
-# beyond the screw-axial-nuts block, which the contacts make dense anyway.
-DOF_REDUCER, DOF_PISTON, DOF_NUT1_ROLL, DOF_NUT2_ROLL, DOF_NUT1, DOF_NUT2, DOF_AXIAL, DOF_SCREW = range(8)
-N_DOFS = 8
-#: Position state of each DOF; its velocity is the next state (twin.layout.POSITION_VELOCITY_PAIRS).
-DOF_POSITIONS = np.array([S.REDUCER_ANGLE, S.PISTON_POSITION, S.NUT1_ANGLE, S.NUT2_ANGLE, S.NUT1_POSITION,
-                          S.NUT2_POSITION, S.SCREW_AXIAL, S.SCREW_ANGLE], dtype=np.int64)
-
-
-@numba.njit(cache=True)
-def dof_active(c, dof):
-    """Whether mechanical DOF ``dof`` is integrated at the model's fidelity (the others are held)."""
-    if dof == DOF_NUT1_ROLL or dof == DOF_NUT2_ROLL:
-        return c[K.NUT_ROTATION] > 0.5
-    if dof == DOF_PISTON:
-        return int(c[K.PNEUMATICS]) == PNEUMATICS_FULL
-    return True
-
-
-@numba.njit(cache=True)
-def _mass_diagonal(c, matrix):
-    """``M`` on the diagonal of ``matrix`` (inertias of Eqs. 9.3, 9.7, 9.8 and the piston of Eq. 9.11)."""
-    for i in range(N_DOFS):
-        for j in range(N_DOFS):
-            matrix[i, j] = 0.0
-    matrix[DOF_REDUCER, DOF_REDUCER] = c[K.J_MOTOR_SIDE]
-    matrix[DOF_SCREW, DOF_SCREW] = c[K.J_SCREW_SIDE]
-    matrix[DOF_AXIAL, DOF_AXIAL] = c[K.SCREW_MASS]
-    matrix[DOF_NUT1, DOF_NUT1] = c[K.MASS_NUT1]
-    matrix[DOF_NUT1_ROLL, DOF_NUT1_ROLL] = c[K.J_NUT]
-    matrix[DOF_NUT2, DOF_NUT2] = c[K.MASS_NUT2]
-    matrix[DOF_NUT2_ROLL, DOF_NUT2_ROLL] = c[K.J_NUT]
-    matrix[DOF_PISTON, DOF_PISTON] = c[K.PISTON_MASS] if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL else 1.0
-
-
-@numba.njit(cache=True)
-def _add_element(matrix, b, velocity, h, stiffness, damping, i0, g0, i1, g1, i2, g2, i3, g3):
-    """Add one spring-damper along ``g . q`` (up to four DOFs; unused ones with coefficient 0) to the
-    velocity system of :func:`stiff_velocity_system`: ``(h d + h^2 k) g g^T`` and ``-h^2 k (g . v) g``."""
-    weight = h * damping + h * h * stiffness
-    rate = h * h * stiffness * (g0 * velocity[i0] + g1 * velocity[i1] + g2 * velocity[i2] + g3 * velocity[i3])
-    index = (i0, i1, i2, i3)
-    grad = (g0, g1, g2, g3)
-    for a in range(4):
-        b[index[a]] -= rate * grad[a]
-        for e in range(4):
-            matrix[index[a], index[e]] += weight * grad[a] * grad[e]
-
-
-@numba.njit(cache=True)
-def stiff_velocity_system(x, c, stiffness_poly, f, h, matrix, b, velocity):
-    """The velocity increment system ``(M + h D + h^2 K) dv = h (M a - h K v)`` of one linearly implicit
-    step (:func:`twin.engine.integrators.imex_euler_step`) over the mechanical DOFs (``DOF_*``).
-
-    ``K`` and ``D`` are the analytic tangent stiffness and damping of the stiff elements only, each a
-    rank-one spring-damper ``k g g^T`` along the coordinate ``g . q`` it deforms: the two ball-groove
-    contacts along ``dx_i`` (Eq. 9.5; :func:`twin.physics.ball_screw.nut_axial_tangent`), their
-    helix friction along ``v_t`` (reduced Ch. 5), the screw's axial bearing and shaft (Sec. 9.3), the
-    torsional elasto-backlash, the preload springs, the guides' roll springs, the load cell (Sec. 9.3.1),
-    and on the diagonal the viscous and regularised Coulomb slopes of the Stribeck laws (Eqs. 7.63-7.64).
-    The rest of the model (pneumatic chambers, the varying shaft length, the nuts' friction torques) is
-    explicit. ``f`` holds ``dx/dt`` at ``x`` (:func:`rhs`); ``velocity`` receives the DOF velocities.
-    """
-    _mass_diagonal(c, matrix)
-    for i in range(N_DOFS):
-        position = DOF_POSITIONS[i]
-        if dof_active(c, i):
-            velocity[i] = x[position + 1]
-            b[i] = h * matrix[i, i] * f[position + 1]
-        else:
-            velocity[i] = 0.0
-            b[i] = 0.0
-    rotation = c[K.NUT_ROTATION] > 0.5
-    arm = c[K.LEAD_ARM]
-    roll_arm = arm if rotation else 0.0
-    # ball-groove contacts and their helix friction
-    tangent_arm = c[K.PITCH_RADIUS] * c[K.COS_HELIX]
-    for nut in range(2):
-        position, roll = (DOF_NUT1, DOF_NUT1_ROLL) if nut == 0 else (DOF_NUT2, DOF_NUT2_ROLL)
-        stiffness, damping, load = nut_axial_tangent(
-            nut_relative_position(x, c, nut), nut_relative_velocity(x, c, nut), c[K.BACKLASH], c[K.COS_HELIX],
-            c[K.CENTRE_DISTANCE], c[K.CONTACT_RADIAL_0], c[K.CONTACT_AXIAL_0], c[K.SIN_ALPHA_0],
-        stiffness_poly, c[K.SIN_ALPHA_MIN], c[K.SIN_ALPHA_SPAN],
-            c[K.CONTACT_DAMPING], c[K.LOADED_BALLS], int(c[K.CONTACT_MODEL]), c[K.LINEAR_CONTACT_STIFFNESS])
-        if stiffness > 0.0:
-            _add_element(matrix, b, velocity, h, stiffness, damping, DOF_AXIAL, 1.0, DOF_SCREW, arm, roll,
-                         -roll_arm, position, -1.0)
-            if int(c[K.BALL_GROOVE_FRICTION]) == BALL_GROOVE_FRICTION_CHAPTER5:
-                slope = nut_friction_slope(
-                    load, nut_groove_speed(x, c, nut), c[K.LOADED_BALLS], c[K.BALL_RADIUS], c[K.FRICTION_G1],
-                    c[K.FRICTION_G2], c[K.FRICTION_G3], c[K.FRICTION_G4], c[K.FRICTION_G5], c[K.FRICTION_G6],
-                    c[K.ROLLING_K_GC], c[K.ROLLING_K_RF], c[K.ROLLING_F_V1], c[K.ROLLING_THRESHOLD])
-                if slope > 0.0:
-                    _add_element(matrix, b, velocity, h, 0.0, slope, DOF_SCREW, tangent_arm, roll,
-                                 -tangent_arm if rotation else 0.0, DOF_AXIAL, -c[K.SIN_HELIX], position,
-                                 c[K.SIN_HELIX])
-    # torsional elasto-backlash between reducer and screw
-    deflection = x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE]
-    if abs(deflection) > 0.5 * c[K.REDUCER_BACKLASH]:
-        elastic = c[K.TORSION_STIFFNESS] * (abs(deflection) - 0.5 * c[K.REDUCER_BACKLASH])
-        rate = x[S.REDUCER_SPEED] - x[S.SCREW_SPEED]
-        damping = c[K.TORSION_DAMPING] if c[K.TORSION_DAMPING] * abs(rate) < elastic else 0.0
-        _add_element(matrix, b, velocity, h, c[K.TORSION_STIFFNESS], damping, DOF_REDUCER, 1.0, DOF_SCREW, -1.0,
-                     DOF_REDUCER, 0.0, DOF_REDUCER, 0.0)
-    # preload springs between the nuts
-    orientation = c[K.PRELOAD_ORIENTATION]
-    compression = c[K.PRELOAD_COMPRESSION] - orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
-    if compression > 0.0:
-        rate = x[S.NUT2_SPEED] - x[S.NUT1_SPEED]
-        damping = c[K.PRELOAD_DAMPING] if c[K.PRELOAD_DAMPING] * abs(rate) < c[K.PRELOAD_STIFFNESS] * compression \
-            else 0.0
-        _add_element(matrix, b, velocity, h, c[K.PRELOAD_STIFFNESS], damping, DOF_NUT2, 1.0, DOF_NUT1, -1.0,
-                     DOF_NUT1, 0.0, DOF_NUT1, 0.0)
-    # screw axial bearing + shaft; guides' roll springs; load cell
-    axial_stiffness, _ = screw_axial_stiffness(x, c)
-    _add_element(matrix, b, velocity, h, axial_stiffness, c[K.SCREW_AXIAL_DAMPING], DOF_AXIAL, 1.0, DOF_AXIAL, 0.0,
-                 DOF_AXIAL, 0.0, DOF_AXIAL, 0.0)
-    if rotation:
-        for roll in (DOF_NUT1_ROLL, DOF_NUT2_ROLL):
-            _add_element(matrix, b, velocity, h, c[K.GUIDE_ROLL_STIFFNESS], c[K.GUIDE_ROLL_DAMPING], roll, 1.0,
-                         roll, 0.0, roll, 0.0, roll, 0.0)
-    if int(c[K.PNEUMATICS]) == PNEUMATICS_FULL:
-        _add_element(matrix, b, velocity, h, c[K.LOAD_CELL_STIFFNESS], c[K.LOAD_CELL_DAMPING], DOF_PISTON, 1.0,
-                     DOF_NUT1, -1.0, DOF_PISTON, 0.0, DOF_PISTON, 0.0)
-        matrix[DOF_PISTON, DOF_PISTON] += h * (c[K.PISTON_DAMPING] + stribeck_slope(
-            x[S.PISTON_SPEED], c[K.CYLINDER_FRICTION_STATIC], c[K.CYLINDER_FRICTION_DYNAMIC],
-            c[K.CYLINDER_FRICTION_VISCOUS], c[K.CYLINDER_V_THRESHOLD]))
-    # viscous and regularised Coulomb slopes of the supports' friction
-    ratio = c[K.RATIO]
-    matrix[DOF_REDUCER, DOF_REDUCER] += h * (c[K.MOTOR_VISCOUS] * ratio * ratio + stribeck_slope(
-        x[S.REDUCER_SPEED], c[K.MR_FRICTION_STATIC], c[K.MR_FRICTION_DYNAMIC], 0.0, c[K.ANGULAR_V_THRESHOLD]))
-    matrix[DOF_SCREW, DOF_SCREW] += h * (c[K.SCREW_DAMPING] + stribeck_slope(
-        x[S.SCREW_SPEED], c[K.SCREW_FRICTION_STATIC], c[K.SCREW_FRICTION_DYNAMIC], c[K.SCREW_FRICTION_VISCOUS],
-        c[K.ANGULAR_V_THRESHOLD]))
-    guide = (c[K.GUIDE_FRICTION_STATIC], c[K.GUIDE_FRICTION_DYNAMIC], c[K.GUIDE_FRICTION_VISCOUS])
-    matrix[DOF_NUT1, DOF_NUT1] += h * stribeck_slope(x[S.NUT1_SPEED], guide[0], guide[1], guide[2],
-                                                     c[K.LINEAR_V_THRESHOLD])
-    matrix[DOF_NUT2, DOF_NUT2] += h * c[K.SLAVE_FRICTION_FRACTION] * stribeck_slope(
-        x[S.NUT2_SPEED], guide[0], guide[1], guide[2], c[K.LINEAR_V_THRESHOLD])
-
-
-CURRENT_LOOP_STATES = (S.CURRENT, S.HALL_CURRENT, S.CURRENT_PI)
-
-
-@numba.njit(cache=True)
-def current_loop_jacobian(x, c, current_demand, jacobian):
-    """Jacobian of :func:`drive_electronics_rhs` over ``CURRENT_LOOP_STATES`` (winding current, Hall output,
-    PI integrator) into ``jacobian[:3, :3]``: the loop is linear (Eq. 9.1, the Hall sensor's first-order
-    lag, the analog PI) between the DC-bus limits; on the limit the voltage is constant and only the
-    anti-windup feedback remains. The back-EMF and temperature couplings are left explicit."""
-    demand_voltage, voltage = current_loop_voltage(x, c, current_demand)
-    inductance = c[K.INDUCTANCE]
-    saturated = voltage != demand_voltage
-    jacobian[0, 0] = -winding_resistance(x[S.WINDING_TEMP], c[K.R20], c[K.R_TEMP_COEF]) / inductance
-    jacobian[0, 1] = 0.0 if saturated else -c[K.CURRENT_KP] / inductance
-    jacobian[0, 2] = 0.0 if saturated else 1.0 / inductance
-    jacobian[1, 0] = 1.0 / c[K.HALL_TAU]
-    jacobian[1, 1] = -1.0 / c[K.HALL_TAU]
-    jacobian[1, 2] = 0.0
-    jacobian[2, 0] = 0.0
-    jacobian[2, 1] = -c[K.CURRENT_KI] + (c[K.CURRENT_KP] / c[K.CURRENT_AW_TIME] if saturated else 0.0)
-    jacobian[2, 2] = -1.0 / c[K.CURRENT_AW_TIME] if saturated else 0.0
-
-
-@numba.njit(cache=True)
-def held_input_propagators(c, h, cache):
+@numba.njit(**SCALAR)
+def held_input_propagators(c, h, lane, cache):
     """Exact one-step propagators of the two linear blocks driven by a held input: the valve spool
-    (second order, Table B.12: ``x'' = w^2 (s - x) - 2 zeta w x'``) and the ideal current loop's lag.
+    (second order, Table B.12: ``x'' = w^2 (s - x) - 2 zeta w x'``) and the ideal current loop's lag, for lane
+    ``lane`` into ``cache[:, lane]``.
 
     ``cache[:8]`` holds ``(h, w, zeta, tau, Phi00, Phi01, Phi10, Phi11)`` and is refreshed only when a key
     changes: the matrix exponential ``Phi = exp(A h)`` of the spool (Moler & Van Loan, SIAM Review 45, 2003,
@@ -531,25 +552,33 @@ def held_input_propagators(c, h, cache):
     and ``cache[8] = 1 - exp(-h / tau)``. Exact under the zero-order hold because the steps divide both
     controllers' periods; the exponential Euler of Hochbruck & Ostermann (Acta Numerica 19, 2010, Sec. 2.1).
     """
-    omega = 2.0 * math.pi * c[K.VALVE_FREQUENCY]
-    zeta = c[K.VALVE_DAMPING]
-    tau = c[K.CURRENT_LOOP_TAU]
-    if cache[0] == h and cache[1] == omega and cache[2] == zeta and cache[3] == tau:
+    omega = 2.0 * math.pi * c[K.VALVE_FREQUENCY, lane]
+    zeta = c[K.VALVE_DAMPING, lane]
+    tau = c[K.CURRENT_LOOP_TAU, lane]
+    if cache[0, lane] == h and cache[1, lane] == omega and cache[2, lane] == zeta and cache[3, lane] == tau:
         return
-    cache[0], cache[1], cache[2], cache[3] = h, omega, zeta, tau
-    root = cmath.sqrt(complex(zeta * zeta - 1.0, 0.0)) * omega
-    first, second = -zeta * omega + root, -zeta * omega - root
-    if abs(first - second) > 1e-9 * omega:
-        e1, e2 = cmath.exp(first * h), cmath.exp(second * h)
-        identity_part = ((first * e2 - second * e1) / (first - second)).real
-        a_part = ((e1 - e2) / (first - second)).real
+    cache[0, lane], cache[1, lane], cache[2, lane], cache[3, lane] = h, omega, zeta, tau
+    discriminant = zeta * zeta - 1.0
+    if 2.0 * math.sqrt(abs(discriminant)) > 1e-9:  # distinct eigenvalues, else the double-eigenvalue limit
+        if discriminant > 0.0:  # over-damped: two real poles
+            root = math.sqrt(discriminant) * omega
+            first, second = -zeta * omega + root, -zeta * omega - root
+            e1, e2 = math.exp(first * h), math.exp(second * h)
+            identity_part = (first * e2 - second * e1) / (first - second)
+            a_part = (e1 - e2) / (first - second)
+        else:  # under-damped: complex pair -zeta w +- j w_d
+            damped = math.sqrt(-discriminant) * omega
+            decay = math.exp(-zeta * omega * h)
+            cosine, sine = math.cos(damped * h), math.sin(damped * h)
+            identity_part = decay * (cosine + zeta * omega * sine / damped)
+            a_part = decay * sine / damped
     else:
         decay = math.exp(-omega * h)
         identity_part = decay * (1.0 + omega * h)
         a_part = decay * h
     # Phi = identity_part I + a_part A, A = [[0, 1], [-w^2, -2 zeta w]]
-    cache[4] = identity_part
-    cache[5] = a_part
-    cache[6] = -a_part * omega * omega
-    cache[7] = identity_part - 2.0 * zeta * omega * a_part
-    cache[8] = -math.expm1(-h / tau)
+    cache[4, lane] = identity_part
+    cache[5, lane] = a_part
+    cache[6, lane] = -a_part * omega * omega
+    cache[7, lane] = identity_part - 2.0 * zeta * omega * a_part
+    cache[8, lane] = -math.expm1(-h / tau)

@@ -11,7 +11,8 @@ controllers read at the ``quantized`` level of the encoders and the resolver
 (their counts are functions of position, not of path) and for every ``ideal``
 instrument; analog channels at the ``quantized``/``full`` levels and the
 encoders' period-method speed depend on the stepping grid, so compare those
-against the compiled loop with care.
+against the compiled loop with care. The analog conditioners' lag coefficients were computed for the instruments'
+integration step: pass instruments built for the drive period.
 """
 
 from __future__ import annotations
@@ -19,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW
-from twin.engine.loop import acquisition_sample, controller_init, guard, instruments_advance, record, speed_sample
-from twin.engine.plant import rhs
+from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW, instruments_advance
+from twin.engine.loop import acquisition_sample, controller_init, guard, record, speed_sample
+from twin.engine.plant import internal_forces, measurands, rhs, work_rows
 from twin.layout import N_INPUTS, STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOUNDS, STATUS_SOLVER_FAILED, S
 
 METHODS = {"scipy_radau": "Radau", "scipy_lsoda": "LSODA", "scipy_bdf": "BDF", "scipy_rk45": "RK45"}
@@ -54,37 +55,47 @@ def local_error_tolerance() -> np.ndarray:
 
 def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, position_ratio: int, output_ratio: int,
                   output: np.ndarray, memory: np.ndarray, method: str, rtol: float, x: np.ndarray):
-    """Integrate sample interval by sample interval with ``solve_ivp`` from state ``x`` (updated in place).
+    """Integrate sample interval by sample interval with ``solve_ivp`` from state ``x`` (updated in place); one
+    run, as a one-lane group of the compiled loop's functions.
 
     Returns
     -------
     (status, bound_code, t_reached, rows_written, reason, stats)
         ``stats``: ``nfev``, ``njev``, ``nlu``, ``steps`` and ``min_step`` [s] over the run.
     """
-    c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
-    u = np.zeros(N_INPUTS)
-    state = np.zeros((N_INSTRUMENTS, STATE_ROW))
-    controller_init(memory, u, state, instruments.parameters, instruments.levels, x, c, force_table, poly)
-    derivative = np.zeros_like(x)
+    c = model.constants.reshape(-1, 1)
+    levels, force_table = model.levels, model.force_table
+    lane_x = x.reshape(-1, 1)  # the same memory: x is updated through it
+    lane_memory = memory.reshape(-1, 1)
+    u = np.zeros((N_INPUTS, 1))
+    w = work_rows(1)
+    parameters = np.ascontiguousarray(instruments.parameters[:, :, None])
+    noise = np.ascontiguousarray(instruments.noise[:, :, None])
+    states = np.zeros((N_INSTRUMENTS, STATE_ROW, 1))
+    alive = np.ones(1, dtype=np.bool_)
+    controller_init(0.0, lane_x, c, u, w, levels, lane_memory, parameters, states, force_table)
+    derivative = np.zeros_like(lane_x)
     active = model.active
-    probe = x.copy()  # the states the fidelity removed keep their values here
+    probe = lane_x.copy()  # the states the fidelity removed keep their values here
 
     def f(t, y):
-        probe[active] = y
-        rhs(t, probe, c, u, force_table, poly, derivative)
-        return derivative[active]
+        probe[active, 0] = y
+        rhs(t, probe, c, u, levels, force_table, derivative, w)
+        return derivative[active, 0]
 
     atol = absolute_tolerance(rtol / 1e-10)[active]
     stats = {"nfev": 0, "njev": 0, "nlu": 0, "steps": 0, "min_step": np.inf}
     rows = 0
     for j in range(n_speed_samples + 1):
         t = j * speed_ts
+        if j % position_ratio == 0 or j % output_ratio == 0:
+            internal_forces(t, lane_x, c, w, 1, levels, force_table)
         if j % position_ratio == 0:
-            acquisition_sample(t, x, c, u, memory, state, instruments.parameters, instruments.levels,
-                               instruments.noise, model.position_table, force_table, poly, position_ratio * speed_ts)
-        speed_sample(x, c, u, memory, instruments.parameters, instruments.levels, speed_ts)
+            acquisition_sample(t, lane_x, c, u, w, levels, lane_memory, parameters, states, noise,
+                               model.position_table, force_table, position_ratio * speed_ts, alive)
+        speed_sample(lane_x, c, u, levels, lane_memory, parameters, speed_ts, alive)
         if j % output_ratio == 0:
-            record(output[rows], t, x, c, u, memory, force_table, poly)
+            record(output[rows], t, lane_x, c, u, w, 0, lane_memory, levels, force_table)
             rows += 1
         if j == n_speed_samples:
             break
@@ -98,11 +109,11 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
         if not solution.success:
             return STATUS_SOLVER_FAILED, 0, t, rows, f"solve_ivp ({method}): {solution.message}", stats
         x[active] = solution.y[:, -1]
-        code = guard(x, c)
+        x[S.SCREW_AXIAL:S.SCREW_AXIAL_SPEED + 1] = probe[S.SCREW_AXIAL:S.SCREW_AXIAL_SPEED + 1, 0]
+        code = guard(lane_x, c, w, 0, levels)
         if code != 0:
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
             return status, code, t + speed_ts, rows, "", stats
-        instruments_advance(t + speed_ts, speed_ts, x, c, state, instruments.parameters, instruments.levels,
-                            instruments.lookback, (position_ratio - (j + 1) % position_ratio) % position_ratio,
-                            force_table)
+        measurands(t + speed_ts, lane_x, c, w, 1, levels, force_table)
+        instruments_advance(t + speed_ts, lane_x, c, w, levels, parameters, states)
     return STATUS_OK, 0, n_speed_samples * speed_ts, rows, "", stats

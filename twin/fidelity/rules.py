@@ -3,7 +3,7 @@
 A scene is a test procedure: its demands, duration and conditions, and the
 outputs it must produce. :func:`resolve_fidelity` turns a requested fidelity
 (``"auto"``, ``"full"`` or a per-subsystem mapping) into a :class:`Fidelity`:
-one level per subsystem of :data:`twin.fidelity.levels.SUBSYSTEMS` and the
+one level per subsystem of :data:`twin.levels.SUBSYSTEMS` and the
 reason for it. The rules themselves are data (``rules.toml``); this module
 only evaluates their conditions, and every condition reports its numbers.
 """
@@ -21,8 +21,9 @@ import numpy as np
 
 from twin.engine.model import contact_constants, contact_position_for_force
 from twin.errors import OptionError
-from twin.fidelity.levels import SUBSYSTEMS, requested_levels
-from twin.layout import CONTACT_LEVELS, N_CONSTANTS, N_STATES, OUTPUT_NAMES, K
+from twin.fidelity.requests import requested_levels
+from twin.layout import N_CONSTANTS, N_STATES, OUTPUT_NAMES
+from twin.levels import SUBSYSTEMS, level_code
 from twin.parameters import ParameterSet
 from twin.scenes import Scene
 from twin.scenes.profiles import profile_values
@@ -152,10 +153,11 @@ class SceneNeeds:
         return profile_values(table, times)
 
     @cached_property
-    def contact(self) -> tuple[np.ndarray, np.ndarray]:
-        """Contact constants and stiffness fit of the full model (for the deflection conditions)."""
+    def contact(self) -> np.ndarray:
+        """Contact constants of the full model, the stiffness fit included (for the deflection conditions)."""
         c = np.zeros(N_CONSTANTS)
-        return c, contact_constants(c, self.params.values(), self.curvature)
+        contact_constants(c, self.params.values(), self.curvature)
+        return c
 
 
 def _force_demand(needs: SceneNeeds, wanted: bool, decided) -> tuple[bool, str]:
@@ -200,11 +202,8 @@ def _nut_roll_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool
 
 
 def _angle_deflection_error(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
-    c, poly = needs.contact
-    deflections = []
-    for model in ("variable_angle", "constant_angle"):
-        c[K.CONTACT_MODEL] = CONTACT_LEVELS[model]
-        deflections.append(contact_position_for_force(c, poly, needs.peak_contact_load))
+    deflections = [contact_position_for_force(needs.contact, level_code("contact", model), needs.peak_contact_load)
+                   for model in ("variable_angle", "constant_angle")]
     error = abs(deflections[0] - deflections[1])
     return error <= limit, (f"variable vs constant angle: {error * 1e9:.2f} nm of {deflections[0] * 1e6:.2f} um "
                             f"deflection at {needs.peak_contact_load:.0f} N (limit {limit * 1e9:g} nm)")
@@ -264,7 +263,7 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
     scene, params
         The test and the parameter set.
     fidelity : "auto", "full" or mapping
-        The request (:func:`twin.fidelity.levels.requested_levels`).
+        The request (:func:`twin.fidelity.requests.requested_levels`).
     outputs : iterable of str, optional
         Signals and features the caller needs; ``None`` takes the scene's
         ``outputs`` (every output if the scene names none).

@@ -47,6 +47,11 @@ from twin.physics.hertz import damping_coefficient, saturated_damping_force
 
 #: Degree of the polynomial fit of the series Hertz stiffness in ``sin(alpha)`` (:func:`stiffness_at`).
 STIFFNESS_FIT_DEGREE = 6
+#: Contact laws (argument ``contact_model``): the codes of the ``contact`` levels in :data:`twin.levels.SUBSYSTEMS`
+#: (their index, most detailed first; ``twin.engine.levels`` checks the two agree).
+CONTACT_VARIABLE_ANGLE = 0  # Hertz with the Eq. 9.4 load-dependent angle
+CONTACT_CONSTANT_ANGLE = 1  # Hertz at the design angle alpha_0
+CONTACT_LINEAR = 2          # linear normal stiffness at the design angle (the elasto-backlash of Ch. 5)
 
 
 @numba.njit(**SCALAR)
@@ -111,7 +116,7 @@ def _contact_deflection(relative_position, backlash, cos_helix, centre_distance,
     closed = gap > 0.0
     side = 1.0 if relative_position > 0.0 else -1.0
     delta_a = max(gap, 0.0) * cos_helix
-    if contact_model == 1:  # a group-invariant level: the same branch for every lane
+    if contact_model == CONTACT_VARIABLE_ANGLE:  # a group-invariant level: the same branch for every lane
         axial = axial_0 + delta_a
         distance = math.sqrt(radial_0 * radial_0 + axial * axial)
         delta_n = distance - centre_distance
@@ -123,7 +128,7 @@ def _contact_deflection(relative_position, backlash, cos_helix, centre_distance,
         geometric = 0.0
     delta_n = max(delta_n, 0.0)  # sqrt(r0^2 + a0^2) may round a few ulps below A0 at first contact
     stiffness = stiffness_at(stiffness_coefficients, sin_alpha_min, sin_alpha_span, sin_alpha)
-    if contact_model == 2:
+    if contact_model == CONTACT_LINEAR:
         elastic = linear_stiffness * delta_n
         normal_stiffness = linear_stiffness
     else:
@@ -160,9 +165,9 @@ def nut_axial_force(relative_position, relative_velocity, backlash, cos_helix, c
     loaded_balls : float
         ``Z_eff``.
     contact_model : int
-        0: Hertz at the constant angle ``alpha_0``; 1: Hertz with the variable angle of
-        Eq. 9.4; 2: linear normal stiffness ``linear_stiffness`` at ``alpha_0`` (the
-        elasto-backlash law of Sec. 5; codes in :mod:`twin.layout`).
+        :data:`CONTACT_VARIABLE_ANGLE` (Hertz with the variable angle of Eq. 9.4), :data:`CONTACT_CONSTANT_ANGLE`
+        (Hertz at ``alpha_0``) or :data:`CONTACT_LINEAR` (linear normal stiffness ``linear_stiffness`` at
+        ``alpha_0``: the elasto-backlash law of Sec. 5).
     linear_stiffness : float
         Normal stiffness per sphere of the linear law [N/m].
 

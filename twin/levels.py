@@ -1,15 +1,22 @@
-"""Fidelity levels of the bench's subsystems: what each level models and what it removes.
+"""Fidelity levels of the bench's subsystems: the one table of what each level models, removes and is coded as.
 
 Every subsystem lists its levels from the most detailed (the "full" model) to
 the cheapest. A level that removes states takes them out of the integrated
 state vector (:data:`Level.removes_states`); a level that makes a signal
 meaningless takes it out of the simulation's output (:data:`Level.removes_signals`),
 so a reduced model never returns a number it did not compute.
+
+The compiled engine branches on integer codes: a subsystem's index in :data:`SUBSYSTEMS` and a level's index in
+its subsystem (0 = full). :func:`level_code` derives them from this table, and the engine's named codes
+(:data:`twin.engine.levels`) are built from it, so a level is declared here and nowhere else. Which levels the
+automatic fidelity may choose, and why, is :mod:`twin.fidelity` (rules.toml).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 from twin.layout import S
 
@@ -84,6 +91,13 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
                         "axial compliance"),
         Level("rigid", "torsionally rigid shaft", removes_signals=("screw_twist",)),
     )),
+    Subsystem("screw_axial", "the screw shaft's axial displacement between the rear bearing and the ball contacts", (
+        Level("dynamic", "the shaft's axial mass integrated between the bearing (in series with the shaft) and the two "
+                         "ball-groove contacts: a 3.8-4.8 kHz mode (Sec. 9.3)"),
+        Level("quasi_static", "massless: its displacement solves the elastic balance of bearing and contacts at every "
+                              "evaluation (Newton), its speed the balance's time derivative",
+              (S.SCREW_AXIAL, S.SCREW_AXIAL_SPEED)),
+    )),
     Subsystem("nut_rotation", "nut roll on the linear guides (Sec. 9.3)", (
         Level("on", "each nut's roll angle integrated against the guides' roll stiffness"),
         Level("off", "rigid guides: the nuts do not roll",
@@ -111,39 +125,16 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
 )}
 
 
-def requested_levels(fidelity) -> tuple[dict[str, str], list[str]]:
-    """Expand a fidelity request into ``{subsystem: level or "auto"}`` and list its problems.
-
-    ``fidelity`` is ``"auto"``, ``"full"`` or a mapping ``{subsystem: level}`` (a level may be
-    ``"auto"``) whose other subsystems take its ``"default"`` entry (``"auto"`` or ``"full"``,
-    ``"auto"`` if absent). Each problem names its field. The one check of a request, shared by
-    :func:`twin.fidelity.resolve_fidelity` and the campaign spec.
-    """
-    choices = {"default": fidelity} if isinstance(fidelity, str) else dict(fidelity)
-    default = choices.pop("default", "auto")
-    problems = []
-    if default not in ("auto", "full"):
-        problems.append(f"fidelity: {default!r} is not 'auto', 'full' or a mapping {{subsystem: level}}")
-    requested = {name: (s.full if default == "full" else "auto") for name, s in SUBSYSTEMS.items()}
-    for name, level in choices.items():
-        if name not in SUBSYSTEMS:
-            problems.append(f"fidelity.{name}: unknown subsystem {name!r}; allowed: default, {', '.join(SUBSYSTEMS)}")
-        elif level != "auto" and level not in SUBSYSTEMS[name].level_names:
-            problems.append(f"fidelity.{name}: level {level!r} is not one of auto, "
-                            f"{', '.join(SUBSYSTEMS[name].level_names)}")
-        else:
-            requested[name] = level
-    return requested, problems
+def level_code(subsystem: str, level: str) -> int:
+    """The engine's integer code of a level: its index in its subsystem (0 = the full level)."""
+    return SUBSYSTEMS[subsystem].level_names.index(level)
 
 
-#: Instruments and output converters ideal: with ``"default": "full"`` this is the bench's full
-#: plant seen through perfect sensors, the setting of the solver studies (app.studies).
-IDEAL_INSTRUMENTS = {"encoders": "ideal", "analog_sensors": "ideal", "torque_meter_refresh": "ideal",
-                     "output_converters": "ideal"}
+def subsystem_index(subsystem: str) -> int:
+    """The engine's index of a subsystem in an array of level codes (:func:`level_codes`)."""
+    return list(SUBSYSTEMS).index(subsystem)
 
 
-def full_plant(pneumatics: str = "full", **instruments: str) -> dict[str, str]:
-    """Request for the full plant (every stiff mode present) with the given load system, seen through
-    ideal instruments and converters unless ``instruments`` sets some: the setting of the solver
-    studies and the physics tests."""
-    return {"default": "full", **IDEAL_INSTRUMENTS, "pneumatics": pneumatics, **instruments}
+def level_codes(levels) -> np.ndarray:
+    """``{subsystem: level}`` (every subsystem) as the int64 array of codes the compiled engine reads."""
+    return np.array([level_code(name, levels[name]) for name in SUBSYSTEMS], dtype=np.int64)
