@@ -395,7 +395,7 @@ def _reduce_pio2(x):
 
 @numba.njit(**SCALAR)
 def sin(x):
-    """sin x (fdlibm s_sin.c, branch-free; < 1 ulp for |x| < 1.6e6, deterministic beyond).
+    """sin x (fdlibm s_sin.c, branch-free; < 1 ulp for |x| < 1.6e6, nan beyond).
 
     +-0 -> +-0, +-inf -> nan, nan -> nan.
     """

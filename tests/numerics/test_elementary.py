@@ -32,8 +32,8 @@ Bit identity
     remainder), and a child process compiling for numba's ``generic`` x86-64 target (SSE2: two doubles per vector,
     no FMA) gives the same bits as this one.
 
-Known defects, as strict xfails (each turns into a failure when fixed, so the marker is removed with the fix):
-sin and cos leave [-1, 1] (up to inf) beyond |x| ~ 1.9e16, and tanh does not compile for an integer argument.
+Beyond the reduction's exact domain (|x| > 1.6e6) sin and cos return nan rather than a value outside [-1, 1], and
+an integer argument is taken as its float.
 """
 
 from __future__ import annotations
@@ -251,22 +251,15 @@ def test_special_values_are_glibcs(name):
     assert not wrong, f"{name}: " + "; ".join(wrong)
 
 
-@pytest.mark.xfail(strict=True, reason="numerics/elementary.py: beyond |x| ~ 1.9e16 sin and cos leave [-1, 1] "
-                   "(up to inf): the reduction's n*pi/2 is no longer exact (reported with a fix)")
 def test_sin_cos_beyond_the_accurate_domain_stay_in_range_or_nan():
-    """Beyond |x| = 1.6e6 the docstring promises only determinism; a value outside [-1, 1] is not a sine."""
+    """Beyond |x| = 1.6e6 the reduction is no longer exact: nan, never a value outside [-1, 1]."""
     x = loguniform(SIN_COS_DOMAIN, MAX_DOUBLE, signed=True)(np.random.default_rng(16), 20_000)
     for name in ("sin", "cos"):
         y = in_lanes(name, x, 4)
         assert np.all(np.isnan(y) | (np.abs(y) <= 1.0)), f"{name}: {np.sum(np.abs(y) > 1)} values beyond [-1, 1]"
 
 
-INTEGER_ARGUMENT = [pytest.param(name, marks=pytest.mark.xfail(
-    strict=True, raises=numba.core.errors.TypingError, reason="numerics/elementary.py: tanh bit-casts its "
-    "argument, and as_int accepts float64 only (reported with a fix)")) if name == "tanh" else name for name in NAMES]
-
-
-@pytest.mark.parametrize("name", INTEGER_ARGUMENT)
+@pytest.mark.parametrize("name", NAMES)
 def test_an_integer_argument_is_taken_as_its_float(name):
     """As ``math.*`` in numba code: f(3) == f(3.0) (physics code may pass an integer literal)."""
     scalar = FUNCTIONS[name][0]
