@@ -15,6 +15,7 @@ import sensors  # noqa: F401  (keys the compiled-code cache; see the docstring)
 _EXPORTS = {
     "simulate": "twin.simulation",
     "simulate_features": "twin.simulation",
+    "simulate_batch": "twin.simulation",
     "InputError": "twin.errors",
     "OptionError": "twin.errors",
     "ParameterError": "twin.errors",
