@@ -883,9 +883,7 @@ def analysis_dataset(
         "backlash_sweep": json.dumps(sweep),
         "min_ok_runs": min_ok_runs,
         "min_detection_runs": min_detection_runs,
-        "min_detection_runs_reason": f"every sweep data set needs {min_detection_runs} ok runs, and a reference "
-                                     "data set that many for its detection threshold: "
-                                     f"{_floor_reason(false_alarm_rate, power, confidence)} (docs/campaigns.md)",
+        "min_detection_runs_reason": _floor_reason(false_alarm_rate, power, confidence),
         "first_order_min_runs": sensitivity.MIN_RUNS,
         "observability_condition": condition,
         "requirement": requirement[0],

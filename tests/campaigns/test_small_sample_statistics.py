@@ -224,3 +224,34 @@ def test_the_cf_compliance_checker_finds_no_high_priority_issue(analysis_file):
 
     assert [(r.name, r.msgs) for r in groups if r.weight == BaseCheck.HIGH and failed(r)] == []
     assert errors == {}
+
+
+# --- scripts/findings_tables.py prints what analysis.nc resolves ----------------------------------------------------
+
+
+def _findings_tables():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[2] / "scripts" / "findings_tables.py"
+    spec = importlib.util.spec_from_file_location("findings_tables", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_findings_tables_print_the_interval_only_where_the_index_is_withheld(capsys):
+    results = _results(100, 3, 10)
+    a = analysis_dataset(results, n_boot=20, sensitivity_boot=50)
+    _findings_tables().tolerance_table(results, a)
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| d0 | f | ")]
+    assert len(lines) == 3 and lines[0].startswith("| d0 | f | p0 | – (")  # ranked by the lower bound: p0 first
+    assert all(", interval only: 100 ok runs < 200" in line and line.split(" | ")[4] == "–" for line in lines)
+    # p2's estimate also fell outside its own interval (this sample), and the line says so
+    assert lines[1].startswith("| d0 | f | p2 | – (") and lines[1].endswith(
+        "100 ok runs < 200; the estimate fell outside its own interval | – | -0.21 | -0.06 |")
+    a["first_order_index_flag"][:] = 0
+    a["first_order_index"].loc[dict(dataset="d0", feature="f", parameter="p0")] = 0.57
+    _findings_tables().tolerance_table(results, a)
+    [line] = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| d0 | f | p0 |")]
+    assert line.startswith("| d0 | f | p0 | 0.57 (")
