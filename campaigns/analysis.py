@@ -695,7 +695,7 @@ def analysis_dataset(
     give the interval of the first-order index
     (:func:`campaigns.sensitivity.first_order`); an index below
     :data:`campaigns.sensitivity.MIN_RUNS` runs, or outside its own interval, is
-    NaN with its reason in ``first_order_index_flag`` (its interval is kept).
+    flagged in ``first_order_index_flag``: every output prints its interval only.
     """
     if min_ok_runs < 3:
         raise ValueError(
@@ -739,9 +739,8 @@ def analysis_dataset(
                 X.T, y, n_boot=sensitivity_boot, confidence=confidence,
                 seed=np.random.SeedSequence(seed, spawn_key=(_SENSITIVITY_STREAM, d, f)),
             )
-            flag = first_order_flag[d, f] = sensitivity.unresolved(found["index"], found["ci"], len(y))
-            out["first_order_index"][d, f] = np.where(flag == 0, found["index"], math.nan)
-            effect_size[d, f] = np.where(flag == 0, found["effect_size"], math.nan)
+            first_order_flag[d, f] = sensitivity.unresolved(found["index"], found["ci"], len(y))
+            out["first_order_index"][d, f], effect_size[d, f] = found["index"], found["effect_size"]
             ci["first_order_index"][d, f], ci["effect_size"][d, f] = found["ci"], found["effect_size_ci"]
     for f in range(len(features)):
         for a, b in ((a, b) for a in range(len(names)) for b in range(len(names))):
@@ -788,16 +787,17 @@ def analysis_dataset(
             out["first_order_index"],
             {"units": "1",
              "long_name": "first-order (Sobol') index: share of the feature's variance explained by the parameter "
-                          f"alone, any shape of dependence; NaN below {sensitivity.MIN_RUNS} used runs or outside its "
-                          "own interval (first_order_index_flag; the interval is kept)",
+                          "alone, any shape of dependence; not to be printed where first_order_index_flag is set "
+                          f"(below {sensitivity.MIN_RUNS} used runs, or outside its own interval): print the interval",
              "method": sensitivity.METHOD, "min_runs": sensitivity.MIN_RUNS},
         ),
         "first_order_index_flag": (
             corr_dims,
             first_order_flag,
-            {"long_name": "why first_order_index and effect_size are not given (0: given): fewer used runs than "
-                          f"{sensitivity.MIN_RUNS} (the chance level of inert parameters' indices is then above 0.1), "
-                          "or the estimate outside its own bootstrap interval",
+            {"long_name": "why first_order_index and effect_size are not resolved (0: they are): fewer used runs "
+                          f"than {sensitivity.MIN_RUNS} (the chance level of inert parameters' indices is then above "
+                          "0.1), or the estimate outside its own bootstrap interval; where set, only the intervals "
+                          "are printed",
              "flag_masks": np.array([sensitivity.BELOW_MIN_RUNS, sensitivity.OUTSIDE_INTERVAL], dtype=np.int8),
              "flag_meanings": sensitivity.FLAG_MEANINGS, "min_runs": sensitivity.MIN_RUNS},
         ),
@@ -813,7 +813,8 @@ def analysis_dataset(
             {
                 "long_name": "standard deviation of the conditional mean E[feature | parameter] over the parameter's "
                              "distribution, sqrt(max(first_order_index, 0) var(feature)): "
-                             "what the parameter alone moves the feature by (NaN where first_order_index is)",
+                             "what the parameter alone moves the feature by (not resolved where "
+                             "first_order_index_flag is set: print effect_size_ci)",
                 "method": sensitivity.METHOD,
                 **in_feature_units,
             },

@@ -92,7 +92,9 @@ def tolerance_table(results: xr.Dataset, analysis: xr.Dataset) -> None:
                 interval = f"({low:.2f} – {high:.2f})"
                 why = withheld(int(flags[k]), int(row.n_used), floor)
                 index = f"– {interval}, interval only: {why}" if why else f"{float(p.first_order_index):.2f} {interval}"
-                effect = in_units(float(p.effect_size), units, 3)
+                effect = (f"({in_units(float(p.effect_size_ci[0]), units, 3)} – "
+                          f"{in_units(float(p.effect_size_ci[1]), units, 3)})" if why
+                          else in_units(float(p.effect_size), units, 3))
                 print(f"| {name} | {feature} | {str(p.parameter.values)} | {index} | {effect} | "
                       f"{float(p.spearman):+.2f} | {float(p.prcc):+.2f} |")
 

@@ -167,8 +167,10 @@ def _sensitivity_table(b: Builder, parameters: list[str]):
                 shown = (f"interval only: [{lo:.2f}, {hi:.2f}]" if withheld
                          else f"{index[j]:.2f} [{lo:.2f}, {hi:.2f}]")
                 resolved = "yes" if lo > 0 else "no (interval includes 0)"
-                rows.append((feature, name, parameters[j], shown,
-                             quantity(float(sel["effect_size"].values[j]), unit),
+                effect_lo, effect_hi = (float(v) for v in sel["effect_size_ci"].values[j])
+                effect = (f"[{quantity(effect_lo, unit)}, {quantity(effect_hi, unit)}]" if withheld
+                          else quantity(float(sel["effect_size"].values[j]), unit))
+                rows.append((feature, name, parameters[j], shown, effect,
                              f"{sel['spearman'].values[j]:+.2f}", resolved,
                              "; ".join(r for r in (reason, withheld) if r) or "–"))
                 muted.append(reason is not None or not lo > 0 or bool(withheld))
