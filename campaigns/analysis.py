@@ -605,7 +605,8 @@ def observability_sweep(
         enough = [len(s) >= min_runs and n_used[datasets[reference]] >= min_runs for s in samples]
         probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
                                 for s, ok in zip(samples, enough, strict=False)])
-        found = {"printed": math.nan, "bracket": nan2, "bounds": nan2, "resolution": "insufficient_data"}
+        found = {"estimate": math.nan, "printed": math.nan, "bracket": nan2, "bounds": nan2,
+                 "resolution": "insufficient_data"}
         verdict = "insufficient data"
     else:
         found = bootstrap_minimum_detectable(
@@ -633,13 +634,14 @@ def observability_sweep(
             ),
             f"minimum_detectable_{stem}": (
                 (),
-                found["printed"],
+                found["estimate"] if found["resolution"] == "resolved" else math.nan,
                 {
                     "units": unit,
                     "long_name": f"smallest {quantity} detected with probability {power:g} at false-alarm rate "
-                                 f"{false_alarm_rate:g}, interpolated along the sweep and rounded at the leading "
-                                 "digit of the half-width of its bounds; only where the sweep resolves it "
-                                 "(minimum_detectable_status = resolved), else NaN: read minimum_detectable_bracket",
+                                 f"{false_alarm_rate:g}, interpolated along the sweep, only where the sweep "
+                                 "resolves it (minimum_detectable_status = resolved), else NaN: read "
+                                 "minimum_detectable_bracket; print it rounded at the leading digit of the "
+                                 "half-width of its bounds (campaigns.analysis.printed_estimate)",
                     "requirement": requirement,
                     "requirement_source": requirement_source,
                 },

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from campaigns.analysis import RESOLUTIONS
+from campaigns.analysis import RESOLUTIONS, printed_estimate
 from reports import figures
 from reports.builder import Builder
 from reports.figures import Line
@@ -85,8 +85,8 @@ def build(b: Builder):
             )
     curves = [Line(f, backlash * factor, probability[f], f"C{k}", "-" if k == 0 else "--")
               for k, f in enumerate(b.features)]
-    minima = [(f"{f}: minimum detectable {number(minimum[f] * factor)} {unit}", minimum[f] * factor, f"C{k}")
-              for k, f in enumerate(b.features)]
+    minima = [(f"{f}: minimum detectable {number(_printed(a, f, minimum[f]) * factor)} {unit}", minimum[f] * factor,
+               f"C{k}") for k, f in enumerate(b.features)]
     bracketed = [f"{f} between {number(lo * factor)} and {number(hi * factor)} {unit}"
                  for f in b.features if resolution[f] == "between_adjacent_levels"
                  for lo, hi in [a["minimum_detectable_bracket"].sel(feature=f).values]]
@@ -121,3 +121,12 @@ def _resolution(analysis, feature: str, minimum: float) -> str:
         meanings = status.attrs.get("flag_meanings", " ".join(RESOLUTIONS)).split()
         return meanings[int(status)]
     return "resolved" if math.isfinite(minimum) else "beyond_sweep"
+
+
+def _printed(analysis, feature: str, minimum: float) -> float:
+    """The minimum detectable backlash as the statement prints it: rounded at the leading digit of its bounds'
+    half-width (:func:`campaigns.analysis.printed_estimate`)."""
+    if "minimum_detectable_backlash_ci" not in analysis:
+        return minimum
+    lower, upper = (float(v) for v in analysis["minimum_detectable_backlash_ci"].sel(feature=feature).values)
+    return printed_estimate(minimum, (lower, upper))

@@ -128,17 +128,18 @@ def test_the_interpolated_estimate_is_neither_a_verdict_nor_printed():
 
 def test_a_value_is_printed_where_the_bounds_span_more_than_one_sweep_step():
     """Levels every 0.25 um, sigma 0.5 um (truth 1.64 um), 100 runs: the bootstrap bounds hold several levels, so the
-    sweep resolves the value: printed, rounded at the leading digit of the bounds' half-width, and the bounds hold the
-    truth."""
+    sweep resolves the value: analysis.nc holds it, the statement prints it rounded at the leading digit of the
+    bounds' half-width, and the bounds hold the truth."""
     sigma, levels = 0.5e-6, np.arange(0, 13) * 0.25e-6
     a = analysis_dataset(sweep_results(sigma, levels, seed=5), n_boot=300)
     verdict, statement, (lower, upper), estimate = verdict_of(a)
     inside = levels[(levels > lower) & (levels < upper)]
     assert resolution_of(a) == "resolved" and len(inside) >= 1
     assert lower < DETECTABLE_SHIFT * sigma <= upper and lower <= estimate <= upper and verdict == "not met"
-    step = 10.0 ** math.floor(math.log10((upper - lower) / 2))
-    assert estimate == pytest.approx(round(estimate / step) * step, abs=1e-15)
-    assert statement.startswith(f"not met: minimum detectable backlash {estimate * 1e6:.3g} µm (95 % bootstrap bounds")
+    step = 10.0 ** math.floor(math.log10((upper - lower) / 2))  # the statement rounds at the bounds' leading digit
+    printed = round(estimate / step) * step
+    assert printed == pytest.approx(printed_estimate(estimate, (lower, upper)), abs=1e-15)
+    assert statement.startswith(f"not met: minimum detectable backlash {printed * 1e6:.3g} µm (95 % bootstrap bounds")
 
 
 def test_sweep_resolution_and_the_printed_digits_known_answers():

@@ -390,6 +390,13 @@ def test_the_observability_section_gives_the_bracket_never_an_interpolated_value
     assert not any("interpolated linearly" in t for t in texts)
     assert any("lies between 0 and that level, and no value inside is resolved" in t for t in texts)
     assert not any("never reaches" in t for t in texts)
+    # a resolved value (as a finer sweep gives): a star, and only f_true's bracket in the caption
+    analysis["minimum_detectable_status"].loc[dict(feature="f")] = 1
+    analysis["minimum_detectable_backlash"].loc[dict(feature="f")] = 1.19e-6
+    analysis["minimum_detectable_backlash_ci"].loc[dict(feature="f")] = [0.0, 2e-6]
+    [caption] = [b.caption for b in _section_blocks(observability, results, analysis)
+                 if isinstance(b, Figure) and b.key == "detection-sweep"]
+    assert "(f_true between 0 and 0.5 µm)" in caption
 
 
 def test_the_separation_map_says_why_a_column_is_blank():
