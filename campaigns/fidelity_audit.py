@@ -34,7 +34,7 @@ import xarray as xr
 
 from campaigns.comparison import VERDICTS, compare_features, paired_shift_verdict, worst_verdict
 from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
-from campaigns.storage import atomic_write
+from campaigns.storage import write_netcdf
 from twin.scenes import list_scenes, load_scene
 from twin.simulation import AUTO, DEFAULT_INTEGRATOR
 
@@ -173,11 +173,14 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
     with xr.open_dataset(full_path) as handle:
         full = handle.load()
     audit = compare_fidelity(auto, full, list(spec.features), numerical_floors(spec, list(spec.features)))
-    atomic_write(out_dir / "fidelity_audit.nc", lambda tmp: audit.to_netcdf(tmp, engine="netcdf4"))
+    write_netcdf(audit, out_dir / "fidelity_audit.nc", title=f"BenchTwin fidelity audit of campaign {spec.name}",
+                 history=f"fidelity audit of {runs} run(s) per data set: auto against full fidelity "
+                         "(campaigns.fidelity_audit)")
     _write_attrs(results_path, auto, summary_attrs(audit))
     return audit
 
 
 def _write_attrs(path: Path, results: xr.Dataset, attrs: dict[str, str]) -> None:
     results.attrs.update(attrs)
-    atomic_write(path, lambda tmp: results.to_netcdf(tmp, engine="netcdf4"))
+    write_netcdf(results, path, title=str(results.attrs.get("title", "")),
+                 history=f"fidelity_audit attributes recorded: {attrs.get('fidelity_audit', '')}")
