@@ -44,6 +44,18 @@ MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the ben
 NUMERICAL_FLOOR_FILE = Path(__file__).with_name("numerical_floor.toml")
 
 
+#: Units and long names of the figures of :func:`campaigns.comparison.compare_features` in the audit's file.
+_COMPARISON_META = {
+    "mean_shift": ("m", "mean of the feature, auto - full, over the paired ok runs"),
+    "sigma_shift": ("m", "standard deviation of the feature, auto - full"),
+    "max_paired_difference": ("m", "largest |auto - full| of a paired run"),
+    "sampling_error": ("m", "Monte Carlo error of the mean: 1.96 sigma / sqrt(n)"),
+    "ks_distance": ("1", "Kolmogorov-Smirnov distance between the auto and full samples"),
+    "ks_pvalue": ("1", "Kolmogorov-Smirnov p-value (not part of the verdict)"),
+    "n": ("1", "paired ok runs"),
+}
+
+
 def has_automatic_choice(spec: CampaignSpec) -> bool:
     """Whether the spec leaves something to an automatic choice the audit can check: the fidelity levels
     (anything but ``"full"``) or the integrator (``"auto"``)."""
@@ -115,7 +127,10 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str],
         audit[name] = (dims, np.array(values, dtype=object if name in ("verdict", "statement") else float)
                        .reshape(shape), attrs)
     audit["speedup"] = full.wall_time.where(both).sum("run") / paired.wall_time.where(both).sum("run")
-    audit["speedup"].attrs["long_name"] = "full-fidelity wall time / auto wall time over the paired runs"
+    audit["speedup"].attrs.update(units="1", long_name="full-fidelity wall time / auto wall time over the paired runs")
+    for name, (unit, long_name) in _COMPARISON_META.items():  # campaigns.comparison's figures, described for CF
+        if name in audit:
+            audit[name].attrs = {"units": audit[name].attrs.get("units", unit), "long_name": long_name}
     audit.attrs.update(runs=runs, mean_shift_tolerance=MEAN_SHIFT_TOLERANCE, verdict=overall_verdict(audit))
     return audit
 

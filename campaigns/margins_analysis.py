@@ -261,15 +261,17 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
         },
         coords={
             "dataset": ("dataset", np.array(names, dtype=object)),
-            "run": ("run", runs),
+            "run": ("run", runs, {"units": "1", "long_name": "run index within the data set"}),
             "feature": ("feature", np.array(features, dtype=object)),
             "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
             "margin": ("margin", np.array(margins, dtype=object)),
-            "margin_probability": ("margin_probability", np.array(QUANTILES), {"units": "1"}),
+            "margin_probability": ("margin_probability", np.array(QUANTILES),
+                                   {"units": "1", "long_name": "probability of the margin quantile"}),
             "limit_check": ("limit_check", np.array(check, dtype=object)),
             "count": ("count", np.array(["beyond", "total"], dtype=object)),
         },
     )
+    out["margin_probability"].encoding["_FillValue"] = None  # a coordinate has no missing values (CF 2.5.1)
     return out
 
 

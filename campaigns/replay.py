@@ -101,6 +101,11 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
     record = execute(run_function, request)
 
     replayed = record["trace"].copy() if record["trace"] is not None else xr.Dataset()
+    if "time" in replayed.coords and "units" not in replayed["time"].attrs:
+        replayed["time"].attrs["units"] = "s"  # the run-function contract: a trace's time is in seconds
+    for name, variable in replayed.variables.items():  # described for CF tools, even when the model did not
+        if "long_name" not in variable.attrs and "standard_name" not in variable.attrs:
+            variable.attrs["long_name"] = str(name).replace("_", " ")
     attrs = {
         "title": f"Replay of run {run} of data set {dataset} of campaign {spec.name}",
         "source": f"campaigns.replay of {results_path}",
