@@ -24,6 +24,7 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+from campaigns.files import size_text
 from campaigns.runs import kill_grace
 from campaigns.spec import CampaignSpec
 from campaigns.storage import CampaignError
@@ -164,9 +165,4 @@ def _duration(seconds: float) -> str:
 
 
 def _size(n: float) -> str:
-    """Two significant digits, so that two sizes that differ do not read alike ("0.97 MB", "1.4 MB")."""
-    for unit in ("B", "kB", "MB", "GB"):
-        if n < 1000:
-            return f"{n:.2g} {unit}" if n < 100 else f"{n:.0f} {unit}"
-        n /= 1000
-    return f"{n:.2g} TB"
+    return size_text(n)

@@ -131,9 +131,19 @@ def _umask() -> int:
     return mask
 
 
+def size_text(n: float) -> str:
+    """A size in bytes for a message, two significant digits ("970 kB", "1.4 MB"): two sizes that differ do not
+    read alike."""
+    for unit in ("B", "kB", "MB", "GB"):
+        if n < 1000:
+            return f"{n:.2g} {unit}" if n < 100 else f"{n:.0f} {unit}"
+        n /= 1000
+    return f"{n:.2g} TB"
+
+
 def _free_space(directory: Path) -> str:
     try:
-        return f"{shutil.disk_usage(directory).free / 1e6:.2g} MB free on {directory}"
+        return f"{size_text(shutil.disk_usage(directory).free)} free on {directory}"
     except OSError:
         return "free space unknown"
 
