@@ -55,8 +55,13 @@ class CampaignInterrupted(CampaignError):
 
 
 def is_campaign_dir(directory: Path) -> bool:
-    """Whether ``directory`` holds a campaign (its ``spec.json`` or its ``chunks/``)."""
-    return (directory / "spec.json").is_file() or (directory / "chunks").is_dir()
+    """Whether ``directory`` holds a campaign: its ``spec.json`` or lock, or a ``chunks/<spec hash>/`` directory."""
+    if (directory / "spec.json").is_file() or (directory / ".lock").is_file():
+        return True
+    try:
+        return any(p.is_dir() for p in (directory / "chunks").iterdir())
+    except OSError:
+        return False
 
 
 def campaign_file(path: str | Path) -> str | None:
@@ -65,7 +70,7 @@ def campaign_file(path: str | Path) -> str | None:
         parent = candidate.parent
         if candidate.name in CAMPAIGN_FILES and is_campaign_dir(parent):
             return f"the {candidate.name} of the campaign in {parent}"
-        for ancestor in parent.parents if parent.name not in CAMPAIGN_DIRS else (parent, *parent.parents):
+        for ancestor in (parent, *parent.parents):
             if ancestor.name in CAMPAIGN_DIRS and is_campaign_dir(ancestor.parent):
                 return f"a file of the campaign in {ancestor.parent} (its {ancestor.name}/)"
     return None

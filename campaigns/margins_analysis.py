@@ -150,12 +150,12 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
     loops = list(dict.fromkeys(str(results[m].attrs["loop"]) for m in margins))
     n_d, n_m, n_f = len(names), len(margins), len(features)
     quantiles = np.full((n_d, n_m, len(QUANTILES)), math.nan)
-    n_finite = np.zeros((n_d, n_m), dtype=np.int64)
+    n_finite = np.zeros((n_d, n_m), dtype=np.int32)  # netCDF classic integers (CF 1.8)
     worst = np.full((n_d, n_m), math.nan)
-    worst_run = np.full((n_d, n_m), -1, dtype=np.int64)
+    worst_run = np.full((n_d, n_m), -1, dtype=np.int32)
     spearman = np.full((n_d, n_m, n_f), math.nan)
     spearman_ci = np.full((n_d, n_m, n_f, 2), math.nan)
-    n_corr = np.zeros((n_d, n_m, n_f), dtype=np.int64)
+    n_corr = np.zeros((n_d, n_m, n_f), dtype=np.int32)
     ok = (results["status"] == "ok").values
     for m, name in enumerate(margins):
         values = margin_values(results, name)
@@ -181,7 +181,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
                     seed=np.random.SeedSequence(seed, spawn_key=(_MARGIN_STREAM, d, m, f)))
 
     # runs beyond a limit, and the verdict per loop and limit over the campaign
-    beyond_count = np.zeros((n_d, len(runs)), dtype=np.int64)
+    beyond_count = np.zeros((n_d, len(runs)), dtype=np.int32)
     beyond_text = np.full((n_d, len(runs)), "", dtype=object)
     verdicts, sentences, fraction, fraction_ci, counts = [], [], [], [], []
     for loop in loops:
@@ -250,7 +250,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             "margin_limit_fraction_ci": (("limit_check", "bound"), np.array(fraction_ci, dtype=float).reshape(-1, 2),
                                          {"units": "1", "long_name": f"{confidence * 100:g} % exact (Clopper-Pearson) "
                                                                      "interval of margin_limit_fraction"}),
-            "margin_limit_counts": (("limit_check", "count"), np.array(counts, dtype=np.int64).reshape(-1, 2),
+            "margin_limit_counts": (("limit_check", "count"), np.array(counts, dtype=np.int32).reshape(-1, 2),
                                     {"units": "1", "long_name": "runs beyond the limit and runs with the margin"}),
             "margin_limit_verdict": (("limit_check",), np.array(verdicts, dtype=object),
                                      {"long_name": "verdict on the design limit: met / not met / undetermined / "
