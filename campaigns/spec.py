@@ -66,7 +66,7 @@ BOUNDS = {
     "duration": (1.0e-3, 600.0, "s", "simulated duration"),
     # a bench run takes about 1.2 s, a full-fidelity one a few s; one hour of wall clock per run is far beyond
     # any procedure, and the budget bounds what a hung run (and the compile warm-up's timed run) holds the queue
-    "timeout": (0.01, 3600.0, "s", "wall-clock budget of one run"),
+    "timeout": (1.0e-3, 3600.0, "s", "wall-clock budget of one run"),
     "runs_per_dataset": (1, MAX_RUNS_PER_DATASET, "", "runs per data set"),
     "fidelity_audit_runs": (0, MAX_RUNS_PER_DATASET, "", "runs per data set re-run at full fidelity"),
     # each kept trace holds the run's whole time series (10 001 samples per variable) in the driver and results.nc

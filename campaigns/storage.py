@@ -290,7 +290,7 @@ class ChunkStore:
 
 
 #: What a campaign's results.nc holds at least (besides the ``spec_json`` attribute).
-RESULTS_VARIABLES = ("status", "failure_reason")
+RESULTS_VARIABLES = ("status",)
 
 
 def read_results(path: str | Path) -> xr.Dataset:

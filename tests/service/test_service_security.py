@@ -148,5 +148,5 @@ def test_a_campaign_beyond_the_limits_is_refused_before_it_is_queued(service, se
     if field == "runs_per_dataset":
         assert "beyond this service's limit of 24 h" in errors[field] and "--max-campaign-hours" in errors[field]
     else:
-        assert "outside the allowed range [0.01, 3600] s" in errors[field]
+        assert "outside the allowed range [0.001, 3600] s" in errors[field]
     assert submitter.get("/api/v1/campaigns").json()["campaigns"] == before
