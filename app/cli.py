@@ -7,6 +7,7 @@ Each subcommand imports the campaign runner, the reports or the studies inside i
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -77,7 +78,28 @@ def cmd_scenes(args) -> int:
     return 0
 
 
+def _check_bounds(**values) -> None:
+    """The command line's numbers against the campaign spec's physical bounds (:data:`campaigns.spec.BOUNDS`),
+    every problem at once, before any work."""
+    from campaigns.spec import in_range
+
+    problems = []
+    for option, value in values.items():
+        try:
+            in_range(option, value)
+        except ValueError as exc:
+            problems.append(f"--{option.replace('_', '-')}: {exc}")
+    if problems:
+        raise InputError("command line", problems)
+
+
 def cmd_simulate(args) -> int:
+    from campaigns.files import check_output, write_netcdf
+
+    _check_bounds(dt=args.dt, duration=args.duration)
+    for path in (args.out, args.plot):  # before the run: a refused file costs nothing
+        if path is not None:
+            check_output(path, force=args.force)
     scene, params = _scene_and_params(args)
     if args.duration is not None:
         scene = scene.with_duration(args.duration)
@@ -111,7 +133,8 @@ def cmd_simulate(args) -> int:
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
     print(f"integrator: {ds.attrs.get('integrator_choice') or solver_label(ds.attrs['integrator'], ds.attrs['dt'])}")
     if args.out:
-        ds.to_netcdf(args.out, engine="netcdf4")
+        write_netcdf(ds, args.out, title=f"BenchTwin run of scene {scene.name}",
+                     history=getattr(args, "command_line", f"twin simulate {scene.name}"))
         print(f"wrote {args.out}")
     if args.plot:
         from twin.plotting import plot_run
@@ -121,9 +144,23 @@ def cmd_simulate(args) -> int:
     return 0 if ds.attrs["status"] == "ok" else 1
 
 
+#: What ``twin accuracy`` writes in its --out directory (the charts with their .svg twins).
+ACCURACY_DATA = ("work_precision.nc", "work_precision.csv", "control_baseline.csv", "stability.nc")
+ACCURACY_CHARTS = ("work_precision.png", "work_precision.svg", "stability.png", "stability.svg",
+                   "campaign_accuracy.png", "campaign_accuracy.svg")
+#: What ``twin chapter5`` writes in its --out directory.
+CHAPTER5_FILES = ("chapter5.json", "fig5_*.png", "fig7_*.png")
+
+
 def cmd_accuracy(args) -> int:
     from app.studies.accuracy import replot, run_accuracy
+    from campaigns.files import check_outputs
 
+    _check_bounds(duration=args.duration)
+    # --replot asks for the charts to be redrawn: it replaces them (and only them) without --force
+    check_outputs(args.out, ACCURACY_CHARTS, force=args.force or args.replot)
+    if not args.replot:
+        check_outputs(args.out, ACCURACY_DATA, force=args.force)
     if args.replot:
         paths = replot(args.out)
     else:
@@ -148,7 +185,9 @@ def cmd_campaign_run(args) -> int:
     import campaigns
     from app.pipeline import run_campaign_pipeline
     from campaigns.budget import estimate
+    from campaigns.files import CampaignInterrupted
 
+    _check_bounds(workers=args.workers)
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
@@ -160,11 +199,29 @@ def cmd_campaign_run(args) -> int:
         else:
             print(f"wrote {kind} report: {path.resolve()}" if kind in ("html", "pdf") else f"wrote {path}")
 
-    run_campaign_pipeline(spec, out, analyze=args.analyze, report=args.report, workers=args.workers,
-                          scheduler=args.scheduler, resume=args.resume, allow_version_mix=args.allow_version_mix,
-                          announce=announce, wrote=wrote)
+    try:
+        run_campaign_pipeline(spec, out, analyze=args.analyze, report=args.report, workers=args.workers,
+                              scheduler=args.scheduler, resume=args.resume, allow_version_mix=args.allow_version_mix,
+                              announce=announce, wrote=wrote)
+    except CampaignInterrupted as stop:
+        print(f"\ntwin: stopped by {stop.signal_name}: {stop.kept} of {stop.total} runs kept in {out}; resume with: "
+              f"{resume_command(args, out)}", file=sys.stderr)
+        return 143 if stop.signal_name == "SIGTERM" else 130
     announce("done", f"total {time.perf_counter() - announce.start:.0f} s")
     return 0
+
+
+def resume_command(args, out: Path) -> str:
+    """The ``twin campaign run`` command that resumes this one: the same spec and options, plus ``--resume``."""
+    words = ["twin", "campaign", "run", str(args.spec), "--out", str(out)]
+    for option, value in (("--runs", args.runs), ("--timeout", args.timeout), ("--scheduler", args.scheduler)):
+        if value is not None:
+            words += [option, f"{value:g}" if isinstance(value, float) else str(value)]
+    if args.workers != 2:
+        words += ["--workers", str(args.workers)]
+    words += [flag for flag, on in (("--analyze", args.analyze), ("--report", args.report),
+                                    ("--allow-version-mix", args.allow_version_mix)) if on]
+    return shlex.join([*words, "--resume"])
 
 
 def _bench_run():
@@ -196,9 +253,11 @@ def _print_analysis(path: Path) -> None:
 
 def cmd_campaign_analyze(args) -> int:
     import campaigns
-    from campaigns.storage import check_output
+    from campaigns.storage import check_output, read_results
 
-    out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force)
+    out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force,
+                       product="analysis.nc")
+    read_results(args.results)  # a truncated or foreign file: one message naming it, before any work
     _print_analysis(campaigns.analyze(args.results, out))
     return 0
 
@@ -243,9 +302,11 @@ def cmd_fidelity_audit(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from campaigns.storage import check_output
+    from campaigns.storage import CampaignError, check_output
     from reports import build_report
 
+    if args.out.exists() and not args.out.is_dir():
+        raise CampaignError(f"{args.out} is not a directory; --out names the directory for report.html and report.pdf")
     for name in ("report.html", "report.pdf"):
         check_output(args.out / name, [args.results, args.analysis, args.accuracy], force=args.force)
     for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy).items():
@@ -255,6 +316,9 @@ def cmd_report(args) -> int:
 
 def cmd_chapter5(args) -> int:
     from app.studies.chapter5 import run_chapter5
+    from campaigns.files import check_outputs
+
+    check_outputs(args.out, CHAPTER5_FILES, force=args.force)
 
     result = run_chapter5(args.out, dynamic=not args.no_dynamic)
     for path in result["figures"]:
@@ -291,6 +355,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the electrical noise")
     p.add_argument("--out", type=Path, help="write the run Dataset (netCDF)")
     p.add_argument("--plot", type=Path, help="write an overview plot (PNG/SVG/PDF)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out or --plot file "
+                                                        "(never a campaign's own files)")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("accuracy", help="speed-versus-accuracy study: work-precision chart, stability map, baselines")
@@ -301,12 +367,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-stability", action="store_true", help="skip the stability map")
     p.add_argument("--campaign-runs", type=int, default=0,
                    help="also compare candidate solvers over N sampled runs of data sets 2 and 5 (e.g. 100)")
-    p.add_argument("--replot", action="store_true", help="only regenerate the charts from the data in --out")
+    p.add_argument("--replot", action="store_true",
+                   help="only redraw (replace) the charts from the data in --out")
+    p.add_argument("--force", action="store_true", help="replace the files of an earlier study in --out")
     p.set_defaults(func=cmd_accuracy)
 
     p = sub.add_parser("chapter5", help="validation against the thesis's Ch. 5: Figs. 5.6-5.13 and 7.22 regenerated")
     p.add_argument("--out", type=Path, default=Path("out/chapter5"), help="output directory (default out/chapter5)")
     p.add_argument("--no-dynamic", action="store_true", help="skip the simulated hysteresis of Figs. 5.11-5.12")
+    p.add_argument("--force", action="store_true", help="replace the figures of an earlier run in --out")
     p.set_defaults(func=cmd_chapter5)
     campaign = sub.add_parser("campaign", help="Monte Carlo campaigns: run a spec, analyse its results")
     campaign_sub = campaign.add_subparsers(dest="campaign_command", required=True)
@@ -365,6 +434,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.command_line = shlex.join(["twin", *(sys.argv[1:] if argv is None else argv)])
     try:
         return args.func(args)
     except Exception as exc:

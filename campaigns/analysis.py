@@ -11,13 +11,22 @@ All statistics use successful runs only (status ``"ok"`` and a finite feature);
   and detection probability at a fixed false-alarm rate.
 * Observability: along the spec's backlash sweep (data sets that differ only in
   their backlash), the smallest backlash detectable against the zero-backlash
-  data set, compared with the 1 µm requirement of Table 9.3.
+  data set, compared with the 1 µm requirement of Table 9.3. The sweep levels
+  bracketing it are the finding; a value between them is printed only where the
+  sweep resolves it (:func:`sweep_resolution`).
+
+Sample-size floors, each from the statistic's own confidence: :data:`MIN_OK_RUNS`
+for moments and correlations (which carry their own intervals),
+:data:`MIN_DETECTION_RUNS` for the quantile that sets the detection threshold
+(order statistics, :func:`min_runs_for_quantile_bound`), and
+:data:`campaigns.sensitivity.MIN_RUNS` for the first-order index.
 """
 
 from __future__ import annotations
 
 import json
 import math
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -31,15 +40,32 @@ from campaigns.margins_analysis import control_robustness
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
 REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm"
-#: Ok runs a data set needs before any statistic of it is computed. The detection threshold is the 95 %
-#: quantile of the reference (false-alarm rate 5 %) and the minimum detectable backlash is where the detection
-#: probability reaches 95 %: both are resolved only when one run is at most 5 % of the sample, i.e. n >= 20.
-#: Below that the bootstrap has too few distinct resamples for a 95 % interval (docs/campaigns.md, Analysis).
+#: Ok runs a data set needs before any statistic of it is computed (``data_sufficient``). A floor against printing
+#: noise, not a confidence statement: below 20 runs a rank correlation must exceed ±0.45 (1.96/sqrt(n - 1)) to be
+#: told from independence, and the first-order index cannot be computed at all (it needs more than 2 x 10 harmonics
+#: of runs). Every statistic above it carries its own interval. The detection threshold carries none: it has its
+#: own floor, :data:`MIN_DETECTION_RUNS` (docs/campaigns.md, Analysis).
 MIN_OK_RUNS = 20
+#: Detection settings of the verdict: the threshold flags this fraction of the reference's runs ...
+FALSE_ALARM_RATE = 0.05
+#: ... and the minimum detectable level is where this fraction of a data set's runs is flagged.
+POWER = 0.95
+#: Confidence of the bootstrap bounds and of the order-statistic floor.
+CONFIDENCE = 0.95
+#: Flag values of ``minimum_detectable_status``: how far the sweep resolves the minimum detectable level.
+RESOLUTIONS = ("insufficient_data", "resolved", "between_adjacent_levels", "beyond_sweep")
 _VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not met / undetermined / insufficient data"}
 _STATEMENT_ATTRS = {
     "long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, "
                  "in one sentence"}
+_RESOLUTION_ATTRS = {
+    "long_name": "how far the sweep resolves the minimum detectable level: resolved (a sweep level lies strictly "
+                 "inside the bootstrap bounds: the value is printed), between_adjacent_levels (the bracket of two "
+                 "adjacent sweep levels is the finding), beyond_sweep (no level detected with the power), "
+                 "insufficient_data",
+    "flag_values": np.arange(len(RESOLUTIONS), dtype=np.int8),
+    "flag_meanings": " ".join(RESOLUTIONS),
+}
 #: What a sweep's condition measures: condition -> (fault quantity, unit, display scale, display unit). The
 #: fault size of a data set is ``|condition - condition of the reference|`` (the backlash itself; the loss of
 #: preload from the healthy reference).
@@ -50,6 +76,60 @@ _OBSERVABILITY_STREAM = 1_000_003
 _SENSITIVITY_STREAM = 1_000_033
 #: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
 _EXPLAINED = 1e-18
+
+
+def quantile_bound_rank(n: int, quantile: float, confidence: float) -> int | None:
+    """Rank ``r`` (1-based) of the smallest order statistic of ``n`` runs that is a one-sided upper confidence bound,
+    at ``confidence``, of the distribution's ``quantile``; None when not even the sample maximum is.
+
+    Distribution-free (any continuous distribution): ``X_(r) >= xi_q`` exactly when fewer than ``r`` runs fall below
+    ``xi_q``, so ``P(X_(r) >= xi_q) = P(Binomial(n, q) <= r - 1)`` (David & Nagaraja 2003, *Order Statistics*,
+    3rd ed., Sec. 7.1). By symmetry ``n + 1 - r`` is the rank of the largest order statistic that is a lower bound of
+    the ``1 - quantile`` quantile at the same confidence.
+    """
+    k = int(stats.binom.ppf(confidence, n, quantile))  # the smallest k with P(Binomial(n, q) <= k) >= confidence
+    while k > 0 and stats.binom.cdf(k - 1, n, quantile) >= confidence:  # round-off guards of the inverse
+        k -= 1
+    while k < n and stats.binom.cdf(k, n, quantile) < confidence:
+        k += 1
+    return k + 1 if k + 1 <= n else None
+
+
+def min_runs_for_quantile_bound(quantile: float, confidence: float) -> int:
+    """The fewest runs for which some order statistic bounds the ``quantile`` from above at ``confidence``.
+
+    The sample maximum is the most likely bound: ``P(X_(n) >= xi_q) = 1 - q^n`` (:func:`quantile_bound_rank`), so
+    ``n = ceil(log(1 - confidence) / log(quantile))``: 59 for the 95 % quantile at 95 % (1 - 0.95^59 = 0.952,
+    1 - 0.95^58 = 0.949; David & Nagaraja 2003, Sec. 7.2, the distribution-free tolerance limit of Wilks 1941).
+    """
+    n = max(1, math.ceil(math.log1p(-confidence) / math.log(quantile)))
+    while 1.0 - quantile**n < confidence:  # round-off guards of the logarithms
+        n += 1
+    while n > 1 and 1.0 - quantile ** (n - 1) >= confidence:
+        n -= 1
+    return n
+
+
+def detection_run_floor(false_alarm_rate: float = FALSE_ALARM_RATE, power: float = POWER,
+                       confidence: float = CONFIDENCE) -> int:
+    """Ok runs every data set of a detection statement needs: :data:`MIN_DETECTION_RUNS` for the default settings.
+
+    The detection threshold is the ``1 - false_alarm_rate`` quantile of the reference, and a data set is detected
+    with probability ``power`` when its ``1 - power`` quantile lies beyond that threshold. Each quantile has a
+    distribution-free confidence bound among its sample's order statistics only from
+    :func:`min_runs_for_quantile_bound` runs on (the largest run bounds the upper quantile from above, the smallest
+    the lower one from below); below it, no threshold taken from the runs can be shown to keep the false-alarm rate
+    (or the power) at its nominal value with ``confidence``, whatever order statistic is used.
+    """
+    return max(min_runs_for_quantile_bound(1.0 - false_alarm_rate, confidence),
+               min_runs_for_quantile_bound(power, confidence))
+
+
+#: Ok runs every data set needs before a detection probability against its threshold (or of its runs, for the
+#: verdict) is computed: 59 at a 5 % false-alarm rate, 95 % power and 95 % confidence (:func:`detection_run_floor`).
+#: At the previous floor, 20, even the largest run bounds the 95 % quantile with only 64 % confidence (1 - 0.95^20),
+#: and the threshold used (interpolated between the two largest runs) with 26-64 %.
+MIN_DETECTION_RUNS = detection_run_floor()
 
 
 def _pearson(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -286,7 +366,9 @@ def bootstrap_minimum_detectable(
         ``probability`` (per data set), ``estimate`` (interpolated, NaN when
         ``power`` is never reached), ``bracket`` and ``bounds`` (each ``(lower,
         upper)``), the replicates' interpolated minima ``replicates`` (``inf``:
-        not reached).
+        not reached), and ``resolution`` (:func:`sweep_resolution`) with the
+        value that may be printed, ``printed`` (:func:`printed_estimate`; NaN
+        unless the sweep resolves it).
     """
     levels = np.asarray(levels, dtype=float)
     samples = [np.asarray(s, dtype=float) for s in samples]
@@ -301,13 +383,46 @@ def bootstrap_minimum_detectable(
         min(float(np.quantile(brackets[:, 1], alpha, method="inverted_cdf")), lower),
         max(float(np.quantile(brackets[:, 2], 1.0 - alpha, method="inverted_cdf")), upper),
     )
+    resolution = sweep_resolution(levels, estimate, bounds)
     return {
         "probability": probability,
         "estimate": estimate,
         "bracket": (lower, upper),
         "bounds": bounds,
         "replicates": np.where(np.isnan(brackets[:, 0]), math.inf, brackets[:, 0]),
+        "resolution": resolution,
+        "printed": printed_estimate(estimate, bounds) if resolution == "resolved" else math.nan,
     }
+
+
+def sweep_resolution(levels, estimate: float, bounds: tuple[float, float]) -> str:
+    """Whether the sweep resolves the minimum detectable level, or only brackets it (one of :data:`RESOLUTIONS`).
+
+    Between two sweep levels the data say nothing: the linear interpolation of the estimate is not evidence. The
+    value is ``"resolved"`` when the bootstrap bounds are finite and hold a sweep level strictly inside: the sampling
+    uncertainty then spans more than one sweep step, so the interpolation's error (at most one step) is within the
+    stated bounds (or the bounds are one level, the estimate itself). Otherwise the estimate lies
+    ``"between_adjacent_levels"`` (the bracket is the finding), or ``"beyond_sweep"`` when no level reaches the
+    power.
+    """
+    if not math.isfinite(estimate):
+        return "beyond_sweep"
+    lower, upper = bounds
+    levels = np.asarray(levels, dtype=float)
+    if math.isfinite(upper) and (lower == upper or ((levels > lower) & (levels < upper)).any()):
+        return "resolved"
+    return "between_adjacent_levels"
+
+
+def printed_estimate(estimate: float, bounds: tuple[float, float]) -> float:
+    """The estimate rounded at the leading digit of its bounds' half-width: a result is given to the precision of its
+    uncertainty (JCGM 100:2008, GUM, Sec. 7.2.6), e.g. 1.19 µm within 0.5-1.5 µm is 1.2 µm; 371 N within 0-600 N is
+    400 N. Bounds of zero width (the estimate is a sweep level) leave it as it is."""
+    half_width = 0.5 * (bounds[1] - bounds[0])
+    if not (math.isfinite(estimate) and math.isfinite(half_width) and half_width > 0):
+        return estimate
+    step = 10.0 ** math.floor(math.log10(half_width))
+    return round(estimate / step) * step
 
 
 def requirement_verdict(lower: float, upper: float, requirement: float = BACKLASH_REQUIREMENT) -> str:
@@ -335,10 +450,13 @@ def requirement_statement(
     bounds: tuple[float, float],
     n_used: dict[str, int],
     *,
-    confidence: float = 0.95,
-    power: float = 0.95,
-    min_ok_runs: int = MIN_OK_RUNS,
-    largest_level: float = math.nan,
+    resolution: str = "resolved",
+    bracket: tuple[float, float] = (math.nan, math.nan),
+    levels: dict[str, float] | None = None,
+    confidence: float = CONFIDENCE,
+    power: float = POWER,
+    false_alarm_rate: float = FALSE_ALARM_RATE,
+    min_runs: int = MIN_DETECTION_RUNS,
     condition: str = "backlash",
     requirement: float = BACKLASH_REQUIREMENT,
     requirement_source: str = "Table 9.3",
@@ -350,45 +468,72 @@ def requirement_statement(
     verdict : str
         From :func:`requirement_verdict`, or ``"insufficient data"``.
     estimate : float
-        Interpolated minimum detectable backlash [m] (NaN: not reached along the sweep).
+        The value that may be printed [SI] (``printed`` of :func:`bootstrap_minimum_detectable`); used only when
+        ``resolution`` is ``"resolved"``.
     bounds : tuple of float
-        Bootstrap bounds [m] (lower: a level not detected, upper: a level detected).
+        Bootstrap bounds [SI] (lower: a level not detected, upper: a level detected, ``inf``: possibly beyond the
+        sweep).
     n_used : dict
         Ok runs of each sweep data set (empty: no sweep).
-    confidence, power, min_ok_runs, largest_level
-        As used for the numbers (``largest_level``: the largest backlash of the sweep).
+    resolution, bracket
+        From :func:`sweep_resolution`; the sweep levels around the estimate (:func:`minimum_detectable`).
+    levels : dict, optional
+        Fault size of each sweep data set [SI]: every level the sentence gives is named by its data set.
+    confidence, power, false_alarm_rate, min_runs
+        As used for the numbers (``min_runs``: the floor of every sweep data set, :func:`detection_run_floor`).
     condition, requirement, requirement_source
         The swept condition (:data:`SWEEP_QUANTITIES`), the requirement on its fault size (SI) and its source.
     """
     quantity, _, scale, unit = SWEEP_QUANTITIES[condition]
+    names = {}
+    for name, value in (levels or {}).items():
+        names.setdefault(float(value), name)
 
     def fmt(value: float) -> str:  # in the display unit of the fault quantity (µm for the backlash)
         return f"{value * scale:.3g} {unit}"
+
+    def level(value: float) -> str:  # a sweep level, named by its data set
+        return f"{fmt(value)} ({names[value]})" if value in names else fmt(value)
 
     against = f"against the {fmt(requirement)} requirement of {requirement_source}"
     if not n_used:
         return (
             "insufficient data: the spec has no observability sweep, "
             f"so no minimum detectable {quantity} is estimated {against}")
-    short = [f"{name} has {_runs(n)}" for name, n in n_used.items() if n < min_ok_runs]
+    short = [f"{name} has {_runs(n)}" for name, n in n_used.items() if n < min_runs]
     if len(short) == len(n_used) > 1 and len(set(n_used.values())) == 1:
         short = [f"each of the {len(n_used)} sweep data sets has {_runs(next(iter(n_used.values())))}"]
     if short:
         return (
-            f"insufficient data: {', '.join(short)} (at least {min_ok_runs} per sweep data set are needed), "
+            f"insufficient data: {', '.join(short)}; at least {min_runs} per sweep data set are needed "
+            f"({_floor_reason(false_alarm_rate, power, confidence)}), "
             f"so no minimum detectable {quantity} is estimated {against}"
         )
     counts = sorted(set(n_used.values()))
     runs = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
     lower, upper = bounds
-    upper_text = (f"at most {fmt(upper)}" if math.isfinite(upper)
-                  else f"possibly beyond the sweep ({fmt(largest_level)})")
-    level = "" if math.isfinite(estimate) else f"not reached up to {fmt(largest_level)}: "
-    value = fmt(estimate) if math.isfinite(estimate) else f"detection probability below {power * 100:g} %"
+    if resolution == "resolved":
+        value = fmt(estimate)
+    elif resolution == "between_adjacent_levels":
+        value = f"between the adjacent sweep levels {level(bracket[0])} and {level(bracket[1])}"
+    else:
+        value = (f"above {level(bracket[0])}, the largest sweep level: detection probability below {power * 100:g} % "
+                 "along the whole sweep")
+    upper_text = f"at most {level(upper)}" if math.isfinite(upper) else "possibly beyond the sweep"
     return (
-        f"{verdict}: minimum detectable {quantity} {level}{value} ({confidence * 100:g} % bootstrap bounds: above "
-        f"{fmt(lower)}, {upper_text}; {runs} ok runs per sweep data set, {len(n_used)} data sets) {against}"
+        f"{verdict}: minimum detectable {quantity} {value} ({confidence * 100:g} % bootstrap bounds: above "
+        f"{level(lower)}, {upper_text}; {runs} ok runs per sweep data set, {len(n_used)} data sets) {against}"
     )
+
+
+def _floor_reason(false_alarm_rate: float, power: float, confidence: float) -> str:
+    """Why a sweep data set needs :func:`detection_run_floor` runs, in words (the quantile that binds)."""
+    threshold = min_runs_for_quantile_bound(1.0 - false_alarm_rate, confidence)
+    if threshold >= min_runs_for_quantile_bound(power, confidence):
+        return (f"with fewer, not even the largest run bounds the {(1 - false_alarm_rate) * 100:g} % quantile that "
+                f"sets the detection threshold from above with {confidence * 100:g} % confidence")
+    return (f"with fewer, not even the smallest run bounds the {(1 - power) * 100:g} % quantile that "
+            f"{power * 100:g} % detection rests on from below with {confidence * 100:g} % confidence")
 
 
 def _used(results: xr.Dataset, feature: str) -> xr.DataArray:
@@ -400,11 +545,11 @@ def observability_sweep(
     feature: str,
     datasets: list[str],
     *,
-    false_alarm_rate: float = 0.05,
-    power: float = 0.95,
+    false_alarm_rate: float = FALSE_ALARM_RATE,
+    power: float = POWER,
     n_boot: int = 1000,
-    confidence: float = 0.95,
-    min_ok_runs: int = MIN_OK_RUNS,
+    confidence: float = CONFIDENCE,
+    min_runs: int | None = None,
     seed=None,
     condition: str = "backlash",
     reference: str | None = None,
@@ -426,9 +571,10 @@ def observability_sweep(
         the minimum detectable backlash is where the detection probability reaches ``power``.
     n_boot, confidence, seed
         Bootstrap of :func:`bootstrap_minimum_detectable`.
-    min_ok_runs : int
-        Ok runs every sweep data set needs; below it the verdict is ``"insufficient data"``
-        and the sweep statistics of that data set are NaN.
+    min_runs : int, optional
+        Ok runs every sweep data set needs (default :func:`detection_run_floor` of the settings); below it the
+        verdict is ``"insufficient data"`` and the detection probability of that data set is NaN (of every data
+        set, when the reference is short).
     condition, reference, requirement, requirement_source
         The swept scene condition (:data:`SWEEP_QUANTITIES`; ``observability.condition`` of the
         spec), the reference data set (default: the one where it is zero), the requirement on the
@@ -438,7 +584,8 @@ def observability_sweep(
     -------
     xarray.Dataset
         ``sweep_<q>(sweep_point)``, ``sweep_detection_probability(sweep_point)``,
-        the scalar ``minimum_detectable_<q>`` (the requirement in its attributes),
+        the scalar ``minimum_detectable_<q>`` (the requirement in its attributes; NaN unless the sweep
+        resolves it), ``minimum_detectable_status`` (:data:`RESOLUTIONS`, numeric flags),
         ``minimum_detectable_bracket(bound)`` (the sweep levels around the estimate),
         ``minimum_detectable_<q>_ci(bound)``, ``requirement_verdict`` and ``requirement_statement``,
         where ``<q>`` is the fault quantity (``backlash``, ``preload_loss``).
@@ -451,23 +598,27 @@ def observability_sweep(
     used = _used(results, feature)
     samples = [results[feature].sel(dataset=n).values[used.sel(dataset=n).values] for n in datasets]
     n_used = {n: len(s) for n, s in zip(datasets, samples, strict=False)}
+    if min_runs is None:
+        min_runs = detection_run_floor(false_alarm_rate, power, confidence)
     nan2 = (math.nan, math.nan)
-    if min(n_used.values()) < min_ok_runs:
-        enough = [len(s) >= min_ok_runs and n_used[datasets[reference]] >= min_ok_runs for s in samples]
+    if min(n_used.values()) < min_runs:
+        enough = [len(s) >= min_runs and n_used[datasets[reference]] >= min_runs for s in samples]
         probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
                                 for s, ok in zip(samples, enough, strict=False)])
-        estimate, bracket, bounds, verdict = math.nan, nan2, nan2, "insufficient data"
+        found = {"estimate": math.nan, "printed": math.nan, "bracket": nan2, "bounds": nan2,
+                 "resolution": "insufficient_data"}
+        verdict = "insufficient data"
     else:
         found = bootstrap_minimum_detectable(
             backlash, samples, reference, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
             confidence=confidence, seed=seed,
         )
-        probability, estimate, bracket, bounds = (found["probability"], found["estimate"], found["bracket"],
-                                                  found["bounds"])
-        verdict = requirement_verdict(*bounds, requirement)
+        probability = found["probability"]
+        verdict = requirement_verdict(*found["bounds"], requirement)
     statement = requirement_statement(
-        verdict, estimate, bounds, n_used, confidence=confidence, power=power, min_ok_runs=min_ok_runs,
-        largest_level=float(backlash.max()), condition=condition, requirement=requirement,
+        verdict, found["printed"], found["bounds"], n_used, resolution=found["resolution"], bracket=found["bracket"],
+        levels=dict(zip(datasets, backlash, strict=True)), confidence=confidence, power=power,
+        false_alarm_rate=false_alarm_rate, min_runs=min_runs, condition=condition, requirement=requirement,
         requirement_source=requirement_source.removeprefix("Bertolino (2020) ").split(":")[0],
     )
     return xr.Dataset(
@@ -483,25 +634,28 @@ def observability_sweep(
             ),
             f"minimum_detectable_{stem}": (
                 (),
-                estimate,
+                found["estimate"] if found["resolution"] == "resolved" else math.nan,
                 {
                     "units": unit,
                     "long_name": f"smallest {quantity} detected with probability {power:g} at false-alarm rate "
-                                 f"{false_alarm_rate:g} (linear interpolation along the sweep; NaN: "
-                                 "not reached or insufficient data)",
+                                 f"{false_alarm_rate:g}, interpolated along the sweep, only where the sweep "
+                                 "resolves it (minimum_detectable_status = resolved), else NaN: read "
+                                 "minimum_detectable_bracket; print it rounded at the leading digit of the "
+                                 "half-width of its bounds (campaigns.analysis.printed_estimate)",
                     "requirement": requirement,
                     "requirement_source": requirement_source,
                 },
             ),
+            "minimum_detectable_status": ((), np.int8(RESOLUTIONS.index(found["resolution"])), _RESOLUTION_ATTRS),
             "minimum_detectable_bracket": (
                 "bound",
-                np.array(bracket),
+                np.array(found["bracket"]),
                 {"units": unit,
                  "long_name": f"sweep levels bracketing minimum_detectable_{stem} (inf: never detected)"},
             ),
             f"minimum_detectable_{stem}_ci": (
                 "bound",
-                np.array(bounds),
+                np.array(found["bounds"]),
                 {
                     "units": unit,
                     "long_name": f"bootstrap bounds of the minimum detectable {quantity}: "
@@ -526,22 +680,31 @@ def analysis_dataset(
     *,
     n_boot: int = 1000,
     confidence: float = 0.95,
-    false_alarm_rate: float = 0.05,
-    power: float = 0.95,
+    false_alarm_rate: float = FALSE_ALARM_RATE,
+    power: float = POWER,
     seed: int = 0,
     min_ok_runs: int = MIN_OK_RUNS,
+    min_detection_runs: int | None = None,
     sensitivity_boot: int = 200,
 ) -> xr.Dataset:
     """Compute every statistic of :func:`analyze` on an opened results dataset.
 
     A data set with fewer than ``min_ok_runs`` used runs of a feature is flagged
-    in ``data_sufficient`` and gets NaN statistics for that feature.
-    ``sensitivity_boot`` resamples give the interval of the first-order index
-    (:func:`campaigns.sensitivity.first_order`).
+    in ``data_sufficient`` and gets NaN statistics for that feature. A detection
+    probability needs ``min_detection_runs`` (default :func:`detection_run_floor`
+    of ``false_alarm_rate``, ``power`` and ``confidence``) in its reference data
+    set, and the verdict in every sweep data set. ``sensitivity_boot`` resamples
+    give the interval of the first-order index
+    (:func:`campaigns.sensitivity.first_order`); an index below
+    :data:`campaigns.sensitivity.MIN_RUNS` runs, or outside its own interval, is
+    flagged in ``first_order_index_flag``: every output prints its interval only.
     """
     if min_ok_runs < 3:
         raise ValueError(
             f"min_ok_runs = {min_ok_runs}: must be at least 3 (a standard deviation and a correlation need 3 runs)")
+    if min_detection_runs is None:
+        min_detection_runs = detection_run_floor(false_alarm_rate, power, confidence)
+    min_detection_runs = max(min_detection_runs, min_ok_runs)
     parameters = [v for v in results.data_vars if results[v].attrs.get("role") == "sampled"]
     features = [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]
     names = [str(n) for n in results["dataset"].values]
@@ -549,6 +712,7 @@ def analysis_dataset(
     out = {k: np.full(shape, math.nan) for k in ("pearson", "spearman", "prcc")}
     ci = {k: np.full(shape + (2,), math.nan) for k in ("pearson", "spearman", "first_order_index", "effect_size")}
     out["first_order_index"], effect_size = np.full(shape, math.nan), np.full(shape, math.nan)
+    first_order_flag = np.zeros(shape, dtype=np.int8)
     n_used = np.zeros((len(names), len(features)), dtype=np.int64)
     mean, std = np.full(n_used.shape, math.nan), np.full(n_used.shape, math.nan)
     overlap = np.full((len(features), len(names), len(names)), math.nan)
@@ -560,6 +724,7 @@ def analysis_dataset(
             mask = _used(results, feature).sel(dataset=name).values
             y = row[feature].values[mask]
             n_used[d, f] = len(y)
+            first_order_flag[d, f] = sensitivity.BELOW_MIN_RUNS if len(y) < sensitivity.MIN_RUNS else 0
             if len(y) < min_ok_runs:
                 continue
             used_values[d, f] = y
@@ -576,24 +741,28 @@ def analysis_dataset(
                 X.T, y, n_boot=sensitivity_boot, confidence=confidence,
                 seed=np.random.SeedSequence(seed, spawn_key=(_SENSITIVITY_STREAM, d, f)),
             )
-            out["first_order_index"][d, f], ci["first_order_index"][d, f] = found["index"], found["ci"]
-            effect_size[d, f], ci["effect_size"][d, f] = found["effect_size"], found["effect_size_ci"]
+            first_order_flag[d, f] = sensitivity.unresolved(found["index"], found["ci"], len(y))
+            out["first_order_index"][d, f], effect_size[d, f] = found["index"], found["effect_size"]
+            ci["first_order_index"][d, f], ci["effect_size"][d, f] = found["ci"], found["effect_size_ci"]
     for f in range(len(features)):
         for a, b in ((a, b) for a in range(len(names)) for b in range(len(names))):
             if (a, f) in used_values and (b, f) in used_values:
                 overlap[f, a, b] = overlap_coefficient(used_values[a, f], used_values[b, f])
-                detection[f, a, b] = detection_probability(used_values[b, f], used_values[a, f], false_alarm_rate)
+                if n_used[b, f] >= min_detection_runs:  # b's quantile is the threshold
+                    detection[f, a, b] = detection_probability(used_values[b, f], used_values[a, f],
+                                                               false_alarm_rate)
     statuses = sorted(set(results["status"].values.ravel().tolist()))
     n_status = np.array([[int((results["status"].sel(dataset=n) == s).sum()) for s in statuses] for n in names])
     n_runs = results.sizes["run"]
 
     corr_dims = ("dataset", "feature", "parameter")
-    units = {results[f].attrs.get("units", "") for f in features}
-    feature_units = units.pop() if len(units) == 1 else "units of each feature"
+    in_feature_units = _feature_units([str(results[f].attrs.get("units", "1")) for f in features])
     data_vars = {
-        "n_used": (("dataset", "feature"), n_used, {"long_name": "runs used (status ok, finite feature)"}),
-        "n_excluded": (("dataset", "feature"), n_runs - n_used, {"long_name": "runs excluded from the statistics"}),
-        "n_status": (("dataset", "status"), n_status, {"long_name": "runs per status"}),
+        "n_used": (("dataset", "feature"), n_used.astype(np.int32),
+                   {"units": "1", "long_name": "runs used (status ok, finite feature)"}),
+        "n_excluded": (("dataset", "feature"), (n_runs - n_used).astype(np.int32),
+                       {"units": "1", "long_name": "runs excluded from the statistics"}),
+        "n_status": (("dataset", "status"), n_status.astype(np.int32), {"units": "1", "long_name": "runs per status"}),
         "data_sufficient": (
             ("dataset", "feature"),
             (n_used >= min_ok_runs).astype(np.int8),
@@ -604,8 +773,10 @@ def analysis_dataset(
                 "min_ok_runs": min_ok_runs,
             },
         ),
-        "feature_mean": (("dataset", "feature"), mean, {"long_name": "mean of the feature over used runs"}),
-        "feature_std": (("dataset", "feature"), std, {"long_name": "standard deviation of the feature over used runs"}),
+        "feature_mean": (("dataset", "feature"), mean,
+                         {"long_name": "mean of the feature over used runs", **in_feature_units}),
+        "feature_std": (("dataset", "feature"), std,
+                        {"long_name": "standard deviation of the feature over used runs", **in_feature_units}),
         "pearson": (corr_dims, out["pearson"], {"units": "1", "long_name": "Pearson correlation"}),
         "pearson_ci": (corr_dims + ("bound",), ci["pearson"],
                        {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of pearson"}),
@@ -618,7 +789,19 @@ def analysis_dataset(
             out["first_order_index"],
             {"units": "1",
              "long_name": "first-order (Sobol') index: share of the feature's variance explained by the parameter "
-                          "alone, any shape of dependence", "method": sensitivity.METHOD},
+                          "alone, any shape of dependence; not to be printed where first_order_index_flag is set "
+                          f"(below {sensitivity.MIN_RUNS} used runs, or outside its own interval): print the interval",
+             "method": sensitivity.METHOD, "min_runs": sensitivity.MIN_RUNS},
+        ),
+        "first_order_index_flag": (
+            corr_dims,
+            first_order_flag,
+            {"long_name": "why first_order_index and effect_size are not resolved (0: they are): fewer used runs "
+                          f"than {sensitivity.MIN_RUNS} (the chance level of inert parameters' indices is then above "
+                          "0.1), or the estimate outside its own bootstrap interval; where set, only the intervals "
+                          "are printed",
+             "flag_masks": np.array([sensitivity.BELOW_MIN_RUNS, sensitivity.OUTSIDE_INTERVAL], dtype=np.int8),
+             "flag_meanings": sensitivity.FLAG_MEANINGS, "min_runs": sensitivity.MIN_RUNS},
         ),
         "first_order_index_ci": (
             corr_dims + ("bound",),
@@ -630,18 +813,19 @@ def analysis_dataset(
             corr_dims,
             effect_size,
             {
-                "units": feature_units,
                 "long_name": "standard deviation of the conditional mean E[feature | parameter] over the parameter's "
                              "distribution, sqrt(max(first_order_index, 0) var(feature)): "
-                             "what the parameter alone moves the feature by",
+                             "what the parameter alone moves the feature by (not resolved where "
+                             "first_order_index_flag is set: print effect_size_ci)",
                 "method": sensitivity.METHOD,
+                **in_feature_units,
             },
         ),
         "effect_size_ci": (
             corr_dims + ("bound",),
             ci["effect_size"],
-            {"units": feature_units,
-             "long_name": "effect_size at the bounds of first_order_index_ci (feature variance held fixed)"},
+            {"long_name": "effect_size at the bounds of first_order_index_ci (feature variance held fixed)",
+             **in_feature_units},
         ),
         "overlap": (("feature", "dataset", "reference"), overlap,
                     {"units": "1", "long_name": "overlap coefficient of the feature distributions"}),
@@ -650,13 +834,16 @@ def analysis_dataset(
             detection,
             {"units": "1",
              "long_name": "fraction of dataset runs beyond the reference's threshold at false-alarm rate "
-                          f"{false_alarm_rate:g}"},
+                          f"{false_alarm_rate:g} (NaN: fewer than min_detection_runs in the reference, or "
+                          "min_ok_runs in the data set)"},
         ),
     }
     coords = {
         "dataset": ("dataset", np.array(names, dtype=object)),
         "reference": ("reference", np.array(names, dtype=object)),
         "feature": ("feature", np.array(features, dtype=object)),
+        "feature_units": ("feature", np.array([str(results[f].attrs.get("units", "1")) for f in features],
+                                              dtype=object), {"long_name": "units of each feature"}),
         "parameter": ("parameter", np.array(parameters, dtype=object)),
         "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
         "status": ("status", np.array(statuses, dtype=object)),
@@ -671,7 +858,7 @@ def analysis_dataset(
         per_feature = [
             observability_sweep(
                 results, feature, sweep, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
-                confidence=confidence, min_ok_runs=min_ok_runs,
+                confidence=confidence, min_runs=min_detection_runs,
                 seed=np.random.SeedSequence(seed, spawn_key=(_OBSERVABILITY_STREAM, f)), condition=condition,
                 reference=observability.get("reference"), requirement=requirement[0], requirement_source=requirement[1],
             )
@@ -698,6 +885,9 @@ def analysis_dataset(
         "detection_power": power,
         "backlash_sweep": json.dumps(sweep),
         "min_ok_runs": min_ok_runs,
+        "min_detection_runs": min_detection_runs,
+        "min_detection_runs_reason": _floor_reason(false_alarm_rate, power, confidence),
+        "first_order_min_runs": sensitivity.MIN_RUNS,
         "observability_condition": condition,
         "requirement": requirement[0],
         "requirement_units": SWEEP_QUANTITIES[condition][1],
@@ -707,6 +897,15 @@ def analysis_dataset(
                                     features=features, n_boot=n_boot, confidence=confidence, seed=seed,
                                     min_ok_runs=min_ok_runs)
     return analysis.merge(robustness, combine_attrs="override")
+
+
+def _feature_units(units: list[str]) -> dict[str, str]:
+    """The ``units`` attribute of a variable along the feature axis: the features' common unit, or (features in
+    several units; CF gives one unit per variable) a comment that points at the ``feature_units`` coordinate."""
+    if len(set(units)) == 1:
+        return {"units": units[0]}
+    return {"comment": "in the units of each feature, given by the feature_units coordinate (" + ", ".join(
+        sorted(set(units))) + ")"}
 
 
 def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
@@ -756,5 +955,21 @@ def analyze(results_path: str | Path, out_path: str | Path | None = None, **opti
     out_path = Path(out_path) if out_path is not None else results_path.with_name("analysis.nc")
     with xr.open_dataset(results_path, engine="netcdf4") as results:
         analysis = analysis_dataset(results.load(), **options)
-    atomic_write(out_path, lambda tmp: analysis.to_netcdf(tmp, engine="netcdf4"))
+        history = str(results.attrs.get("history", "")).strip()
+    stamp = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    analysis.attrs["history"] = "\n".join(
+        [line for line in (history, f"{stamp}: campaigns.analysis.analyze({results_path.name})") if line])
+    atomic_write(out_path, lambda tmp: analysis.to_netcdf(tmp, engine="netcdf4", encoding=cf_encoding(analysis)))
     return out_path
+
+
+def cf_encoding(ds: xr.Dataset) -> dict[str, dict]:
+    """netCDF encoding that keeps a dataset's coordinates CF-clean: text labels (``dataset``, ``feature``,
+    ``parameter``, ...) as character arrays (CF 1.8, Sec. 6.1 labels: tools that check the monotonicity of numeric
+    coordinate variables skip them, and xarray reads them back as string coordinates), and no ``_FillValue`` on any
+    coordinate (CF 1.8, Sec. 2.5.1: coordinates have no missing values)."""
+    encoding = {}
+    for name, coordinate in ds.coords.items():
+        text = coordinate.dtype.kind in "OUS"
+        encoding[name] = {"dtype": "S1"} if text else {"_FillValue": None}
+    return encoding

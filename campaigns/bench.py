@@ -144,8 +144,12 @@ def margin_variables(spec, request_of, map_chunks=None) -> dict:
     out = {}
     for name, (loop, metric) in MARGIN_VARIABLES.items():
         unit, long_name = METRICS[metric]
-        out[name] = (dims, arrays[name], {"units": unit, "long_name": f"{loop} loop {long_name} (twin.control.margins)",
-                                          "role": "margin", "loop": loop, "metric": metric})
+        values, attrs = arrays[name], {}
+        if unit == "dB":  # an amplitude ratio in dB; stored as the ratio, which every unit library reads alike
+            values, unit = 10.0 ** (values / 20.0), "1"
+            attrs["comment"] = "amplitude ratio (gain margin in dB = 20 log10 of it); inf: no phase crossover"
+        out[name] = (dims, values, {"units": unit, "long_name": f"{loop} loop {long_name} (twin.control.margins)",
+                                    "role": "margin", "loop": loop, "metric": metric, **attrs})
     out[MARGIN_NOTE] = (dims, notes, {"long_name": "why loop margins are NaN (empty: every present loop computed)"})
     return out
 

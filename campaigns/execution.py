@@ -35,7 +35,11 @@ import contextlib
 import json
 import logging
 import math
+import os
+import signal
 import statistics
+import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
@@ -50,11 +54,12 @@ from campaigns import bench as bench_adapter
 from campaigns.budget import check_disk, estimate
 from campaigns.catalog import Catalog
 from campaigns.fidelity_audit import audit_campaign, has_automatic_choice
+from campaigns.files import CampaignError, CampaignInterrupted
 from campaigns.provenance import provenance
 from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
 from campaigns.sampling import sample
-from campaigns.sandbox import run_isolated
-from campaigns.spec import CampaignSpec, load_spec
+from campaigns.sandbox import STOP_SIGNALS, Sandbox, children_ignore_stop_signals, run_isolated
+from campaigns.spec import BOUNDS, CampaignSpec, load_spec
 from campaigns.storage import ChunkStore, OutputLock
 from twin.scenes import split_targets
 
@@ -210,10 +215,85 @@ def run_campaign(
     bench = run_function is None
     if bench:
         run_function = bench_adapter.simulate_run
+    if not (isinstance(workers, int) and 1 <= workers <= BOUNDS["workers"][1]):
+        raise CampaignError(f"workers: {workers!r} is not a whole number in [1, {BOUNDS['workers'][1]}]")
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
+    stores: list[ChunkStore] = []
+    with _stop_signals() as stopped:
+        try:
+            return _run(spec, out_dir, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
+                        run_function=run_function, bench=bench, allow_version_mix=allow_version_mix,
+                        announce=announce, stores=stores)
+        except (KeyboardInterrupt, CampaignInterrupted) as exc:  # the second: the fidelity audit's own campaign
+            kept = len(stores[0].done) if stores else 0
+            name = exc.signal_name if isinstance(exc, CampaignInterrupted) else stopped.name or "Ctrl-C"
+            raise CampaignInterrupted(out_dir, kept, len(spec.datasets) * spec.runs_per_dataset, name) from None
+
+
+class _Stop:
+    """Which signal stopped the campaign (``name``), set by the handlers of :func:`_stop_signals`."""
+
+    name = ""
+
+
+@contextlib.contextmanager
+def _stop_signals():
+    """Ctrl-C and SIGTERM stop the campaign cleanly: the first raises ``KeyboardInterrupt`` in the driver, whose
+    unwinding ends the workers and the sandboxes and releases the lock; a second one while that runs ends the
+    driver at once (its chunk files are complete or absent, and the OS drops the lock). Outside the main thread
+    (a driver inside a server thread) nothing is installed."""
+    stop = _Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def first(signum, frame):
+        stop.name = "Ctrl-C" if signum == signal.SIGINT else signal.Signals(signum).name
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, again)
+        raise KeyboardInterrupt
+
+    def again(signum, frame):
+        print(f"\n{signal.Signals(signum).name} again: stopping at once", file=sys.stderr, flush=True)
+        os._exit(128 + signum)
+
+    previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+    for sig in STOP_SIGNALS:
+        if previous[sig] is not signal.SIG_IGN:
+            signal.signal(sig, first)
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _compile_and_time(run_function: RunFunction, request: RunRequest) -> float | None:
+    """Compile the run function's model once before the workers start, then time one run, both in a sandbox.
+
+    The sandbox's start-up (imports, the run function's warm-up: numba compiles and writes its on-disk cache,
+    which the workers then load) has the sandbox's own limit (:data:`campaigns.sandbox.STARTUP_TIMEOUT`); the
+    timed run has the campaign's budget (``execution.timeout`` and its grace), as every run: a spec whose runs
+    cannot finish in time stops here after that budget, not after however long the run would take.
+
+    Returns the run's wall time [s], or None when it did not end ok within its budget.
+    """
+    sandbox = Sandbox()
+    try:
+        record = sandbox.run(run_function, request)
+    finally:
+        sandbox.close()
+    return record["wall_time"] if record["status"] == "ok" else None
+
+
+def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, bench, allow_version_mix, announce,
+         stores: list) -> Path:
+    """:func:`run_campaign` once its arguments are checked (``stores`` receives the chunk store, for the count of
+    an interruption)."""
     with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
         store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
                            allow_version_mix=allow_version_mix)
+        stores.append(store)
         samples = sample(spec)
         pending = deque(
             (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
@@ -224,8 +304,11 @@ def run_campaign(
         # once here, before the workers start, so they load the compiled code instead of compiling it
         if pending and bench:
             announce("compile",
-                     f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached)")
-            per_run = bench_adapter.warm_up(spec)
+                     f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached), then "
+                     f"timing one run (within its {spec.execution.timeout:g} s budget)")
+            per_run = _compile_and_time(run_function, build_request(spec, samples, *pending[0]))
+            if per_run is None:
+                announce("compile", f"{spec.name}: the timed run did not end ok within its budget; duration unknown")
         # One cluster for the runs, the margins and the fidelity audit: started when first needed, closed at the end.
         with contextlib.ExitStack() as cluster:
             client = None
@@ -234,7 +317,8 @@ def run_campaign(
                 announce("cluster start",
                          f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
                          "(about 10-20 s)")
-                client = cluster.enter_context(_client(workers, scheduler))
+                with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
+                    client = cluster.enter_context(_client(workers, scheduler))
                 expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
                             else "see the bar")
                 announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")

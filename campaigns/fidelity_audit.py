@@ -34,7 +34,7 @@ import xarray as xr
 
 from campaigns.comparison import VERDICTS, compare_features, paired_shift_verdict, worst_verdict
 from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
-from campaigns.storage import atomic_write
+from campaigns.storage import write_netcdf
 from twin.scenes import list_scenes, load_scene
 from twin.simulation import AUTO, DEFAULT_INTEGRATOR
 
@@ -42,6 +42,18 @@ MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the ben
 #: Per built-in scene and feature, the spread of tight runs that differ only in their step or by picometres [m]
 #: (benchmarks/numerical_floor.py; docs/accuracy.md, "What the tight reference can and cannot tell").
 NUMERICAL_FLOOR_FILE = Path(__file__).with_name("numerical_floor.toml")
+
+
+#: Units and long names of the figures of :func:`campaigns.comparison.compare_features` in the audit's file.
+_COMPARISON_META = {
+    "mean_shift": ("m", "mean of the feature, auto - full, over the paired ok runs"),
+    "sigma_shift": ("m", "standard deviation of the feature, auto - full"),
+    "max_paired_difference": ("m", "largest |auto - full| of a paired run"),
+    "sampling_error": ("m", "Monte Carlo error of the mean: 1.96 sigma / sqrt(n)"),
+    "ks_distance": ("1", "Kolmogorov-Smirnov distance between the auto and full samples"),
+    "ks_pvalue": ("1", "Kolmogorov-Smirnov p-value (not part of the verdict)"),
+    "n": ("1", "paired ok runs"),
+}
 
 
 def has_automatic_choice(spec: CampaignSpec) -> bool:
@@ -115,7 +127,10 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str],
         audit[name] = (dims, np.array(values, dtype=object if name in ("verdict", "statement") else float)
                        .reshape(shape), attrs)
     audit["speedup"] = full.wall_time.where(both).sum("run") / paired.wall_time.where(both).sum("run")
-    audit["speedup"].attrs["long_name"] = "full-fidelity wall time / auto wall time over the paired runs"
+    audit["speedup"].attrs.update(units="1", long_name="full-fidelity wall time / auto wall time over the paired runs")
+    for name, (unit, long_name) in _COMPARISON_META.items():  # campaigns.comparison's figures, described for CF
+        if name in audit:
+            audit[name].attrs = {"units": audit[name].attrs.get("units", unit), "long_name": long_name}
     audit.attrs.update(runs=runs, mean_shift_tolerance=MEAN_SHIFT_TOLERANCE, verdict=overall_verdict(audit))
     return audit
 
@@ -173,11 +188,14 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
     with xr.open_dataset(full_path) as handle:
         full = handle.load()
     audit = compare_fidelity(auto, full, list(spec.features), numerical_floors(spec, list(spec.features)))
-    atomic_write(out_dir / "fidelity_audit.nc", lambda tmp: audit.to_netcdf(tmp, engine="netcdf4"))
+    write_netcdf(audit, out_dir / "fidelity_audit.nc", title=f"BenchTwin fidelity audit of campaign {spec.name}",
+                 history=f"fidelity audit of {runs} run(s) per data set: auto against full fidelity "
+                         "(campaigns.fidelity_audit)")
     _write_attrs(results_path, auto, summary_attrs(audit))
     return audit
 
 
 def _write_attrs(path: Path, results: xr.Dataset, attrs: dict[str, str]) -> None:
     results.attrs.update(attrs)
-    atomic_write(path, lambda tmp: results.to_netcdf(tmp, engine="netcdf4"))
+    write_netcdf(results, path, title=str(results.attrs.get("title", "")),
+                 history=f"fidelity_audit attributes recorded: {attrs.get('fidelity_audit', '')}")

@@ -46,13 +46,32 @@ _MARGIN_STREAM = 1_000_099
 
 
 #: ``{limit: (metric, field of ControlLimits, comparison, unit, symbol)}``: a run is beyond the limit when
-#: ``comparison(margin, limit)`` is true.
+#: ``comparison(margin, limit)`` is true. ``unit`` is the limit's (and the statements'): the gain margin limit is
+#: in dB (``[control_limits]``), the stored gain margins are amplitude ratios (units "1"), compared as such.
 LIMITS = {
     "phase_margin": ("phase_margin", "phase_margin_min", "<", "degree", "PM"),
     "gain_margin": ("gain_margin", "gain_margin_min", "<", "dB", "GM"),
     "peak_sensitivity": ("peak_sensitivity", "peak_sensitivity_max", ">", "1", "|S|max"),
 }
 _UNIT_TEXT = {"degree": "°", "dB": " dB", "1": "", "Hz": " Hz"}
+
+
+def as_ratio(values, units: str):
+    """Gain margins as amplitude ratios: files written before the ratio was stored hold them in dB."""
+    values = np.asarray(values, dtype=float)
+    return 10.0 ** (values / 20.0) if units == "dB" else values
+
+
+def decibels(ratio):
+    """An amplitude ratio in dB (``20 log10``; ``inf`` stays ``inf``): how the statements and the report show a
+    gain margin."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 20.0 * np.log10(np.asarray(ratio, dtype=float))
+
+
+def margin_values(results: xr.Dataset, name: str) -> np.ndarray:
+    """A stored margin variable's values, gain margins as amplitude ratios whatever file version holds them."""
+    return as_ratio(results[name].values, str(results[name].attrs.get("units", "")))
 
 
 def limits_of(results: xr.Dataset) -> ControlLimits:
@@ -84,9 +103,15 @@ def _value(value: float, unit: str) -> str:
     return f"{value:.3g}{_UNIT_TEXT.get(unit, ' ' + unit)}"
 
 
+def _shown(value: float, limit: str) -> str:
+    """A stored margin value as the statements show it (a gain margin ratio in dB)."""
+    return _value(float(decibels(value)) if limit == "gain_margin" else value, LIMITS[limit][3])
+
+
 def limit_statement(verdict: str, loop: str, limit: str, threshold: float, k: int, n: int, bounds, allowed: float,
                     worst: float, worst_where: str, *, confidence: float, min_ok_runs: int) -> str:
-    """The one sentence stating a limit's verdict with the numbers it rests on."""
+    """The one sentence stating a limit's verdict with the numbers it rests on (``threshold`` in the limit's unit,
+    ``worst`` as stored: a gain margin as an amplitude ratio)."""
     _, _, comparison, unit, symbol = LIMITS[limit]
     rule = f"{loop} loop {symbol} {'≥' if comparison == '<' else '≤'} {_value(threshold, unit)}"
     if verdict == "insufficient data":
@@ -95,7 +120,7 @@ def limit_statement(verdict: str, loop: str, limit: str, threshold: float, k: in
     lower, upper = bounds
     return (f"{verdict}: {rule}: {k} of {n} runs beyond the limit ({confidence * 100:g} % exact bounds on the "
             f"fraction: {lower * 100:.2g}–{upper * 100:.2g} %, allowed {allowed * 100:g} %); worst "
-            f"{_value(worst, unit)} ({worst_where})")
+            f"{_shown(worst, limit)} ({worst_where})")
 
 
 def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features: list[str], n_boot: int = 1000,
@@ -125,15 +150,15 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
     loops = list(dict.fromkeys(str(results[m].attrs["loop"]) for m in margins))
     n_d, n_m, n_f = len(names), len(margins), len(features)
     quantiles = np.full((n_d, n_m, len(QUANTILES)), math.nan)
-    n_finite = np.zeros((n_d, n_m), dtype=np.int64)
+    n_finite = np.zeros((n_d, n_m), dtype=np.int32)  # netCDF classic integers (CF 1.8)
     worst = np.full((n_d, n_m), math.nan)
-    worst_run = np.full((n_d, n_m), -1, dtype=np.int64)
+    worst_run = np.full((n_d, n_m), -1, dtype=np.int32)
     spearman = np.full((n_d, n_m, n_f), math.nan)
     spearman_ci = np.full((n_d, n_m, n_f, 2), math.nan)
-    n_corr = np.zeros((n_d, n_m, n_f), dtype=np.int64)
+    n_corr = np.zeros((n_d, n_m, n_f), dtype=np.int32)
     ok = (results["status"] == "ok").values
     for m, name in enumerate(margins):
-        values = results[name].values
+        values = margin_values(results, name)
         metric = str(results[name].attrs["metric"])
         for d in range(n_d):
             finite = ~np.isnan(values[d])
@@ -156,18 +181,19 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
                     seed=np.random.SeedSequence(seed, spawn_key=(_MARGIN_STREAM, d, m, f)))
 
     # runs beyond a limit, and the verdict per loop and limit over the campaign
-    beyond_count = np.zeros((n_d, len(runs)), dtype=np.int64)
+    beyond_count = np.zeros((n_d, len(runs)), dtype=np.int32)
     beyond_text = np.full((n_d, len(runs)), "", dtype=object)
     verdicts, sentences, fraction, fraction_ci, counts = [], [], [], [], []
     for loop in loops:
         for limit, (metric, field, comparison, unit, symbol) in LIMITS.items():
             name = f"{loop}_loop_{metric}"
             threshold = getattr(limits, field)
-            values = results[name].values if name in results else np.full((n_d, len(runs)), math.nan)
-            beyond = _beyond(values, comparison, threshold)
+            values = margin_values(results, name) if name in results else np.full((n_d, len(runs)), math.nan)
+            stored = float(10.0 ** (threshold / 20.0)) if unit == "dB" else threshold  # the limit as stored
+            beyond = _beyond(values, comparison, stored)
             for d, r in zip(*np.nonzero(beyond), strict=True):
                 beyond_count[d, r] += 1
-                entry = f"{loop} {symbol} {_value(values[d, r], unit)}"
+                entry = f"{loop} {symbol} {_shown(values[d, r], limit)}"
                 beyond_text[d, r] = f"{beyond_text[d, r]}; {entry}" if beyond_text[d, r] else entry
             n, k = int((~np.isnan(values)).sum()), int(beyond.sum())
             finite = ~np.isnan(values)
@@ -189,17 +215,21 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             fraction_ci.append(bounds)
             counts.append((k, n))
     check = [f"{loop}_loop_{limit}" for loop in loops for limit in LIMITS]
-    units = [str(results[m].attrs.get("units", "")) for m in margins]
+    # one variable per margin for the statistics in the margin's own units (CF: one unit per variable)
+    per_margin = {}
+    for m, name in enumerate(margins):
+        unit = "1" if str(results[name].attrs.get("metric")) == "gain_margin" else str(results[name].attrs.get("units",
+                                                                                                             "1"))
+        what = f"{results[name].attrs.get('loop', '')} loop {str(results[name].attrs.get('metric', name))}".strip()
+        per_margin[f"{name}_quantile"] = (("dataset", "margin_probability"), quantiles[:, m], {
+            "units": unit, "long_name": f"quantiles of the {what} over the runs with a finite margin"})
+        per_margin[f"{name}_worst"] = (("dataset",), worst[:, m], {
+            "units": unit, "long_name": f"worst case of the {what} (smallest gain/phase margin and crossover, "
+                                        "largest |S|max)"})
     out = xr.Dataset(
         {
-            "margin_quantile": (("dataset", "margin", "margin_probability"), quantiles,
-                                {"long_name": "quantiles of each loop margin over the runs with a finite margin",
-                                 "units_of_margin": json.dumps(dict(zip(margins, units, strict=True)))}),
+            **per_margin,
             "margin_n": (("dataset", "margin"), n_finite, {"units": "1", "long_name": "runs with a finite margin"}),
-            "margin_worst": (("dataset", "margin"), worst,
-                             {"long_name": "worst case of each margin (smallest gain/phase margin and crossover, "
-                                           "largest |S|max)", "units_of_margin": json.dumps(dict(zip(margins, units,
-                                                                                                  strict=True)))}),
             "margin_worst_run": (("dataset", "margin"), worst_run,
                                  {"units": "1", "long_name": "run index of the worst case (-1: none)"}),
             "margin_spearman": (("dataset", "margin", "feature"), spearman,
@@ -220,7 +250,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             "margin_limit_fraction_ci": (("limit_check", "bound"), np.array(fraction_ci, dtype=float).reshape(-1, 2),
                                          {"units": "1", "long_name": f"{confidence * 100:g} % exact (Clopper-Pearson) "
                                                                      "interval of margin_limit_fraction"}),
-            "margin_limit_counts": (("limit_check", "count"), np.array(counts, dtype=np.int64).reshape(-1, 2),
+            "margin_limit_counts": (("limit_check", "count"), np.array(counts, dtype=np.int32).reshape(-1, 2),
                                     {"units": "1", "long_name": "runs beyond the limit and runs with the margin"}),
             "margin_limit_verdict": (("limit_check",), np.array(verdicts, dtype=object),
                                      {"long_name": "verdict on the design limit: met / not met / undetermined / "
@@ -231,15 +261,17 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
         },
         coords={
             "dataset": ("dataset", np.array(names, dtype=object)),
-            "run": ("run", runs),
+            "run": ("run", runs, {"units": "1", "long_name": "run index within the data set"}),
             "feature": ("feature", np.array(features, dtype=object)),
             "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
             "margin": ("margin", np.array(margins, dtype=object)),
-            "margin_probability": ("margin_probability", np.array(QUANTILES), {"units": "1"}),
+            "margin_probability": ("margin_probability", np.array(QUANTILES),
+                                   {"units": "1", "long_name": "probability of the margin quantile"}),
             "limit_check": ("limit_check", np.array(check, dtype=object)),
             "count": ("count", np.array(["beyond", "total"], dtype=object)),
         },
     )
+    out["margin_probability"].encoding["_FillValue"] = None  # a coordinate has no missing values (CF 2.5.1)
     return out
 
 

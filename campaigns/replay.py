@@ -23,7 +23,7 @@ from campaigns.execution import build_request
 from campaigns.runs import RunFunction, execute
 from campaigns.sampling import sample_run
 from campaigns.spec import Distribution, SpecError, validate_spec
-from campaigns.storage import CampaignError, atomic_write, check_output
+from campaigns.storage import CampaignError, check_output, read_results, write_netcdf
 
 
 def resolve_run_function(name: str) -> RunFunction:
@@ -70,13 +70,7 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
     results_path = Path(results_path)
     if out is not None:
         check_output(out, [results_path], force=force)
-    try:
-        with xr.open_dataset(results_path, engine="netcdf4") as handle:
-            stored = handle.load()
-    except (OSError, ValueError) as exc:
-        raise CampaignError(f"{results_path}: cannot read campaign results ({exc})") from exc
-    if "spec_json" not in stored.attrs:
-        raise CampaignError(f"{results_path} is not a campaign's results.nc (no spec_json attribute)")
+    stored = read_results(results_path)
     canonical = json.loads(stored.attrs["spec_json"])
     try:
         spec = validate_spec(canonical["spec"], None)
@@ -107,6 +101,11 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
     record = execute(run_function, request)
 
     replayed = record["trace"].copy() if record["trace"] is not None else xr.Dataset()
+    if "time" in replayed.coords and "units" not in replayed["time"].attrs:
+        replayed["time"].attrs["units"] = "s"  # the run-function contract: a trace's time is in seconds
+    for name, variable in replayed.variables.items():  # described for CF tools, even when the model did not
+        if "long_name" not in variable.attrs and "standard_name" not in variable.attrs:
+            variable.attrs["long_name"] = str(name).replace("_", " ")
     attrs = {
         "title": f"Replay of run {run} of data set {dataset} of campaign {spec.name}",
         "source": f"campaigns.replay of {results_path}",
@@ -124,5 +123,6 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
         attrs[f"identical_{feature}"] = "yes" if np.float64(value).tobytes() == np.float64(kept).tobytes() else "no"
     replayed.attrs.update(attrs)
     if out is not None:
-        atomic_write(Path(out), lambda tmp: replayed.to_netcdf(tmp, engine="netcdf4"))
+        write_netcdf(replayed, out, title=attrs["title"],
+                     history=f"run {run} of data set {dataset} replayed from {results_path} (campaigns.replay)")
     return replayed

@@ -27,6 +27,7 @@ parent dies while the child is stuck.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import ctypes
 import os
 import signal
@@ -44,6 +45,30 @@ STARTUP_TIMEOUT = 600.0
 
 
 _local = threading.local()
+#: The signals that stop a campaign (Ctrl-C, a service's stop): the driver handles them, its children must not.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def children_ignore_stop_signals():
+    """Processes started meanwhile ignore Ctrl-C and SIGTERM: the driver alone handles them.
+
+    A terminal's Ctrl-C (and a service's SIGTERM to the process group) reaches every process of the group; the
+    dask workers and run sandboxes must not each stop with a traceback, the driver ends them cleanly. A child
+    started by this thread inherits its blocked signal mask; in the main thread the signals are also ignored
+    process-wide meanwhile, since dask starts its workers from its own threads (an ignored disposition is
+    inherited across ``exec``, and Python then leaves it ignored). A Ctrl-C pressed in that window (the
+    cluster's start, seconds) is ignored too: press it again once the runs have started.
+    """
+    previous_mask = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    main = threading.current_thread() is threading.main_thread()
+    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in STOP_SIGNALS} if main else {}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous_mask)
 
 
 class Sandbox:
@@ -58,12 +83,13 @@ class Sandbox:
         child_in, parent_out = os.pipe()
         parent_in, child_out = os.pipe()
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
-        self._proc = subprocess.Popen(
-            [sys.executable, "-c", f"from campaigns.sandbox import serve; serve({child_in}, {child_out})"],
-            pass_fds=(child_in, child_out),
-            stdin=subprocess.DEVNULL,
-            env=env,
-        )
+        with children_ignore_stop_signals():
+            self._proc = subprocess.Popen(
+                [sys.executable, "-c", f"from campaigns.sandbox import serve; serve({child_in}, {child_out})"],
+                pass_fds=(child_in, child_out),
+                stdin=subprocess.DEVNULL,
+                env=env,
+            )
         os.close(child_in)
         os.close(child_out)
         self._to_child = Connection(parent_out, readable=False)

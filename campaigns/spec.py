@@ -53,6 +53,50 @@ from twin.tomlfiles import read_inheriting
 #: campaigns with different ``root_seed`` values.
 MAX_RUNS_PER_DATASET = 20_000
 
+#: Physical bounds of the solver and execution fields, ``field: (low, high, unit, what it is and why the range)``,
+#: checked before anything runs (:func:`in_range`); the CLI checks its ``--dt``, ``--duration``, ``--timeout`` and
+#: ``--workers`` against the same table.
+BOUNDS = {
+    # the finest step of the work-precision ladder (125 us / 1024, docs/accuracy.md); below it a 10 s procedure is
+    # over 1e8 steps (hours per run) for no accuracy the twin can show; above 1 ms the controller's period is missed
+    "dt": (1.0e-7, 1.0e-3, "s", "integration step"),
+    # at least 10 samples per 1 ms acquisition period; at most one sample per second (the shortest procedure is 10 s)
+    "output_dt": (1.0e-4, 1.0, "s", "output spacing"),
+    # the longest built-in test procedure is 10 s; a procedure 60 times longer is a mistake, not a test
+    "duration": (1.0e-3, 600.0, "s", "simulated duration"),
+    # a bench run takes about 1.2 s, a full-fidelity one a few s; one hour of wall clock per run is far beyond
+    # any procedure, and the budget bounds what a hung run (and the compile warm-up's timed run) holds the queue
+    "timeout": (1.0e-3, 3600.0, "s", "wall-clock budget of one run"),
+    "runs_per_dataset": (1, MAX_RUNS_PER_DATASET, "", "runs per data set"),
+    "fidelity_audit_runs": (0, MAX_RUNS_PER_DATASET, "", "runs per data set re-run at full fidelity"),
+    # each kept trace holds the run's whole time series (10 001 samples per variable) in the driver and results.nc
+    "trace_runs": (0, 100, "", "traced runs per data set"),
+    "decimation": (1, 10_000, "", "trace decimation (keep every n-th output sample)"),
+    "chunk_size": (1, 10_000, "", "runs per task"),
+    "workers": (1, 256, "", "worker processes"),
+}
+
+
+def in_range(field: str, value, *, bound: str | None = None) -> None:
+    """Raise ``ValueError`` naming the value and its allowed range unless ``value`` is within ``BOUNDS[bound or
+    field]`` (the message is the problem a spec or the CLI reports for ``field``)."""
+    low, high, unit, what = BOUNDS[bound or field]
+    if value is None or low <= value <= high:
+        return
+    suffix = f" {unit}" if unit else ""
+    raise ValueError(f"{value:g}{suffix} is outside the allowed range [{low:g}, {high:g}]{suffix} ({what})")
+
+
+def _bounded(kind, bound: str):
+    """A spec field of type ``kind`` checked against ``BOUNDS[bound]``."""
+
+    def check(value):
+        in_range(bound, value)
+        return value
+
+    return Annotated[kind, AfterValidator(check)]
+
+
 class SpecError(InputError):
     """A campaign spec is invalid; ``problems`` lists every problem with its field path."""
 
@@ -88,8 +132,8 @@ class Solver(_Strict):
     """
 
     integrator: str = "rk4"  # or "auto" (opt-in: twin.engine.solver_choice), or any twin.simulate integrator
-    dt: float | None = Field(default=None, gt=0)
-    output_dt: float | None = Field(default=None, gt=0)
+    dt: _bounded(float | None, "dt") = None
+    output_dt: _bounded(float | None, "output_dt") = None
     fidelity: str | dict[str, str] = "auto"
 
     @field_validator("fidelity")
@@ -106,7 +150,7 @@ class FidelityAudit(_Strict):
     (same parameters, same noise) and compare the features (:mod:`campaigns.fidelity_audit`).
     ``0`` skips it; it is also skipped when the campaign already runs at full fidelity with a named integrator."""
 
-    runs: int = Field(default=10, ge=0)
+    runs: _bounded(int, "fidelity_audit_runs") = 10
 
 
 class Execution(_Strict):
@@ -120,9 +164,9 @@ class Execution(_Strict):
     by default it adapts to the measured run time (see :mod:`campaigns.execution`).
     """
 
-    timeout: float = Field(default=600.0, gt=0)
+    timeout: _bounded(float, "timeout") = 600.0
     isolation: Literal["process", "none"] = "process"
-    chunk_size: int | None = Field(default=None, ge=1)
+    chunk_size: _bounded(int | None, "chunk_size") = None
 
 
 class Traces(_Strict):
@@ -133,9 +177,9 @@ class Traces(_Strict):
     (adding ``motor_current`` keeps the full current loop in every run of the campaign).
     """
 
-    runs_per_dataset: int = Field(default=0, ge=0)
+    runs_per_dataset: _bounded(int, "trace_runs") = 0
     variables: list[str] = ["position_demand", "nut1_position", "screw_equivalent_position", "linear_encoder_position"]
-    decimation: int = Field(default=10, ge=1)
+    decimation: _bounded(int, "decimation") = 10
 
 
 def _known_condition(name: str, info: ValidationInfo) -> str:
@@ -288,7 +332,7 @@ class CampaignSpec(_Strict):
     name: str = Field(min_length=1)
     description: str = ""
     root_seed: int = Field(ge=0)
-    runs_per_dataset: int = Field(ge=1, le=MAX_RUNS_PER_DATASET)
+    runs_per_dataset: _bounded(int, "runs_per_dataset")
     features: list[str] = Field(min_length=1)
     base: Base = Base()
     solver: Solver = Solver()

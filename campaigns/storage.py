@@ -45,9 +45,9 @@ import numpy as np
 import xarray as xr
 
 from campaigns import provenance as prov
-from campaigns.files import CampaignError, atomic_write
+from campaigns.files import CONVENTIONS, CampaignError, atomic_write, check_output, write_netcdf
 from campaigns.provenance import package_versions
-from campaigns.runs import STATUS_MEANINGS
+from campaigns.runs import STATUS_MEANINGS, STATUSES
 from campaigns.spec import CampaignSpec
 from campaigns.units import HALF_RANGE_SIGMAS
 
@@ -60,36 +60,22 @@ CHUNK_KEYS = ("dataset_index", "run", "status", "failure_reason", "t_reached", "
 _log = logging.getLogger("campaigns")
 
 __all__ = ["CampaignError", "ChunkStore", "OutputLock", "atomic_write", "build_results", "check_output",
-           "package_versions"]
+           "package_versions", "read_results", "write_netcdf"]
 
 
 class CorruptChunk(CampaignError):
     """A chunk file cannot be read back intact."""
 
 
-def check_output(out: str | Path, inputs=(), *, force: bool = False) -> Path:
-    """Refuse to write ``out`` over one of ``inputs``, or over an existing file unless ``force``.
-
-    Raises
-    ------
-    CampaignError
-        Naming the file and what to do.
-    """
-    out = Path(out)
-    for given in inputs:
-        if given is not None and Path(given).exists() and out.exists() and os.path.samefile(out, given):
-            raise CampaignError(f"{out}: refusing to write the output over its own input; choose another --out")
-    if out.exists() and not force:
-        raise CampaignError(f"{out} already exists; pass --force to replace it or choose another --out")
-    return out
-
-
 class OutputLock:
     """Exclusive ownership of an output directory for as long as the lock is held.
 
     ``fcntl.flock`` on ``OUT/.lock``; the file holds the owner's pid, host and start time
-    for the refusal message. The OS drops the lock when the owner exits or dies. (flock is
-    reliable on local file systems; on NFS use one driver per directory by hand.)
+    for the refusal message. The OS drops the lock when the owner exits or dies. A clean
+    release (the end of a campaign, Ctrl-C, SIGTERM) also removes the file, so nothing stale
+    is left; an owner checks, once it holds the lock, that the file it locked is still the one
+    in the directory (a release may have removed it in between), and locks the new one otherwise.
+    (flock is reliable on local file systems; on NFS use one driver per directory by hand.)
     """
 
     def __init__(self, out_dir: str | Path):
@@ -98,18 +84,26 @@ class OutputLock:
         self._fd: int | None = None
 
     def acquire(self) -> OutputLock:
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
-            raise CampaignError(f"cannot use output directory {self.root}: {exc.strerror or exc}") from exc
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 4096, 0).decode(errors="replace").strip() or "unknown process"
-            os.close(fd)
-            raise CampaignError(f"{self.root} is in use by another campaign driver ({holder}); "
-                                "wait for it to finish, or choose another output directory") from None
+        while True:
+            try:
+                self.root.mkdir(parents=True, exist_ok=True)
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as exc:
+                raise CampaignError(f"cannot use output directory {self.root}: {exc.strerror or exc}") from exc
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 4096, 0).decode(errors="replace").strip() or "unknown process"
+                os.close(fd)
+                raise CampaignError(f"{self.root} is in use by another campaign driver ({holder}); "
+                                    "wait for it to finish, or choose another output directory") from None
+            try:
+                current = os.stat(self.path).st_ino
+            except FileNotFoundError:
+                current = None
+            if current == os.fstat(fd).st_ino:
+                break
+            os.close(fd)  # locked a file a releasing owner had just removed: lock the directory's own
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"pid {os.getpid()} on {socket.gethostname()}, since "
                       f"{datetime.now(UTC).isoformat(timespec='seconds')}\n".encode(), 0)
@@ -118,6 +112,10 @@ class OutputLock:
 
     def release(self) -> None:
         if self._fd is not None:
+            try:
+                self.path.unlink(missing_ok=True)  # still locked: nobody else can be using it
+            except OSError:
+                os.ftruncate(self._fd, 0)  # a read-only directory: at least no stale owner in it
             fcntl.flock(self._fd, fcntl.LOCK_UN)
             os.close(self._fd)
             self._fd = None
@@ -163,8 +161,8 @@ class ChunkStore:
                 differ = _differences(stored["canonical"], spec.canonical())
                 raise CampaignError(
                     f"{self.root} holds results of a different spec (hash {stored['hash'][:16]}, "
-                    f"this spec {self.hash[:16]}; "
-                    f"differences in: {', '.join(differ)}); refusing to mix them. Use another output directory."
+                    f"this spec {self.hash[:16]}; differences in: {', '.join(differ)}); refusing to mix them. "
+                    + _resume_hint(stored["canonical"], spec.canonical(), self.root)
                 )
         self.chunk_dir = self.root / "chunks" / self.hash[:16]
         try:
@@ -285,8 +283,45 @@ class ChunkStore:
             ds.attrs[key if key.startswith("execution") else f"execution_{key}"] = value
         ds.attrs.update(attrs or {})
         path = self.root / RESULTS_NAME
-        atomic_write(path, lambda p: ds.to_netcdf(p, engine="netcdf4"))
-        return path
+        runs = ds.sizes["dataset"] * ds.sizes["run"]
+        return write_netcdf(ds, path, title=ds.attrs["title"],
+                            history=f"{runs} runs of campaign {self.spec.name} assembled from "
+                                    f"{len(self.chunk_files())} chunk files by BenchTwin (campaigns.storage)")
+
+
+#: What a campaign's results.nc holds at least (besides the ``spec_json`` attribute).
+RESULTS_VARIABLES = ("status",)
+
+
+def read_results(path: str | Path) -> xr.Dataset:
+    """A campaign's ``results.nc``, loaded and checked: every problem is one :class:`CampaignError` naming the file.
+
+    Raises
+    ------
+    CampaignError
+        If the file is missing, a directory, unreadable (truncated, not netCDF) or not a campaign's results.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise CampaignError(f"{path}: no such file; give the results.nc that `twin campaign run` wrote")
+    if path.is_dir():
+        hint = f" ({path / RESULTS_NAME})" if (path / RESULTS_NAME).is_file() else ""
+        raise CampaignError(f"{path} is a directory; give the campaign's results.nc{hint}")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as handle:
+            ds = handle.load()
+    except Exception as exc:  # noqa: BLE001 - netCDF4/HDF5 raise OSError, RuntimeError, ValueError... for a bad file
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        raise CampaignError(
+            f"{path}: cannot be read as a netCDF file ({type(exc).__name__}: {first}); is it complete? A results.nc "
+            "cut short is rebuilt from its chunk files by `twin campaign run SPEC --out DIR --resume`") from None
+    problems = [] if "spec_json" in ds.attrs else ["no spec_json attribute"]
+    problems += [f"no {v!r} variable" for v in RESULTS_VARIABLES if v not in ds.variables]
+    problems += [f"no {d!r} dimension" for d in ("dataset", "run") if d not in ds.dims]
+    if problems:
+        raise CampaignError(f"{path} is not a campaign's results.nc ({'; '.join(problems)}); give the results.nc "
+                            "that `twin campaign run` wrote")
+    return ds
 
 
 def _checksum(arrays: dict) -> str:
@@ -347,9 +382,46 @@ def _units(trace: xr.Dataset, variable: str) -> str:
 
 
 def _differences(a: dict, b: dict) -> list[str]:
+    """The spec fields that differ, with the stored and the new value where they are short."""
     sa, sb = a["spec"], b["spec"]
     keys = sorted(k for k in set(sa) | set(sb) if sa.get(k) != sb.get(k))
-    return keys or ["resolved distributions (nominal values of the parameter set)"]
+    out = []
+    for key in keys:
+        old, new = sa.get(key), sb.get(key)
+        if isinstance(old, dict) and isinstance(new, dict):
+            out += [f"{key}.{k} (stored {old.get(k)!r}, now {new.get(k)!r})" for k in sorted(set(old) | set(new))
+                    if old.get(k) != new.get(k)]
+        elif len(repr(old)) + len(repr(new)) < 80:
+            out.append(f"{key} (stored {old!r}, now {new!r})")
+        else:
+            out.append(key)
+    return out or ["resolved distributions (nominal values of the parameter set)"]
+
+
+#: Spec fields a command-line option overrides: what to repeat to resume results made with it.
+_OPTIONS = {("runs_per_dataset",): "--runs", ("execution", "timeout"): "--timeout"}
+
+
+def _resume_hint(stored: dict, mine: dict, root: Path) -> str:
+    """What would make this run match the stored results: the options they were made with, when the spec file
+    is the same and only overridden fields differ; else another output directory."""
+    sa, sb = stored["spec"], mine["spec"]
+    overridable = {path[0] for path in _OPTIONS}
+    rest_a = {k: v for k, v in sa.items() if k not in overridable}
+    rest_b = {k: v for k, v in sb.items() if k not in overridable}
+    execution_a, execution_b = dict(sa.get("execution") or {}), dict(sb.get("execution") or {})
+    execution_a.pop("timeout", None), execution_b.pop("timeout", None)
+    options = []
+    for path, option in _OPTIONS.items():
+        old, new = sa, sb
+        for key in path:
+            old, new = (old or {}).get(key), (new or {}).get(key)
+        if old != new:
+            options.append(f"{option} {old:g}" if isinstance(old, float) else f"{option} {old}")
+    if rest_a == rest_b and execution_a == execution_b and stored.get("resolved") == mine.get("resolved") and options:
+        return (f"They were made with {' '.join(options)}: to resume them, repeat it (e.g. `twin campaign run SPEC "
+                f"--out {root} --resume {' '.join(options)}`); or use another output directory.")
+    return "Resume with the spec and options that made them, or use another output directory."
 
 
 def _provenance_attrs(chunks: list[dict]) -> dict[str, str]:
@@ -422,7 +494,12 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
     for f in spec.features:
         unit, long_name = spec.feature_meta(f)
         data_vars[f] = (dims, features[f], {"units": unit, "long_name": long_name, "role": "feature"})
-    data_vars["status"] = (dims, status, {"long_name": "run status", "flag_meanings": json.dumps(STATUS_MEANINGS)})
+    data_vars["status"] = (dims, status, {
+        "long_name": "run status: " + ", ".join(STATUSES) + " (coded in status_flag)",
+        "comment": "\n".join(f"{k}: {v}" for k, v in STATUS_MEANINGS.items())})
+    data_vars["status_flag"] = (dims, np.vectorize(STATUSES.index, otypes=[np.int8])(status), {
+        "long_name": "run status as a CF flag (status as a number)",
+        "flag_values": np.arange(len(STATUSES), dtype=np.int8), "flag_meanings": " ".join(STATUSES)})
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
     data_vars["integrator"] = (dims, integrator, {
         "long_name": "method and step that solved the run, e.g. 'rk4 at 62.5 us' (the solver's 'auto' chooses per "
@@ -439,20 +516,22 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
                                              {"units": unit, "long_name": long_name})
     coords = {
         "dataset": ("dataset", np.array([d.name for d in spec.datasets], dtype=object), {"long_name": "data set"}),
-        "run": ("run", np.arange(spec.runs_per_dataset, dtype=np.int64),
-                {"long_name": "run index within the data set"}),
+        "run": ("run", np.arange(spec.runs_per_dataset, dtype=np.int32),
+                {"units": "1", "long_name": "run index within the data set"}),
         "scene": ("dataset", np.array([d.scene or spec.base.scene for d in spec.datasets], dtype=object),
                   {"long_name": "scene"}),
     }
     if k_traces and trace_len:
-        coords["trace_run"] = ("trace_run", np.arange(k_traces, dtype=np.int64),
-                               {"long_name": "run index of the kept traces"})
-        coords["trace_time"] = ("trace_time", trace_time, {"units": "s", "long_name": "time", "standard_name": "time"})
+        coords["trace_run"] = ("trace_run", np.arange(k_traces, dtype=np.int32),
+                               {"units": "1", "long_name": "run index of the kept traces"})
+        # elapsed time of a simulated test procedure, not a calendar instant: no CF "time" (which needs an epoch)
+        coords["trace_time"] = ("trace_time", trace_time,
+                                {"units": "s", "long_name": "time since the start of the test procedure"})
         for v in spec.traces.variables:
             attrs = {"units": trace_units[v], "long_name": f"{v}, decimated by {spec.traces.decimation}"}
             data_vars[f"trace_{v}"] = (("dataset", "trace_run", "trace_time"), traces[v], attrs)
     attrs = {
-        "Conventions": "CF-1.8",
+        "Conventions": CONVENTIONS,
         "title": f"BenchTwin Monte Carlo campaign {spec.name}",
         "source": "BenchTwin campaign runner (campaigns package)",
         "campaign": spec.name,

@@ -7,8 +7,9 @@ be regenerated after the model changes instead of being edited by hand:
 
 Prints Markdown: the feature statistics per data set (mean with its 95 % confidence interval, standard
 deviation, n), the dominant tolerances per data set (given-data first-order index with its bootstrap
-interval and the effect size in µm, beside Spearman and PRCC), the separation of the data sets, and the
-observability verdicts verbatim from analysis.nc.
+interval and the effect size in µm, beside Spearman and PRCC; the interval alone where the analysis withheld the
+index), the separation of the data sets, and the observability verdicts verbatim from analysis.nc (a sweep level
+the analysis does not resolve is given as the bracket of sweep levels it states, never an interpolated number).
 """
 
 from __future__ import annotations
@@ -66,26 +67,43 @@ def feature_table(results: xr.Dataset, analysis: xr.Dataset) -> None:
 
 
 def tolerance_table(results: xr.Dataset, analysis: xr.Dataset) -> None:
+    """The three tolerances per data set whose first-order index has the largest lower bound. An index the analysis
+    withheld (``first_order_index_flag``: too few runs, or the estimate outside its own interval) is printed as its
+    interval only, with the reason; so is its effect size."""
     if "first_order_index" not in analysis:
         print("(no first-order indices in this analysis)")
         return
     measured = [str(f) for f in analysis.feature.values if not str(f).endswith("_true")]
+    floor = int(analysis.attrs.get("first_order_min_runs", 0))
     print("| data set | feature | tolerance | first-order index (95 % CI) | effect size [µm] | Spearman | PRCC |")
     print("|---|---|---|---|---|---|---|")
     for name in (str(d) for d in analysis.dataset.values):
         for feature in measured:
             row = analysis.sel(dataset=name, feature=feature)
-            index = row.first_order_index.values
-            if not np.isfinite(index).any():
+            lower = row.first_order_index_ci.sel(bound="lower").values
+            if not np.isfinite(lower).any():
                 print(f"| {name} | {feature} | (insufficient data) | | | | |")
                 continue
             units = str(results[feature].attrs.get("units", "m")) if feature in results else "m"
-            for k in np.argsort(-np.nan_to_num(index, nan=-1.0))[:TOP_TOLERANCES]:
+            flags = row.first_order_index_flag.values if "first_order_index_flag" in row else np.zeros(len(lower))
+            for k in np.argsort(-np.nan_to_num(lower, nan=-np.inf), kind="stable")[:TOP_TOLERANCES]:
                 p = row.isel(parameter=k)
                 low, high = (float(v) for v in p.first_order_index_ci.values)
-                effect = in_units(float(p.effect_size), units, 3)
-                print(f"| {name} | {feature} | {str(p.parameter.values)} | {float(p.first_order_index):.2f} "
-                      f"({low:.2f} – {high:.2f}) | {effect} | {float(p.spearman):+.2f} | {float(p.prcc):+.2f} |")
+                interval = f"({low:.2f} – {high:.2f})"
+                why = withheld(int(flags[k]), int(row.n_used), floor)
+                index = f"– {interval}, interval only: {why}" if why else f"{float(p.first_order_index):.2f} {interval}"
+                effect = (f"({in_units(float(p.effect_size_ci[0]), units, 3)} – "
+                          f"{in_units(float(p.effect_size_ci[1]), units, 3)})" if why
+                          else in_units(float(p.effect_size), units, 3))
+                print(f"| {name} | {feature} | {str(p.parameter.values)} | {index} | {effect} | "
+                      f"{float(p.spearman):+.2f} | {float(p.prcc):+.2f} |")
+
+
+def withheld(flag: int, n: int, floor: int) -> str:
+    """Why the analysis withheld a first-order index, from its flag bits (empty: it did not)."""
+    reasons = ([f"{n} ok runs < {floor}"] if flag & 1 else []) + (
+        ["the estimate fell outside its own interval"] if flag & 2 else [])
+    return "; ".join(reasons)
 
 
 def separation_table(analysis: xr.Dataset) -> None:

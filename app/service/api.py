@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -15,6 +17,7 @@ import campaigns
 from app.service.auth import COOKIE_NAME, identify, require
 from app.service.registry import FINAL_STATES
 from app.service.submission import SUBMITTED_NAME, input_dir, output_dir, prepare
+from campaigns.budget import estimate
 from campaigns.spec import SpecError
 
 router = APIRouter()
@@ -31,6 +34,17 @@ FILES = {
 #: The generated report is shown as it is: its own CSS and embedded figures, no scripts, no external loads.
 REPORT_POLICY = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'none'"
 _PATH = re.compile(r"^[A-Za-z_][\w.\[\]]*$")
+
+#: The answers every route documents in the OpenAPI schema besides its own (``responses=`` of each route).
+_ERROR = {"content": {"application/json": {"schema": {"type": "object", "properties": {"detail": {"type": "string"}}}}}}
+AUTHENTICATED = {
+    400: {"description": "a token in the URL (?token=...): refused, tokens travel in the Authorization header",
+          **_ERROR},
+    401: {"description": "no token, or an unknown or revoked one", **_ERROR},
+    403: {"description": "a token with too small a role, or a cookie-authenticated change from another site",
+          **_ERROR},
+}
+NOT_FOUND = {404: {"description": "no such campaign", **_ERROR}}
 
 
 class PayloadTooLarge(Exception):
@@ -82,13 +96,28 @@ def error_list(problems: list[str]) -> list[dict]:
     return errors
 
 
+def cost_problems(spec, settings) -> list[str]:
+    """The campaign's estimated duration against the service's limit (``twin serve --max-campaign-hours``): one
+    problem saying why when it is beyond it, before anything is queued."""
+    from campaigns.bench import simulate_run  # lazy: the twin's catalog loads with the first submission
+
+    cost = estimate(spec, simulate_run, workers=settings.workers)
+    limit = settings.max_campaign_hours * 3600.0
+    if cost.wall_seconds is None or cost.wall_seconds <= limit:
+        return []
+    return [f"runs_per_dataset: the campaign would take {cost.describe()} (about {cost.run_seconds:.2g} s per run), "
+            f"beyond this service's limit of {settings.max_campaign_hours:g} h per campaign (twin serve "
+            "--max-campaign-hours); submit fewer runs (?runs=N) or split it into several campaigns"]
+
+
 def submit(request: Request, text: str, runs: int | None, seed: int | None, who: dict) -> dict:
-    """Validate and queue a spec (blocking: call it in a worker thread); the campaign's record.
+    """Validate, estimate and queue a spec (blocking: call it in a worker thread); the campaign's record.
 
     Raises :class:`SpecError`, and then nothing is queued.
     """
     registry = request.app.state.registry
-    submission = prepare(registry.data, text, runs=runs, seed=seed)
+    settings = request.app.state.settings
+    submission = prepare(registry.data, text, runs=runs, seed=seed, check=lambda spec: cost_problems(spec, settings))
     spec = submission.spec
     registry.add_campaign(submission.campaign_id, spec.name, spec.spec_hash(),
                           len(spec.datasets) * spec.runs_per_dataset, submission.overrides, who["name"])
@@ -101,12 +130,24 @@ def _iso(t: float | None) -> str | None:
 
 
 def available_files(registry, campaign_id: str) -> list[str]:
-    campaign_dir = registry.campaign_dir(campaign_id)
-    return [name for name, (where, file, _) in FILES.items() if _file(campaign_dir, where, file).is_file()]
+    return [name for name in FILES if served_file(registry, campaign_id, name) is not None]
 
 
 def _file(campaign_dir: Path, where: str, file: str) -> Path:
     return (output_dir(campaign_dir) if where == "out" else input_dir(campaign_dir)) / file
+
+
+def served_file(registry, campaign_id: str, name: str) -> Path | None:
+    """The file ``name`` of a campaign if it may be served: a regular file at its own place inside the campaign's
+    directory, reached through no symbolic link (one planted in the output cannot lead outside); else None."""
+    where, file, _ = FILES[name]
+    path = _file(registry.campaign_dir(campaign_id), where, file)
+    try:
+        real = path.resolve(strict=True)
+        expected = registry.data.resolve(strict=True) / path.relative_to(registry.data)
+        return real if real == expected and stat.S_ISREG(os.lstat(real).st_mode) else None
+    except (OSError, RuntimeError, ValueError):  # missing, a symlink loop, outside the data directory
+        return None
 
 
 def describe(registry, record: dict, now: float) -> dict:
@@ -143,7 +184,7 @@ def describe(registry, record: dict, now: float) -> dict:
     }
 
 
-@router.get("/health", tags=["service"])
+@router.get("/health", tags=["service"], responses={400: AUTHENTICATED[400]})
 def health(request: Request) -> dict:
     """Liveness (no token): the service answers and its registry is readable."""
     registry = request.app.state.registry
@@ -151,7 +192,7 @@ def health(request: Request) -> dict:
             "running": len(registry.ids_in_state("running"))}
 
 
-@router.get("/api/v1/campaigns", tags=["campaigns"])
+@router.get("/api/v1/campaigns", tags=["campaigns"], responses=AUTHENTICATED)
 def list_campaigns(request: Request, limit: int = Query(200, ge=1, le=1000)) -> dict:
     """The latest campaigns, newest first (role ``read``)."""
     caller(request)
@@ -163,8 +204,10 @@ def list_campaigns(request: Request, limit: int = Query(200, ge=1, le=1000)) -> 
              openapi_extra={"requestBody": {"required": True, "content": {
                  "application/toml": {"schema": {"type": "string"}},
                  "application/json": {"schema": SpecSubmission.model_json_schema()}}}},
-             responses={413: {"description": "spec larger than the limit"},
-                        422: {"description": "every validation problem with its field path; nothing queued"}})
+             responses={**AUTHENTICATED,
+                        413: {"description": "spec larger than the limit", **_ERROR},
+                        422: {"description": "every validation problem with its field path (the estimated duration "
+                                             "beyond the service's limit too); nothing queued"}})
 async def create_campaign(request: Request, runs: int | None = Query(None, description="runs per data set (override)"),
                           seed: int | None = Query(None, description="root seed (override)")):
     """Submit a spec (role ``submit``): a TOML body, or JSON ``{"spec", "runs", "seed"}``."""
@@ -200,7 +243,7 @@ def _record(request: Request, campaign_id: str) -> dict:
     return record
 
 
-@router.get("/api/v1/campaigns/{campaign_id}", tags=["campaigns"])
+@router.get("/api/v1/campaigns/{campaign_id}", tags=["campaigns"], responses={**AUTHENTICATED, **NOT_FOUND})
 def get_campaign(request: Request, campaign_id: str) -> dict:
     """State, progress, failures, timings, spec hash, verdict statements (role ``read``)."""
     caller(request)
@@ -219,14 +262,17 @@ def cancel_campaign_as(request: Request, campaign_id: str, who: dict) -> dict:
     return describe(request.app.state.registry, _record(request, campaign_id), datetime.now(UTC).timestamp())
 
 
-@router.post("/api/v1/campaigns/{campaign_id}/cancel", tags=["campaigns"])
+@router.post("/api/v1/campaigns/{campaign_id}/cancel", tags=["campaigns"],
+             responses={**AUTHENTICATED, **NOT_FOUND, 409: {"description": "the campaign is finished already",
+                                                            **_ERROR}})
 def cancel_campaign(request: Request, campaign_id: str) -> dict:
     """Cancel a queued or running campaign (role ``submit`` for one's own, ``admin`` for any); 409 if finished."""
     return cancel_campaign_as(request, campaign_id, caller(request, "submit"))
 
 
 @router.get("/api/v1/campaigns/{campaign_id}/files/{name}", tags=["campaigns"],
-            responses={404: {"description": "unknown campaign, a name not in the list, or not written yet"}})
+            responses={**AUTHENTICATED, 404: {"description": "unknown campaign, a name not in the list, not written "
+                                                             "yet, or not a regular file of the campaign", **_ERROR}})
 def get_file(request: Request, campaign_id: str, name: str):
     """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``spec`` (as submitted),
     ``spec.json`` (canonical) (role ``read``). Any other name is 404."""
@@ -234,9 +280,9 @@ def get_file(request: Request, campaign_id: str, name: str):
     if name not in FILES:
         raise HTTPException(404, f"no file {name!r}; available names: {', '.join(FILES)}")
     record = _record(request, campaign_id)
-    where, file, media = FILES[name]
-    path = _file(request.app.state.registry.campaign_dir(record["id"]), where, file)
-    if not path.is_file():
+    media = FILES[name][2]
+    path = served_file(request.app.state.registry, record["id"], name)
+    if path is None:
         raise HTTPException(404, f"{name} of campaign {campaign_id} does not exist (yet)")
     download = name if name != "spec" else f"{record['name']}.toml"
     headers = {"Content-Security-Policy": REPORT_POLICY} if name == "report.html" else {}

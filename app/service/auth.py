@@ -14,12 +14,17 @@ from __future__ import annotations
 
 import hashlib
 import secrets
+from urllib.parse import urlsplit
 
 from app.service.registry import Registry
 
 ROLES = ("read", "submit", "admin")
 TOKEN_PREFIX = "bt_"
 COOKIE_NAME = "benchtwin_token"
+#: Methods that change something: a browser's cookie may authenticate them only from this site's own pages.
+UNSAFE_METHODS = ("POST", "PUT", "PATCH", "DELETE")
+#: Query parameters that would carry a token in a URL (refused: URLs end up in logs, histories and Referer headers).
+TOKEN_PARAMETERS = ("token", "access_token", "bearer", "api_key")
 
 
 class AuthError(Exception):
@@ -74,3 +79,23 @@ def require(record: dict, role: str) -> None:
     """Raise a 403 :class:`AuthError` unless ``record``'s role is at least ``role``."""
     if ROLES.index(record["role"]) < ROLES.index(role):
         raise AuthError(403, f"this needs the {role!r} role; token {record['name']!r} has {record['role']!r}")
+
+
+def cross_site(headers, *, strict: bool = True) -> str | None:
+    """Why a browser request is not from this site's own pages, or None when it is.
+
+    The browser says where a request comes from in headers a page cannot forge: ``Sec-Fetch-Site`` (every
+    current browser) and ``Origin`` (every browser on a POST). A request is same-origin when
+    ``Sec-Fetch-Site`` is ``same-origin``, or, without it, when ``Origin`` names this server (its ``Host``).
+    ``strict``: a request with neither header is refused too (a cookie request that no browser made: scripts
+    authenticate with ``Authorization: Bearer`` and are not concerned).
+    """
+    fetch_site = headers.get("sec-fetch-site")
+    if fetch_site is not None:
+        return None if fetch_site == "same-origin" else f"Sec-Fetch-Site: {fetch_site}"
+    origin = headers.get("origin")
+    if origin is None:
+        return "neither Origin nor Sec-Fetch-Site says it comes from this site" if strict else None
+    if origin == "null" or urlsplit(origin).netloc != headers.get("host"):
+        return f"Origin: {origin}"
+    return None

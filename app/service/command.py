@@ -17,6 +17,8 @@ def add_serve_parser(sub) -> None:
     serve.add_argument("--port", type=int, default=8765, help="port (default 8765)")
     serve.add_argument("--workers", type=int, default=2, help="worker processes of each campaign's local cluster")
     serve.add_argument("--scheduler", help="address of an existing dask scheduler (instead of a local cluster)")
+    serve.add_argument("--max-campaign-hours", type=float, default=None,
+                       help="refuse a campaign whose estimated duration is longer (default 24 h)")
     serve.set_defaults(func=cmd_serve)
     serve_sub = serve.add_subparsers(dest="serve_command")
     token = serve_sub.add_parser("token", help="access tokens")
@@ -46,12 +48,15 @@ def cmd_serve(args) -> int:
     data = args.data.resolve()
     data.mkdir(parents=True, exist_ok=True)
     os.chdir(data)  # a bare name in a submitted spec that is no built-in one then names nothing of the server's
-    app = create_app(Settings(data=data, workers=args.workers, scheduler=args.scheduler))
+    limit = {} if args.max_campaign_hours is None else {"max_campaign_hours": args.max_campaign_hours}
+    if args.max_campaign_hours is not None and not args.max_campaign_hours > 0:
+        raise SystemExit(f"twin serve: error: --max-campaign-hours must be > 0, got {args.max_campaign_hours:g}")
+    app = create_app(Settings(data=data, workers=args.workers, scheduler=args.scheduler, **limit))
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         logging.getLogger("benchtwin.service").warning(
             "listening on %s: reachable from other machines; tokens travel in clear unless a TLS proxy is in front",
             args.host)
-    # access log: method, path and status only (tokens travel in headers and form bodies, never in URLs)
+    # access log: method, path (without its query string) and status; a token in a URL is refused
     uvicorn.run(app, host=args.host, port=args.port, log_level="info", timeout_graceful_shutdown=30)
     return 0
 

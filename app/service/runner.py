@@ -29,6 +29,7 @@ from app.pipeline import run_campaign_pipeline
 from app.service.registry import Registry
 from app.service.submission import load_frozen, output_dir
 from campaigns.analysis import summary
+from campaigns.files import CampaignInterrupted
 from campaigns.storage import CampaignError, OutputLock
 from reports.errors import ReportError
 from twin.errors import InputError
@@ -118,6 +119,9 @@ def run(data: Path, campaign_id: str, workers: int, scheduler: str | None) -> in
                             finished_at=time.time(), summary={"statements": statements, "warnings": warnings})
         print(f"[{time.strftime('%H:%M:%S')}] done", flush=True)
         return 0
+    except CampaignInterrupted as stop:  # the executor's SIGTERM (cancel, server stop): it records the outcome
+        print(f"[{time.strftime('%H:%M:%S')}] {stop}", flush=True)
+        return 143
     except (InputError, CampaignError, ReportError) as exc:  # the user's to fix: one message, as the CLI prints it
         print(f"runner: {exc}", flush=True)
         registry.transition(campaign_id, ("running",), state="failed", error=str(exc), finished_at=time.time())

@@ -62,8 +62,12 @@ def output_dir(campaign_dir: Path) -> Path:
     return campaign_dir / "out"
 
 
-def prepare(data: Path, text: str, *, runs: int | None = None, seed: int | None = None) -> Submission:
+def prepare(data: Path, text: str, *, runs: int | None = None, seed: int | None = None,
+            check=None) -> Submission:
     """Validate a submitted spec and move its frozen inputs to ``DATA/campaigns/<new id>/input``.
+
+    ``check(spec)`` returns further problems of the validated spec (the service's cost limit), which
+    refuse it as well, before anything is kept.
 
     Raises
     ------
@@ -90,6 +94,9 @@ def prepare(data: Path, text: str, *, runs: int | None = None, seed: int | None 
         overlay = f'extends = "{SUBMITTED_NAME}"\n' + "".join(f"{k} = {v}\n" for k, v in overrides.items())
         _write(staging / SPEC_NAME, overlay)
         spec = campaigns.load_spec(staging / SPEC_NAME)
+        problems = check(spec) if check is not None else []
+        if problems:
+            raise SpecError(problems)
         campaign_id = uuid.uuid4().hex[:12]
         final = input_dir(data / "campaigns" / campaign_id)
         final.parent.mkdir(parents=True)

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from campaigns.margins_analysis import decibels, margin_values
 from reports import figures
 from reports.model import Callout, Paragraph
 
@@ -35,6 +36,20 @@ def _text(value: float, unit: str) -> str:
     return f"{value:.3g}{_UNITS.get(unit, ' ' + unit)}"
 
 
+def _shown(values, metric: str, unit: str):
+    """Values of a margin as the report shows them, and their unit: gain margins (amplitude ratios) in dB."""
+    return (decibels(values), "dB") if metric == "gain_margin" else (np.asarray(values, dtype=float), unit)
+
+
+def _statistic(analysis, name: str, what: str):
+    """``<margin>_quantile`` / ``<margin>_worst`` of an analysis (``margin_quantile`` / ``margin_worst`` along
+    ``margin`` in analyses written before one variable per margin)."""
+    if f"{name}_{what}" in analysis:
+        return analysis[f"{name}_{what}"]
+    old = analysis[f"margin_{what}"].sel(margin=name)
+    return old.copy(data=10.0 ** (old.values / 20.0)) if name.endswith("gain_margin") else old
+
+
 def _margins(results) -> list[str]:
     return [str(v) for v in results.data_vars if results[v].attrs.get("role") == "margin"]
 
@@ -47,7 +62,8 @@ def _figure(results, datasets: list[str], limits: dict) -> bytes:
         row = []
         for loop in loops:
             name = f"{loop}_loop_{metric}"
-            values = results[name].values.astype(float) if name in results else np.full((len(datasets), 1), np.nan)
+            values = (_shown(margin_values(results, name), metric, "")[0] if name in results
+                      else np.full((len(datasets), 1), np.nan))
             note = "no phase crossover:\nGM = ∞" if np.isinf(values).any() else "not computed"
             row.append((values, float(limits[field]), side, note))
         grid.append(row)
@@ -90,10 +106,10 @@ def build(b):
     f_b = features.index("backlash_feature") if "backlash_feature" in features else 0
     rows = []
     for name in analysis["margin"].values:
-        unit = str(results[str(name)].attrs.get("units", ""))
-        median = analysis["margin_quantile"].sel(margin=name, margin_probability=0.5).values
-        worst = analysis["margin_worst"].sel(margin=name).values
         metric = str(results[str(name)].attrs["metric"])
+        median, unit = _shown(_statistic(analysis, str(name), "quantile").sel(margin_probability=0.5).values, metric,
+                              str(results[str(name)].attrs.get("units", "")))
+        worst = _shown(_statistic(analysis, str(name), "worst").values, metric, unit)[0]
         pick = np.nanargmin if metric != "peak_sensitivity" else np.nanargmax
         if np.isnan(worst).all():
             rows.append((str(name), "–", "–", "–", "–"))
@@ -119,7 +135,7 @@ def build(b):
         "Loop margins per data set: the range of the data sets' medians, the worst case over the campaign with its "
         f"run, and the strongest Spearman correlation with {features[f_b]} over the data sets (95 % bootstrap "
         "interval, runs used; ok runs with finite margin and feature). Quantiles of every data set are in analysis.nc "
-        "(margin_quantile).",
+        "(<margin>_quantile; gain margins stored as amplitude ratios, shown here in dB).",
         ("Margin", "Median (data-set range)", "Worst", "Worst run", f"Spearman ρ with {features[f_b]}"), rows)
     violated = analysis["margin_limits_violated"].values
     found = [(b.datasets[d], int(analysis["run"].values[r]), str(violated[d, r]))

@@ -19,6 +19,12 @@ def rank_order(values: np.ndarray) -> np.ndarray:
     return finite[np.argsort(-np.abs(values[finite]), kind="stable")]
 
 
+def largest_first(values: np.ndarray) -> np.ndarray:
+    """Indices of the finite entries, largest (signed) first (ties in parameter order)."""
+    finite = np.flatnonzero(np.isfinite(values))
+    return finite[np.argsort(-values[finite], kind="stable")]
+
+
 def ranked_over_datasets(analysis, feature: str) -> np.ndarray:
     """Parameter indices by their largest |Spearman ρ| in any data set (parameters without one left out)."""
     rho = np.abs(analysis["spearman"].sel(feature=feature).transpose("parameter", "dataset").values)
@@ -131,15 +137,21 @@ def build(b: Builder):
 
 
 def _sensitivity_table(b: Builder, parameters: list[str]):
-    """The three largest first-order indices per data set with their intervals and effect sizes (analysis.nc)."""
+    """The three tolerances with the largest first-order index per data set (analysis.nc): ranked by the lower bound of
+    the index's interval, what the runs resolve; a withheld index (``first_order_index_flag``) shows its interval only,
+    with the reason."""
     a = b.analysis
     method = a["first_order_index"].attrs.get("method", "given-data first-order index")
+    floor = int(a.attrs.get("first_order_min_runs", a["first_order_index"].attrs.get("min_runs", 0)))
     yield Paragraph(
         f"Rank correlations cannot see a tolerance whose effect is not monotone (a V-shaped dependence has ρ ≈ 0), and "
         f"a strong ρ may belong to a negligible effect. The first-order index ({method}) is the share of the feature's "
         "variance a tolerance explains alone, monotone or not; the effect size is how much it moves the feature (the "
         "standard deviation of the feature's conditional mean over the tolerance's range). An index whose interval "
         "includes 0 is not resolved by this many runs."
+        + (f" Below {floor} ok runs the index itself is not given, only its interval: with 38 tolerances that do "
+           "nothing, the largest of their indices averages above 0.1 by chance alone there (docs/campaigns.md)."
+           if floor else "")
     )
     rows, muted = [], []
     for feature in b.measured:
@@ -147,18 +159,36 @@ def _sensitivity_table(b: Builder, parameters: list[str]):
         for name in b.datasets:
             sel = a.sel(dataset=name, feature=feature)
             reason = b.insufficient(name, feature)
-            index = sel["first_order_index"].values
-            for j in rank_order(index)[:3]:
-                lo, hi = sel["first_order_index_ci"].values[j]
-                rows.append((feature, name, parameters[j], f"{index[j]:.2f} [{lo:.2f}, {hi:.2f}]",
-                             quantity(float(sel["effect_size"].values[j]), unit),
-                             f"{sel['spearman'].values[j]:+.2f}", "yes" if lo > 0 else "no (interval includes 0)",
-                             reason or "–"))
-                muted.append(reason is not None or not lo > 0)
-            if reason and not np.isfinite(index).any():
+            index, bounds = sel["first_order_index"].values, sel["first_order_index_ci"].values
+            flags = sel["first_order_index_flag"].values if "first_order_index_flag" in sel else np.zeros(len(index))
+            for j in largest_first(bounds[:, 0])[:3]:
+                lo, hi = bounds[j]
+                withheld = _withheld(int(flags[j]), int(sel["n_used"]), floor)
+                shown = (f"interval only: [{lo:.2f}, {hi:.2f}]" if withheld
+                         else f"{index[j]:.2f} [{lo:.2f}, {hi:.2f}]")
+                resolved = "yes" if lo > 0 else "no (interval includes 0)"
+                effect_lo, effect_hi = (float(v) for v in sel["effect_size_ci"].values[j])
+                effect = (f"[{quantity(effect_lo, unit)}, {quantity(effect_hi, unit)}]" if withheld
+                          else quantity(float(sel["effect_size"].values[j]), unit))
+                rows.append((feature, name, parameters[j], shown, effect,
+                             f"{sel['spearman'].values[j]:+.2f}", resolved,
+                             "; ".join(r for r in (reason, withheld) if r) or "–"))
+                muted.append(reason is not None or not lo > 0 or bool(withheld))
+            if reason and not np.isfinite(bounds).any():
                 rows.append((feature, name, "–", "–", "–", "–", "–", reason))
                 muted.append(True)
-    yield b.table("The three largest first-order indices per data set, with their bootstrap intervals, the effect size "
-                  "and Spearman ρ beside them; greyed rows are not resolved or rest on too few runs.",
+    yield b.table("The three tolerances per data set whose first-order index has the largest lower bound, with the "
+                  "index and its bootstrap interval, the effect size and Spearman ρ beside them; greyed rows are not "
+                  "resolved, rest on too few runs, or give the interval only (the Data column says why).",
                   ("Feature", "Data set", "Parameter", "First-order index [interval]", "Effect size", "Spearman ρ",
                    "Resolved", "Data"), rows, muted)
+
+
+def _withheld(flag: int, n: int, floor: int) -> str | None:
+    """Why the analysis withheld a first-order index (its ``first_order_index_flag`` bits), in words."""
+    reasons = []
+    if flag & 1:
+        reasons.append(f"index withheld: {n} ok runs < {floor}")
+    if flag & 2:
+        reasons.append("index withheld: the estimate fell outside its own bootstrap interval")
+    return "; ".join(reasons) or None

@@ -6,8 +6,24 @@ import json
 
 import numpy as np
 
+from campaigns.runs import STATUS_MEANINGS
 from reports.builder import LISTED_RUNS, Builder
 from reports.model import Callout
+
+
+def status_meanings(attrs) -> dict[str, str]:
+    """What each status means, as the results file states it: ``comment`` (one ``"status: meaning"`` per line), or a
+    JSON ``flag_meanings`` in files written before the CF flag variable ``status_flag``; else the runner's own."""
+    try:
+        return json.loads(attrs["flag_meanings"])
+    except (KeyError, TypeError, ValueError):
+        pass
+    meanings = dict(STATUS_MEANINGS)
+    for item in str(attrs.get("comment", "")).splitlines():
+        key, sep, text = item.partition(": ")
+        if sep and key in meanings:
+            meanings[key] = text
+    return meanings
 
 
 def build(b: Builder):
@@ -29,6 +45,6 @@ def build(b: Builder):
         rows.append((name, st, str(len(runs)), listed, reason or "–"))
     yield b.table("Failed runs grouped by data set, status and reason (run indices within the data set).",
                   ("Data set", "Status", "Count", "Runs", "Reason"), rows)
-    meanings = json.loads(results["status"].attrs.get("flag_meanings", "{}") or "{}")
+    meanings = status_meanings(results["status"].attrs)
     present = sorted({str(s) for s in status.ravel()} - {"ok"})
     yield b.table("What each status means.", ("Status", "Meaning"), [(s, meanings.get(s, "–")) for s in present])

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from campaigns.analysis import RESOLUTIONS, printed_estimate
 from reports import figures
 from reports.builder import Builder
 from reports.figures import Line
@@ -23,13 +24,18 @@ def build(b: Builder):
         f"threshold that flags {fa:.0%} of a reference data set's runs (false alarms); the overlap coefficient is the "
         "shared area of the two feature histograms (1: indistinguishable, 0: disjoint)."
     )
+    floor, reason = a.attrs.get("min_detection_runs"), a.attrs.get("min_detection_runs_reason", "")
     for feature in b.measured:
         detection = a["detection_probability"].sel(feature=feature).transpose("dataset", "reference").values
+        blank = [d for d, column in zip(b.datasets, detection.T, strict=True) if not np.isfinite(column).any()]
         yield b.figure(
             f"separation-{feature}",
             f"Detection probability of {feature}: runs of the row data set flagged by a threshold set on the column "
             f"data set at a {fa:.0%} false-alarm rate. Cells near 1 mean the bench tells the two conditions apart; "
-            "compare the data sets with backlash (rows) against those without (columns).",
+            "compare the data sets with backlash (rows) against those without (columns)."
+            + (f" Blank columns ({', '.join(blank)}): insufficient data for a threshold"
+               + (f", fewer than {int(floor)} ok runs: {reason}." if floor is not None else ".")
+               if blank else ""),
             figures.heatmap(detection, b.datasets, b.datasets, colorbar_label="detection probability [–]",
                             xlabel="reference data set (threshold)", ylabel="tested data set", vmin=0.0, vmax=1.0,
                             cmap="viridis"),
@@ -55,13 +61,17 @@ def build(b: Builder):
     factor, unit = display_scale("m", [requirement])
     yield Paragraph(
         f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
-        f"{', '.join(quantity(x, 'm') for x in backlash)}), the detection probability against the zero-backlash "
-        f"data set is interpolated linearly to where it reaches {power:.0%}: the minimum detectable backlash."
+        f"{', '.join(quantity(x, 'm') for x in backlash)}), the minimum detectable backlash is where the detection "
+        f"probability against the zero-backlash data set reaches {power:.0%}. Between two sweep levels the runs say "
+        "nothing, so the finding is the pair of adjacent levels around that crossing; a value between them is given "
+        "only where the sweep resolves it (its bootstrap bounds hold a sweep level inside), rounded to the precision "
+        "of those bounds. Each sentence above is the analysis's, verbatim."
     )
     minimum = {f: float(a["minimum_detectable_backlash"].sel(feature=f)) for f in b.features}
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
+    resolution = {f: _resolution(a, f, minimum[f]) for f in b.features}
     for feature in b.features:
-        if not math.isfinite(minimum[feature]):
+        if resolution[feature] == "beyond_sweep":
             yield Callout(f"{feature}: the detection probability never reaches {power:.0%} along the sweep.", "info")
     if (backlash > 0).any():
         smallest = int(np.flatnonzero(backlash == backlash[backlash > 0].min())[0])
@@ -69,19 +79,26 @@ def build(b: Builder):
         if bounded:
             yield Paragraph(
                 f"For {', '.join(bounded)} the smallest non-zero level of the sweep "
-                f"({quantity(backlash[smallest], 'm')}) is already detected, so the minimum detectable backlash is an "
-                "upper bound from the interpolation between 0 and that level. Add data sets with backlash near the "
+                f"({quantity(backlash[smallest], 'm')}) is already detected, so the minimum detectable backlash lies "
+                "between 0 and that level, and no value inside is resolved. Add data sets with backlash near the "
                 "requirement to resolve it."
             )
     curves = [Line(f, backlash * factor, probability[f], f"C{k}", "-" if k == 0 else "--")
               for k, f in enumerate(b.features)]
-    minima = [(f"{f}: minimum detectable {number(minimum[f] * factor)} {unit}", minimum[f] * factor, f"C{k}")
-              for k, f in enumerate(b.features)]
+    minima = [(f"{f}: minimum detectable {number(_printed(a, f, minimum[f]) * factor)} {unit}", minimum[f] * factor,
+               f"C{k}") for k, f in enumerate(b.features)]
+    bracketed = [f"{f} between {number(lo * factor)} and {number(hi * factor)} {unit}"
+                 for f in b.features if resolution[f] == "between_adjacent_levels"
+                 for lo, hi in [a["minimum_detectable_bracket"].sel(feature=f).values]]
     yield b.figure(
         "detection-sweep",
-        "Detection probability against backlash along the sweep, per feature. Where a curve crosses the "
-        f"{power:.0%} line (star) is the minimum detectable backlash, the green line the requirement; the verdict "
-        f"above also weighs the bootstrap bounds of the star's position.",
+        "Detection probability against backlash along the sweep, per feature; the dashed line is the "
+        f"{power:.0%} target, the green line the requirement. A star marks a minimum detectable backlash the sweep "
+        "resolves; "
+        + (f"where it does not, the minimum lies between two adjacent levels ({'; '.join(bracketed)}) and no star is "
+           "drawn (the straight segments between the points are not data). " if bracketed else
+           "the straight segments between the points are not data. ")
+        + "The verdict above weighs the bootstrap bounds.",
         figures.detection(curves, power=power, false_alarm_rate=fa,
                           requirement=(f"requirement {number(requirement * factor)} {unit} ({source.split(':')[0]})",
                                        requirement * factor),
@@ -94,3 +111,22 @@ def build(b: Builder):
             "zero-backlash one is what the bench can observe.",
             figures.distributions(b.distribution_panels(feature, sweep)),
         )
+
+
+def _resolution(analysis, feature: str, minimum: float) -> str:
+    """How far the sweep resolves the feature's minimum detectable backlash, as the analysis flagged it
+    (``minimum_detectable_status``); an older analysis without the flag: resolved when it states a value."""
+    if "minimum_detectable_status" in analysis:
+        status = analysis["minimum_detectable_status"].sel(feature=feature)
+        meanings = status.attrs.get("flag_meanings", " ".join(RESOLUTIONS)).split()
+        return meanings[int(status)]
+    return "resolved" if math.isfinite(minimum) else "beyond_sweep"
+
+
+def _printed(analysis, feature: str, minimum: float) -> float:
+    """The minimum detectable backlash as the statement prints it: rounded at the leading digit of its bounds'
+    half-width (:func:`campaigns.analysis.printed_estimate`)."""
+    if "minimum_detectable_backlash_ci" not in analysis:
+        return minimum
+    lower, upper = (float(v) for v in analysis["minimum_detectable_backlash_ci"].sel(feature=feature).values)
+    return printed_estimate(minimum, (lower, upper))

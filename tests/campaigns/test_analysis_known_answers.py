@@ -18,6 +18,7 @@ from scipy import stats
 from campaigns import analysis, sensitivity
 from campaigns.analysis import (
     BACKLASH_REQUIREMENT,
+    MIN_DETECTION_RUNS,
     analysis_dataset,
     analyze,
     bootstrap_correlation,
@@ -32,6 +33,8 @@ from campaigns.analysis import (
 from campaigns.sensitivity import HARMONICS, _easi_order, _first_order_of_signals, first_order
 
 AGAINST = "against the 1 µm requirement of Table 9.3"
+#: Runs per data set of the constructed sweeps: one more than the detection floor (59 at the default settings).
+RUNS = 60
 
 
 def _quantile_order_statistic(values, q):
@@ -128,9 +131,13 @@ def test_the_analysis_intervals_are_the_bootstrap_of_each_data_set_and_feature_s
                 confidence=0.9,
                 seed=np.random.SeedSequence(8, spawn_key=(analysis._SENSITIVITY_STREAM, d, k)),
             )
-            np.testing.assert_array_equal(
-                a["first_order_index"].sel(dataset=f"d{d}", feature=("f", "g")[k]), found["index"]
-            )
+            # 30 runs, below sensitivity.MIN_RUNS: every index flagged (outputs print the intervals only)
+            cell = a.sel(dataset=f"d{d}", feature=("f", "g")[k])
+            np.testing.assert_array_equal(cell["first_order_index"], found["index"])
+            np.testing.assert_array_equal(cell["effect_size"], found["effect_size"])
+            np.testing.assert_array_equal(cell["first_order_index_flag"],
+                                          sensitivity.unresolved(found["index"], found["ci"], 30))
+            assert (cell["first_order_index_flag"] & sensitivity.BELOW_MIN_RUNS).all()
             np.testing.assert_array_equal(
                 a["first_order_index_ci"].sel(dataset=f"d{d}", feature=("f", "g")[k]), found["ci"]
             )
@@ -202,7 +209,7 @@ def test_minimum_detectable_known_answers():
 def _sweep_samples(seed=34):
     rng = np.random.default_rng(seed)
     levels = np.array([2.0, 0.0, 1.0, 3.0, 4.0])  # the reference (0) second, to be found by index
-    return levels, [level + rng.normal(0.0, 0.8, 40) for level in levels]
+    return levels, [level + rng.normal(0.0, 0.8, RUNS) for level in levels]
 
 
 def test_bootstrap_minimum_detectable_is_the_loop_over_resampled_sweeps():
@@ -278,42 +285,56 @@ def test_the_bootstrap_bounds_move_with_the_confidence_on_a_fine_sweep():
 
 
 def test_requirement_statement_known_sentences():
-    assert requirement_statement("met", 0.42e-6, (0.0, 0.5e-6), {"a": 20, "b": 25}, largest_level=5e-6) == (
-        "met: minimum detectable backlash 0.42 µm (95 % bootstrap bounds: above 0 µm, at most 0.5 µm; "
-        f"20–25 ok runs per sweep data set, 2 data sets) {AGAINST}"
+    """A resolved value with its bounds; a bracket of adjacent levels, named by their data sets; a sweep never
+    detected; every level the sentence gives named by its data set when the levels are given."""
+    levels = {"b0": 0.0, "b1": 0.5e-6, "b2": 1e-6, "b3": 5e-6}
+    assert requirement_statement("met", 0.4e-6, (0.0, 0.5e-6), {"a": 60, "b": 65}) == (
+        "met: minimum detectable backlash 0.4 µm (95 % bootstrap bounds: above 0 µm, at most 0.5 µm; "
+        f"60–65 ok runs per sweep data set, 2 data sets) {AGAINST}"
     )
     assert requirement_statement(
-        "not met",
-        math.nan,
-        (2e-6, math.inf),
-        {"a": 30, "b": 30, "c": 30},
-        confidence=0.9,
-        power=0.8,
-        largest_level=5e-6,
+        "undetermined", math.nan, (0.5e-6, 5e-6), {"b0": 70, "b1": 70}, resolution="between_adjacent_levels",
+        bracket=(1e-6, 5e-6), levels=levels,
     ) == (
-        "not met: minimum detectable backlash not reached up to 5 µm: detection probability below 80 % (90 % bootstrap "
-        f"bounds: above 2 µm, possibly beyond the sweep (5 µm); 30 ok runs per sweep data set, 3 data sets) {AGAINST}"
-    )
-    # exactly min_ok_runs is enough
-    assert requirement_statement("undetermined", 1.2e-6, (0.5e-6, 2e-6), {"a": 20}, min_ok_runs=20).startswith(
-        "undetermined: minimum detectable backlash 1.2 µm (95 % bootstrap bounds: above 0.5 µm, at most 2 µm; "
-        "20 ok runs"
-    )
-
-
-def test_insufficient_data_sentences_name_the_short_data_sets():
-    tail = f"so no minimum detectable backlash is estimated {AGAINST}"
-    assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {"a": 1, "b": 20}) == (
-        f"insufficient data: a has 1 ok run (at least 20 per sweep data set are needed), {tail}"
+        "undetermined: minimum detectable backlash between the adjacent sweep levels 1 µm (b2) and 5 µm (b3) "
+        f"(95 % bootstrap bounds: above 0.5 µm (b1), at most 5 µm (b3); 70 ok runs per sweep data set, 2 data sets) "
+        f"{AGAINST}"
     )
     assert requirement_statement(
-        "insufficient data", math.nan, (math.nan, math.nan), {"a": 0, "b": 3, "c": 30}, min_ok_runs=5
-    ) == (f"insufficient data: a has 0 ok runs, b has 3 ok runs (at least 5 per sweep data set are needed), {tail}")
-    assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {"a": 5, "b": 5}).startswith(
-        "insufficient data: each of the 2 sweep data sets has 5 ok runs (at least 20"
+        "not met", math.nan, (1e-6, math.inf), {"a": 30, "b": 30, "c": 30}, resolution="beyond_sweep",
+        bracket=(5e-6, math.inf), levels=levels, confidence=0.9, power=0.8, min_runs=22,
+    ) == (
+        "not met: minimum detectable backlash above 5 µm (b3), the largest sweep level: detection probability below "
+        "80 % along the whole sweep (90 % bootstrap bounds: above 1 µm (b2), possibly beyond the sweep; 30 ok runs "
+        f"per sweep data set, 3 data sets) {AGAINST}"
     )
-    assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {"a": 5}).startswith(
-        "insufficient data: a has 5 ok runs (at least 20"
+    # exactly the floor is enough
+    assert requirement_statement("undetermined", 1.2e-6, (0.5e-6, 2e-6), {"a": 59}).startswith(
+        "undetermined: minimum detectable backlash 1.2 µm (95 % bootstrap bounds: above 0.5 µm, at most 2 µm; "
+        "59 ok runs"
+    )
+
+
+def test_insufficient_data_sentences_name_the_short_data_sets_and_the_runs_needed():
+    why = ("with fewer, not even the largest run bounds the 95 % quantile that sets the detection threshold from above "
+           "with 95 % confidence")
+    tail = f"so no minimum detectable backlash is estimated {AGAINST}"
+    assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {"a": 1, "b": 59}) == (
+        f"insufficient data: a has 1 ok run; at least 59 per sweep data set are needed ({why}), {tail}"
+    )
+    assert requirement_statement(
+        "insufficient data", math.nan, (math.nan, math.nan), {"a": 0, "b": 3, "c": 30}, min_runs=5
+    ) == (f"insufficient data: a has 0 ok runs, b has 3 ok runs; at least 5 per sweep data set are needed ({why}), "
+          + tail)
+    assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {"a": 50, "b": 50}).startswith(
+        "insufficient data: each of the 2 sweep data sets has 50 ok runs; at least 59 per sweep data set"
+    )
+    # the power's quantile binds when it is the more extreme one: 99 % detection needs 299 runs at 95 % confidence
+    assert requirement_statement(
+        "insufficient data", math.nan, (math.nan, math.nan), {"a": 100}, power=0.99, min_runs=299
+    ) == (
+        "insufficient data: a has 100 ok runs; at least 299 per sweep data set are needed (with fewer, not even the "
+        "smallest run bounds the 1 % quantile that 99 % detection rests on from below with 95 % confidence), " + tail
     )
     assert requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {}) == (
         "insufficient data: the spec has no observability sweep, so no minimum detectable backlash is estimated "
@@ -343,32 +364,36 @@ def test_sweep_statistics_are_those_of_the_sweep_functions_against_the_zero_back
         np.testing.assert_array_equal(cell["sweep_detection_probability"], found["probability"])
         np.testing.assert_array_equal(cell["minimum_detectable_bracket"], found["bracket"])
         np.testing.assert_array_equal(cell["minimum_detectable_backlash_ci"], found["bounds"])
-        assert float(cell["minimum_detectable_backlash"]) == pytest.approx(found["estimate"])
+        resolved = found["resolution"] == "resolved"
+        np.testing.assert_equal(float(cell["minimum_detectable_backlash"]), found["estimate"] if resolved else math.nan)
+        assert analysis.RESOLUTIONS[int(cell["minimum_detectable_status"])] == found["resolution"]
         verdict = analysis.requirement_verdict(*found["bounds"])
         assert str(cell["requirement_verdict"].item()) == verdict
         assert str(cell["requirement_statement"].item()).startswith(f"{verdict}: ")
     np.testing.assert_array_equal(a["sweep_backlash"], levels * 1e-6)
     # the reversed feature sits below the reference: its thresholds are the lower ones
     assert str(a["requirement_statement"].sel(feature="f").item()).endswith(
-        f"40 ok runs per sweep data set, 5 data sets) {AGAINST}"
+        f"{RUNS} ok runs per sweep data set, 5 data sets) {AGAINST}"
     )
 
 
 def test_observability_sweep_defaults_are_the_documented_ones():
-    """False-alarm rate 5 %, power 95 %, 95 % bounds, MIN_OK_RUNS: the same numbers as the sweep functions' defaults."""
+    """False-alarm rate 5 %, power 95 %, 95 % bounds, MIN_DETECTION_RUNS: the same numbers as the sweep functions'
+    defaults."""
     levels, samples = _sweep_samples()
     results = results_dataset({"f": np.array(samples)}, {}, levels=levels)
     found = analysis.observability_sweep(results, "f", ["d0", "d1", "d2", "d3", "d4"], n_boot=100, seed=3)
     expected = bootstrap_minimum_detectable(levels, samples, 1, n_boot=100, seed=3)
-    assert float(found["minimum_detectable_backlash"]) == pytest.approx(expected["estimate"])
+    np.testing.assert_equal(float(found["minimum_detectable_backlash"]),
+                            expected["estimate"] if expected["resolution"] == "resolved" else math.nan)
     assert tuple(found["minimum_detectable_backlash_ci"].values) == expected["bounds"]
     assert "95 % bootstrap bounds" in str(found["requirement_statement"].item())
 
 
 def test_a_short_sweep_data_set_withholds_the_verdict_but_not_the_others_detection():
     levels, samples = _sweep_samples()
-    status = np.full((5, 40), "ok", dtype=object)
-    status[3, 19:] = "error"  # d3: 19 ok runs
+    status = np.full((5, RUNS), "ok", dtype=object)
+    status[3, 58:] = "error"  # d3: 58 ok runs, one below the detection floor
     results = results_dataset(
         {"f": np.array(samples)}, {}, levels=levels, status=status, sweep=["d0", "d1", "d2", "d3", "d4"]
     )
@@ -380,8 +405,9 @@ def test_a_short_sweep_data_set_withholds_the_verdict_but_not_the_others_detecti
         float(a["minimum_detectable_backlash"])
     )
     assert np.isnan(a["minimum_detectable_backlash_ci"]).all() and np.isnan(a["minimum_detectable_bracket"]).all()
-    assert "d3 has 19 ok runs" in str(a["requirement_statement"].item())
-    status[1, 19:] = "error"  # the reference short too: no data set has a detection probability
+    assert "d3 has 58 ok runs; at least 59 per sweep data set are needed" in str(a["requirement_statement"].item())
+    assert int(a["minimum_detectable_status"]) == analysis.RESOLUTIONS.index("insufficient_data")
+    status[1, 58:] = "error"  # the reference short too: no data set has a detection probability
     a = analysis_dataset(results.assign(status=(("dataset", "run"), status)), n_boot=50).sel(feature="f")
     assert np.isnan(a["sweep_detection_probability"]).all()
 
@@ -395,7 +421,7 @@ def test_per_data_set_counts_means_and_the_separation_matrices():
     results = results_dataset({"f": f}, {"p": rng.normal(size=(3, 8))}, status=status)
     with pytest.raises(ValueError, match="min_ok_runs = 2: must be at least 3"):
         analysis_dataset(results, min_ok_runs=2)
-    a = analysis_dataset(results, n_boot=20, min_ok_runs=3, sensitivity_boot=10).sel(feature="f")
+    a = analysis_dataset(results, n_boot=20, min_ok_runs=3, min_detection_runs=3, sensitivity_boot=10).sel(feature="f")
     assert list(a["n_used"].values) == [6, 7, 2] and list(a["n_excluded"].values) == [2, 1, 6]
     assert list(a["data_sufficient"].values) == [1, 1, 0]
     assert a["status"].values.tolist() == ["error", "failed", "ok", "timeout"]
@@ -416,6 +442,11 @@ def test_per_data_set_counts_means_and_the_separation_matrices():
         np.isnan(a["overlap"].sel(dataset="d2")).all()
         and np.isnan(a["detection_probability"].sel(reference="d2")).all()
     )
+    # at the default detection floor (59) no data set here sets a threshold: no detection probability, the overlap
+    # (a histogram, no quantile) stays
+    default = analysis_dataset(results, n_boot=20, min_ok_runs=3, sensitivity_boot=10).sel(feature="f")
+    assert np.isnan(default["detection_probability"]).all() and default.attrs["min_detection_runs"] == 59
+    np.testing.assert_array_equal(default["overlap"], a["overlap"])
     assert a["effect_size"].attrs["units"] == "m"
     # exactly min_ok_runs used runs is enough: flagged sufficient, and its statistics computed
     exact = analysis_dataset(results, n_boot=20, min_ok_runs=6, sensitivity_boot=10).sel(dataset="d0", feature="f")
@@ -433,6 +464,9 @@ def test_attributes_state_the_settings_and_a_spec_without_sweep_says_so():
         results, n_boot=30, confidence=0.9, false_alarm_rate=0.1, power=0.8, seed=2, sensitivity_boot=10
     )
     assert (a.attrs["false_alarm_rate"], a.attrs["detection_power"], a.attrs["min_ok_runs"]) == (0.1, 0.8, 20)
+    # the detection floor follows the settings: 1 - 0.9^22 = 0.902 >= 0.9 > 1 - 0.9^21 (the 80 % power needs 11)
+    assert a.attrs["min_detection_runs"] == 22 and "90 % quantile" in a.attrs["min_detection_runs_reason"]
+    assert a.attrs["first_order_min_runs"] == sensitivity.MIN_RUNS
     assert a.attrs["requirement"] == BACKLASH_REQUIREMENT and a.attrs["requirement_units"] == "m"
     assert json.loads(a.attrs["bootstrap"]) == {
         "method": "percentile, pairs resampled",
@@ -440,7 +474,10 @@ def test_attributes_state_the_settings_and_a_spec_without_sweep_says_so():
         "confidence": 0.9,
         "seed": 2,
     }
-    assert a["effect_size"].attrs["units"] == "units of each feature"
+    # features in two units: no single unit along the feature axis, the feature_units coordinate gives each
+    assert "units" not in a["effect_size"].attrs and "feature_units coordinate (m, s)" in a["effect_size"].attrs[
+        "comment"]
+    assert a["feature_units"].values.tolist() == ["m", "s"] and "units" not in a["feature_mean"].attrs
     assert list(a["requirement_verdict"].values) == ["insufficient data"] * 2
     assert all("no observability sweep" in s for s in a["requirement_statement"].values)
     assert (a["data_sufficient"] == 1).all()
@@ -542,19 +579,20 @@ def test_first_order_interval_is_the_loop_over_resampled_runs_and_the_effect_siz
 
 def test_defaults_of_the_analysis_and_of_the_sentence():
     """1000 correlation resamples and 200 for the first-order index by default; the data_sufficient flag in CF form;
-    the not-reached sentence at the default power of 95 %; exactly min_ok_runs ok runs per sweep data set is a
-    verdict, and no warning."""
+    the never-reached sentence at the default power of 95 %; exactly MIN_DETECTION_RUNS ok runs per sweep data set is
+    a verdict, and no warning."""
     rng = np.random.default_rng(44)
     results = results_dataset({"f": rng.normal(size=(2, 25))}, {"p": rng.normal(size=(2, 25))})
     a = analysis_dataset(results)
     assert json.loads(a.attrs["bootstrap"])["n_boot"] == 1000 and a["first_order_index_ci"].attrs["n_boot"] == 200
     assert a["data_sufficient"].attrs["flag_values"].tolist() == [0, 1]
-    assert requirement_statement("not met", math.nan, (2e-6, math.inf), {"a": 30}, largest_level=5e-6).startswith(
-        "not met: minimum detectable backlash not reached up to 5 µm: detection probability below 95 % ("
-    )
+    assert requirement_statement(
+        "not met", math.nan, (2e-6, math.inf), {"a": 60}, resolution="beyond_sweep", bracket=(5e-6, math.inf)
+    ).startswith("not met: minimum detectable backlash above 5 µm, the largest sweep level: detection probability "
+                 "below 95 % along the whole sweep (")
     levels, samples = _sweep_samples()
-    status = np.full((5, 40), "ok", dtype=object)
-    status[:, 20:] = "error"  # exactly MIN_OK_RUNS = 20 in every sweep data set
+    status = np.full((5, RUNS), "ok", dtype=object)
+    status[:, MIN_DETECTION_RUNS:] = "error"  # exactly MIN_DETECTION_RUNS = 59 in every sweep data set
     results = results_dataset(
         {"f": np.array(samples)}, {}, levels=levels, status=status, sweep=["d0", "d1", "d2", "d3", "d4"]
     )

@@ -142,7 +142,15 @@ def test_minimum_detectable_interpolates_the_sweep():
 
 
 def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
-    path = campaigns.analyze(reference_results, tmp_path / "analysis.nc", n_boot=200)
+    """40 runs per data set: enough for the moments and correlations, too few for a detection threshold (59) at the
+    default settings; the sweep statistics are checked with the floor lowered to 40."""
+    path = campaigns.analyze(reference_results, tmp_path / "default.nc", n_boot=20, sensitivity_boot=10)
+    with xr.open_dataset(path) as a:
+        assert (a["requirement_verdict"] == "insufficient data").all() and a.attrs["min_detection_runs"] == 59
+        assert "each of the 3 sweep data sets has 40 ok runs; at least 59 per sweep data set are needed" in str(
+            a["requirement_statement"].sel(feature="backlash_feature").item())
+        assert np.isnan(a["detection_probability"]).all() and (a["data_sufficient"] == 1).all()
+    path = campaigns.analyze(reference_results, tmp_path / "analysis.nc", n_boot=200, min_detection_runs=40)
     with xr.open_dataset(path) as a:
         assert a.attrs["Conventions"] == "CF-1.8"
         assert (a["n_excluded"] == 0).all() and (a["n_used"] == 40).all()
@@ -157,21 +165,26 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         p = a["sweep_detection_probability"].sel(feature="backlash_feature")
         assert float(p.sel(sweep_point="ds2")) == 1.0 and float(p.sel(sweep_point="ds6")) == 1.0
         minimum = a["minimum_detectable_backlash"].sel(feature="backlash_feature")
-        assert 0 < float(minimum) <= 5e-6 and minimum.attrs["requirement"] == 1e-6
+        # 5 um already detected, 0 um not: the minimum lies between those two adjacent levels and no number is given
+        assert math.isnan(float(minimum)) and minimum.attrs["requirement"] == 1e-6
         bracket = a["minimum_detectable_bracket"].sel(feature="backlash_feature")
-        assert list(bracket.values) == [0.0, 5e-6]  # 5 um already detected: the 1 um verdict needs a finer sweep
+        assert list(bracket.values) == [0.0, 5e-6]  # the 1 um verdict needs a finer sweep
+        assert str(a["requirement_statement"].sel(feature="backlash_feature").item()).startswith(
+            "undetermined: minimum detectable backlash between the adjacent sweep levels 0 µm (ds4) and 5 µm (ds6) (")
         # the bootstrap bounds are the same sweep levels (5 um is detected in every resample): no verdict on 1 um
         assert list(a["minimum_detectable_backlash_ci"].sel(feature="backlash_feature").values) == [0.0, 5e-6]
         assert a["requirement_verdict"].sel(feature="backlash_feature") == "undetermined"
-        assert (a["data_sufficient"] == 1).all() and a.attrs["min_ok_runs"] == 20
+        assert (a["data_sufficient"] == 1).all() and (a.attrs["min_ok_runs"], a.attrs["min_detection_runs"]) == (20, 40)
         # the given-data sensitivity: the gain dominates data set 2, its effect in metres of feature
         effect = a["effect_size"].sel(dataset="ds2", feature="backlash_feature")
         assert effect.to_pandas().idxmax() == "synthetic.gain" and a["effect_size"].attrs["units"] == "m"
         assert "rbd_fast" in a["first_order_index"].attrs["method"]
-        index_ci = a["first_order_index_ci"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
-        assert (index_ci.sel(bound="lower")
-                <= a["first_order_index"].sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
-                <= index_ci.sel(bound="upper"))
+        # 40 runs, below sensitivity.MIN_RUNS (200): the index is flagged (outputs print its interval only); the gain's
+        # effect is large enough for the interval to exclude 0, and the estimate lies inside it
+        cell = a.sel(dataset="ds2", feature="backlash_feature", parameter="synthetic.gain")
+        assert int(cell["first_order_index_flag"]) == 1 and float(cell["first_order_index_ci"].sel(bound="lower")) > 0
+        index_ci = cell["first_order_index_ci"]
+        assert index_ci.sel(bound="lower") <= cell["first_order_index"] <= index_ci.sel(bound="upper")
         assert float(a["overlap"].sel(feature="backlash_feature", dataset="ds2", reference="ds4")) == 0.0
 
 

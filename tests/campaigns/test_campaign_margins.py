@@ -116,8 +116,8 @@ def test_worst_case_flags_and_correlation():
     results = _synthetic_results(400, 12)
     a = _robustness(results)
     phase = results["speed_loop_phase_margin"].values[0]
-    worst = a["margin_worst"].sel(dataset="ds", margin="speed_loop_phase_margin")
-    assert float(worst) == phase.min() == 20.0
+    worst = a["speed_loop_phase_margin_worst"].sel(dataset="ds")
+    assert float(worst) == phase.min() == 20.0 and worst.attrs["units"] == "degree"  # one unit per variable (CF)
     assert int(a["margin_worst_run"].sel(dataset="ds", margin="speed_loop_phase_margin")) == int(np.argmin(phase))
     flagged = a["margin_runs_beyond_limits"].values[0] > 0
     np.testing.assert_array_equal(flagged, phase < 30.0)
@@ -130,8 +130,27 @@ def test_worst_case_flags_and_correlation():
                                           feature="backlash_feature")) == 400
     # a constant margin has no rank correlation (NaN), not a spurious one
     assert np.isnan(a["margin_spearman"].sel(dataset="ds", margin="speed_loop_gain_margin").values).all()
-    q = a["margin_quantile"].sel(dataset="ds", margin="speed_loop_phase_margin")
+    q = a["speed_loop_phase_margin_quantile"].sel(dataset="ds")
     assert float(q.sel(margin_probability=0.0)) == 20.0 and float(q.sel(margin_probability=1.0)) == phase.max()
+    assert a["speed_loop_gain_margin_quantile"].attrs["units"] == "1"  # amplitude ratios, whatever the file held
+
+
+def test_gain_margins_stored_as_ratios_keep_the_limits_meaning():
+    """Gain margins are stored as amplitude ratios (units "1", issue 31); the limit stays in dB, so 3.5 dB (ratio
+    1.5) is beyond the 6 dB limit and 20 dB (ratio 10) is not, exactly as when the file held dB."""
+    in_db = _synthetic_results(400, 0)
+    gain_db = np.where(np.arange(400) < 3, 3.5, 20.0)
+    in_db["speed_loop_gain_margin"] = in_db["speed_loop_gain_margin"].copy(data=gain_db[None])
+    as_ratio = in_db.copy()
+    as_ratio["speed_loop_gain_margin"] = in_db["speed_loop_gain_margin"].copy(data=10 ** (gain_db[None] / 20))
+    as_ratio["speed_loop_gain_margin"].attrs["units"] = "1"
+    for results in (in_db, as_ratio):
+        a = _robustness(results)
+        statement = str(a["margin_limit_statement"].sel(limit_check="speed_loop_gain_margin").values)
+        assert statement.startswith("undetermined: speed loop GM ≥ 6 dB: 3 of 400 runs beyond the limit"), statement
+        assert "worst 3.5 dB (ds run 0)" in statement
+        assert "speed GM 3.5 dB" in str(a["margin_limits_violated"].values[0, 0])
+        assert float(a["speed_loop_gain_margin_worst"].sel(dataset="ds")) == pytest.approx(10 ** (3.5 / 20))
 
 
 def test_an_infinite_gain_margin_says_why():

@@ -81,7 +81,7 @@ def test_results_without_spec_json_are_refused(reference_results, tmp_path, resu
     with pytest.raises(CampaignError, match="no spec.json"):
         campaigns.run_campaign(load(SYNTHETIC_SPEC, runs=7), out, resume=resume, progress=False,
                                run_function=synthetic_run)
-    assert foreign.read_bytes() == before and sorted(p.name for p in out.iterdir()) == [".lock", "results.nc"]
+    assert foreign.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["results.nc"]  # lock removed
 
 
 # --- Row 3: two drivers on one --out both ran and crashed each other -----------------------------
@@ -254,7 +254,7 @@ timeout = 0.0
 
 def test_runs_have_an_upper_bound(tmp_path):
     with pytest.raises(SpecError,
-                       match=f"runs_per_dataset: Input should be less than or equal to {MAX_RUNS_PER_DATASET}"):
+                       match=rf"runs_per_dataset: 200000 is outside the allowed range \[1, {MAX_RUNS_PER_DATASET}\]"):
         load(SYNTHETIC_SPEC, runs=200_000)
 
 

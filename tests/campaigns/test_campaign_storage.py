@@ -8,6 +8,8 @@ import numpy as np
 import xarray as xr
 from campaign_helpers import SYNTHETIC_SPEC, load
 
+from campaigns.files import CONVENTIONS
+
 
 def test_results_round_trip(reference_results, tmp_path):
     with xr.open_dataset(reference_results, engine="netcdf4") as first:
@@ -34,7 +36,7 @@ def test_results_schema(reference_results):
         assert ds["trace_nut1_position"].attrs["units"] == "m"
         # the kept trace is the run's own: its last sample is the true feature (synthetic model)
         np.testing.assert_allclose(ds["trace_nut1_position"][:, :, -1], ds["backlash_feature_true"][:, :2])
-        assert ds.attrs["Conventions"] == "CF-1.8"
+        assert ds.attrs["Conventions"] == CONVENTIONS
         assert json.loads(ds.attrs["spec_json"]) == spec.canonical()
         assert ds.attrs["spec_hash"] == spec.spec_hash()
         assert int(ds.attrs["root_seed_entropy"]) == spec.root_seed

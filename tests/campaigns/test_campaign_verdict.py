@@ -3,7 +3,8 @@ CLI).
 
 The synthetic sweeps have a Gaussian feature ``f = backlash + N(0, sigma)``. Detection at false-alarm rate
 alpha = 5 % with power 95 % then needs a shift of ``(z_0.95 + z_0.95) sigma = 3.29 sigma``: that is the true
-minimum detectable backlash of each sweep.
+minimum detectable backlash of each sweep. Where the bootstrap bounds are two adjacent sweep levels, the sweep
+does not resolve the value: the statement gives the bracket and analysis.nc no number.
 """
 
 from __future__ import annotations
@@ -18,7 +19,15 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis import MIN_OK_RUNS, analysis_dataset, bootstrap_minimum_detectable
+from campaigns.analysis import (
+    MIN_DETECTION_RUNS,
+    MIN_OK_RUNS,
+    RESOLUTIONS,
+    analysis_dataset,
+    bootstrap_minimum_detectable,
+    printed_estimate,
+    sweep_resolution,
+)
 
 #: The observability spec's sweep levels [m].
 LEVELS = (0.0, 0.5e-6, 1e-6, 1.5e-6, 2e-6, 3e-6, 5e-6)
@@ -53,12 +62,20 @@ def verdict_of(analysis: xr.Dataset) -> tuple[str, str, np.ndarray, float]:
             a["minimum_detectable_backlash_ci"].values, float(a["minimum_detectable_backlash"]))
 
 
-def test_clearly_met():
-    # truth 3.29 * 0.1 um = 0.33 um: the 0.5 um data set is detected in every resample
-    verdict, statement, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(0.1e-6), n_boot=300))
-    assert verdict == "met" and (lower, upper) == (0.0, 0.5e-6) and lower <= estimate <= upper
-    assert statement.startswith("met: minimum detectable backlash ")
-    assert "above 0 µm, at most 0.5 µm; 100 ok runs per sweep data set, 7 data sets" in statement
+def resolution_of(analysis: xr.Dataset) -> str:
+    return RESOLUTIONS[int(analysis["minimum_detectable_status"].sel(feature="f"))]
+
+
+def test_clearly_met_between_two_adjacent_levels_is_a_bracket():
+    # truth 3.29 * 0.1 um = 0.33 um: the 0.5 um data set is detected in every resample, the 0 um one never
+    a = analysis_dataset(sweep_results(0.1e-6), n_boot=300)
+    verdict, statement, (lower, upper), estimate = verdict_of(a)
+    assert verdict == "met" and (lower, upper) == (0.0, 0.5e-6) and math.isnan(estimate)
+    assert resolution_of(a) == "between_adjacent_levels"
+    assert statement == (
+        "met: minimum detectable backlash between the adjacent sweep levels 0 µm (b0) and 0.5 µm (b1) (95 % bootstrap "
+        "bounds: above 0 µm (b0), at most 0.5 µm (b1); 100 ok runs per sweep data set, 7 data sets) against the 1 µm "
+        "requirement of Table 9.3")
 
 
 def test_clearly_not_met():
@@ -69,9 +86,13 @@ def test_clearly_not_met():
 
 
 def test_never_detected_along_the_sweep_is_not_met_with_an_infinite_upper_bound(tmp_path):
-    verdict, statement, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(5e-6), n_boot=300))
+    a = analysis_dataset(sweep_results(5e-6), n_boot=300)
+    verdict, statement, (lower, upper), estimate = verdict_of(a)
     assert verdict == "not met" and math.isnan(estimate) and lower >= 1e-6 and upper == math.inf
-    assert "not reached up to 5 µm" in statement and "possibly beyond the sweep" in statement
+    assert resolution_of(a) == "beyond_sweep"
+    assert statement.startswith("not met: minimum detectable backlash above 5 µm (b6), the largest sweep level: "
+                                "detection probability below 95 % along the whole sweep (95 % bootstrap bounds: above ")
+    assert "possibly beyond the sweep; 100 ok runs" in statement
     path = tmp_path / "analysis.nc"
     analysis_dataset(sweep_results(5e-6), n_boot=50).to_netcdf(path, engine="netcdf4")
     with xr.open_dataset(path, engine="netcdf4") as stored:  # inf and NaN survive the file
@@ -88,10 +109,55 @@ def test_a_bracket_straddling_the_requirement_is_undetermined():
         assert statement.startswith("undetermined: ")
 
 
-def test_the_interpolated_estimate_is_not_a_verdict():
-    """0 and 5 um only (the old demo sweep): the interpolation gives 4.7 um, the truth may be anywhere in 0-5 um."""
-    verdict, _, (lower, upper), estimate = verdict_of(analysis_dataset(sweep_results(0.1e-6, (0.0, 5e-6)), n_boot=300))
-    assert estimate == pytest.approx(5e-6 * 0.90 / 0.95) and (lower, upper) == (0.0, 5e-6) and verdict == "undetermined"
+def test_the_interpolated_estimate_is_neither_a_verdict_nor_printed():
+    """0 and 5 um only (the old demo sweep): the interpolation gives 4.7 um, the truth may be anywhere in 0-5 um, so
+    the statement and analysis.nc give the bracket, never 4.7 (the replay of "minimum detectable backlash 4.74 µm")."""
+    results = sweep_results(0.1e-6, (0.0, 5e-6))
+    a = analysis_dataset(results, n_boot=300)
+    verdict, statement, (lower, upper), estimate = verdict_of(a)
+    assert (lower, upper) == (0.0, 5e-6) and verdict == "undetermined" and math.isnan(estimate)
+    assert resolution_of(a) == "between_adjacent_levels"
+    assert statement.startswith("undetermined: minimum detectable backlash between the adjacent sweep levels 0 µm (b0) "
+                                "and 5 µm (b1) (")
+    assert "4.7" not in statement
+    np.testing.assert_array_equal(a["minimum_detectable_bracket"].sel(feature="f"), [0.0, 5e-6])
+    samples = [results["f"].sel(dataset=n).values for n in results["dataset"].values]
+    found = bootstrap_minimum_detectable((0.0, 5e-6), samples, 0, n_boot=300, seed=1)
+    assert found["estimate"] == pytest.approx(5e-6 * 0.90 / 0.95) and math.isnan(found["printed"])
+
+
+def test_a_value_is_printed_where_the_bounds_span_more_than_one_sweep_step():
+    """Levels every 0.25 um, sigma 0.5 um (truth 1.64 um), 100 runs: the bootstrap bounds hold several levels, so the
+    sweep resolves the value: analysis.nc holds it, the statement prints it rounded at the leading digit of the
+    bounds' half-width, and the bounds hold the truth."""
+    sigma, levels = 0.5e-6, np.arange(0, 13) * 0.25e-6
+    a = analysis_dataset(sweep_results(sigma, levels, seed=5), n_boot=300)
+    verdict, statement, (lower, upper), estimate = verdict_of(a)
+    inside = levels[(levels > lower) & (levels < upper)]
+    assert resolution_of(a) == "resolved" and len(inside) >= 1
+    assert lower < DETECTABLE_SHIFT * sigma <= upper and lower <= estimate <= upper and verdict == "not met"
+    step = 10.0 ** math.floor(math.log10((upper - lower) / 2))  # the statement rounds at the bounds' leading digit
+    printed = round(estimate / step) * step
+    assert printed == pytest.approx(printed_estimate(estimate, (lower, upper)), abs=1e-15)
+    assert statement.startswith(f"not met: minimum detectable backlash {printed * 1e6:.3g} µm (95 % bootstrap bounds")
+
+
+def test_sweep_resolution_and_the_printed_digits_known_answers():
+    levels = np.array([0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0])
+    assert sweep_resolution(levels, 1.19, (0.5, 1.5)) == "resolved"  # 1.0 lies inside
+    assert sweep_resolution(levels, 0.96, (0.5, 1.0)) == "between_adjacent_levels"
+    assert sweep_resolution(levels, 4.74, (0.0, 5.0)) == "resolved"  # 0.5 ... 3 lie inside
+    assert sweep_resolution(np.array([0.0, 5.0]), 4.74, (0.0, 5.0)) == "between_adjacent_levels"
+    # 5 lies inside, but the bounds are open above: not resolved
+    assert sweep_resolution(np.array([0.0, 5.0]), 4.74, (0.0, math.inf)) == "between_adjacent_levels"
+    assert sweep_resolution(levels, 0.5, (0.5, 0.5)) == "resolved"  # the estimate is a level
+    assert sweep_resolution(levels, math.nan, (5.0, math.inf)) == "beyond_sweep"
+    # GUM 7.2.6: to the leading digit of the uncertainty (half-width 0.5 -> 0.1, 300 -> 100, 0.25 -> 0.1, 0.025 -> 0.01)
+    assert printed_estimate(1.19, (0.5, 1.5)) == pytest.approx(1.2)
+    assert printed_estimate(371.0, (0.0, 600.0)) == pytest.approx(400.0)
+    assert printed_estimate(1.834, (1.5, 2.0)) == pytest.approx(1.8)
+    assert printed_estimate(1.834, (1.8, 1.85)) == pytest.approx(1.83)
+    assert printed_estimate(2.0, (2.0, 2.0)) == 2.0
 
 
 def test_bounds_contain_the_estimate_and_the_truth_on_a_fine_sweep():
@@ -121,8 +187,8 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     a = analysis_dataset(sweep_results(0.1e-6, ok_runs=1), n_boot=50)
     verdict, statement, ci, estimate = verdict_of(a)
     assert verdict == "insufficient data" and np.isnan(ci).all() and math.isnan(estimate)
-    assert statement.startswith("insufficient data: each of the 7 sweep data sets has 1 ok run ")
-    assert f"at least {MIN_OK_RUNS} per sweep data set" in statement
+    assert statement.startswith("insufficient data: each of the 7 sweep data sets has 1 ok run; ")
+    assert f"at least {MIN_DETECTION_RUNS} per sweep data set are needed" in statement
     assert (a["data_sufficient"] == 0).all() and (a["n_used"] == 1).all() and a.attrs["min_ok_runs"] == MIN_OK_RUNS
     for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability",
                  "sweep_detection_probability"):
@@ -136,6 +202,19 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     assert (np.isnan(a["feature_mean"].sel(dataset="b2")).all()
             and np.isfinite(a["feature_mean"].sel(dataset="b1")).all())
     assert f"b2 has {MIN_OK_RUNS - 1} ok runs" in str(a["requirement_statement"].sel(feature="f").item())
+    # enough runs for the moments and correlations (20) but not for the detection threshold (59): b2's statistics are
+    # computed, no detection probability against it, and the verdict is withheld with the number needed
+    results = sweep_results(0.1e-6)
+    results["status"][2, MIN_DETECTION_RUNS - 1 :] = "error"
+    a = analysis_dataset(results, n_boot=50).sel(feature="f")
+    assert list(a["data_sufficient"].values) == [1] * 7 and np.isfinite(a["feature_mean"]).all()
+    assert np.isnan(a["detection_probability"].sel(reference="b2")).all()
+    assert np.isfinite(a["detection_probability"].sel(dataset="b2", reference="b0"))
+    assert np.isnan(a["sweep_detection_probability"].sel(sweep_point="b2"))
+    assert str(a["requirement_statement"].item()).startswith(
+        f"insufficient data: b2 has {MIN_DETECTION_RUNS - 1} ok runs; at least {MIN_DETECTION_RUNS} per sweep data set "
+        "are needed (with fewer, not even the largest run bounds the 95 % quantile that sets the detection threshold "
+        "from above with 95 % confidence), so no minimum detectable backlash is estimated")
 
 
 def test_every_feature_gets_its_own_verdict():

@@ -17,13 +17,14 @@ from campaigns.analysis import analysis_dataset
 from reports import ReportError
 from reports.builder import Builder
 from reports.inputs import Inputs, load_inputs
-from reports.model import Callout, Paragraph, Table
+from reports.model import Callout, Figure, Paragraph, Table
 from reports.sections import executive as executive_section
 from reports.units import number
 
 LEVELS = (0.0, 0.5e-6, 2e-6)
 NAMES = ("b0", "b1", "b2")
-RUNS = 30
+#: Runs per data set: one more than the analysis's detection floor (59), so that the sweeps have a verdict.
+RUNS = 60
 
 
 def results_of(sigma=(0.1e-6, 0.1e-6), *, status=None, gain_effect=0.0, seed=0) -> xr.Dataset:
@@ -143,11 +144,11 @@ def test_the_question_states_the_requirement_the_analysis_states():
 def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
     status = np.full((3, RUNS), "ok", dtype=object)
     status[1, 12:] = "error"  # b1: 12 ok runs, below MIN_OK_RUNS = 20
-    status[2, :3] = "timeout"  # b2: 27 ok runs
+    status[2, :3] = "timeout"  # b2: 57 ok runs
     results = results_of(status=status)
     page = executive(results)
     [table] = [t for t in page if isinstance(t, Table)]
-    assert [row[2] for row in table.rows] == ["30 of 30", "12 of 30", "27 of 30"]
+    assert [row[2] for row in table.rows] == ["60 of 60", "12 of 60", "57 of 60"]
     assert [row[3] for row in table.rows] == ["–", "insufficient data: 12 ok run(s) < 20", "–"]
     assert table.muted == (False, True, False)
     assert "at least 20 needed, analysis.nc, min_ok_runs" in table.caption
@@ -155,7 +156,7 @@ def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
     assert "all share" not in table.caption and "read from the spec's overrides" in table.caption
 
     [failures] = callouts(page, "Failures:")
-    assert failures.text == "Failures: 21 of 90 runs failed (left out of every statistic)." and failures.tone == "bad"
+    assert failures.text == "Failures: 51 of 180 runs failed (left out of every statistic)." and failures.tone == "bad"
     assert failures.link == "failures"
 
 
@@ -198,7 +199,7 @@ def test_every_run_ok_is_a_good_failures_callout_and_the_audit_sets_its_tone():
     results = results_of()
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
     [failures] = callouts(executive(results, analysis), "Failures:")
-    assert (failures.text, failures.tone) == ("Failures: 0 of 90 runs failed.", "good")
+    assert (failures.text, failures.tone) == ("Failures: 0 of 180 runs failed.", "good")
     for audit, tone in (
         ("met: auto is within the tolerance of full fidelity on every data set and feature", "good"),
         ("not met: auto differs from full fidelity (rule to fix): short/f", "bad"),
@@ -235,10 +236,10 @@ def test_influences_rank_the_resolved_effect_sizes_with_their_data_set_and_n():
         [-0.1, 0.2],
     ]
     assert _influences(results, analysis) == (
-        "f: p.gain moves it by 3 µm in b1 (first-order index 0.63 [0.41, 0.86]), n = 30; "
+        "f: p.gain moves it by 3 µm in b1 (first-order index 0.63 [0.41, 0.86]), n = 60; "
         "p.inert moves it by 500 nm in b0 (first-order index "
         + number(float(analysis["first_order_index"].sel(dataset="b0", feature="f", parameter="p.inert")), 2)
-        + " [0.01, 0.3]), n = 30."
+        + " [0.01, 0.3]), n = 60."
     )
     # an index whose interval reaches 0 is not an influence; none resolved: said so, nothing ranked
     analysis["first_order_index_ci"].loc[dict(feature="f", parameter="p.inert", dataset="b0", bound="lower")] = 0.0
@@ -265,7 +266,7 @@ def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
             lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
             value = float(rho.sel(dataset=dataset))
             items.append(
-                (abs(value), f"{parameter} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 30)")
+                (abs(value), f"{parameter} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 60)")
             )
         return (
             "f, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
@@ -358,3 +359,90 @@ def test_an_accuracy_study_along_another_dimension_is_refused(tmp_path):
     accuracy.to_netcdf(tmp_path / "bad.nc")
     with pytest.raises(ReportError, match="must all lie along the dimension 'run'"):
         load_inputs(path, accuracy_path=tmp_path / "bad.nc")
+
+
+# --- the observability section and the first-order table: brackets and withheld indices ---------------------------
+
+
+def _section_blocks(module, results: xr.Dataset, analysis: xr.Dataset) -> list:
+    inputs = Inputs(results, analysis, None, json.loads(results.attrs["spec_json"]), (), False)
+    return list(module.build(Builder(inputs)))
+
+
+def test_the_observability_section_gives_the_bracket_never_an_interpolated_value():
+    """Noise 0.1 µm on levels 0, 0.5 and 2 µm: 0.5 µm is detected, 0 is not; the minimum lies between those two
+    adjacent levels. The section quotes the statement, names the bracket in the figure caption and prints no value
+    between the levels (the analysis holds none)."""
+    from reports.sections import observability
+
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    assert np.isnan(analysis["minimum_detectable_backlash"]).all()
+    blocks = _section_blocks(observability, results, analysis)
+    texts = [getattr(b, "text", "") or getattr(b, "caption", "") for b in blocks]
+    for feature in ("f", "f_true"):
+        statement = str(analysis["requirement_statement"].sel(feature=feature).item())
+        assert statement.startswith("met: minimum detectable backlash between the adjacent sweep levels 0 µm (b0) and "
+                                    "0.5 µm (b1) (")
+        assert f"{feature}: {statement}" in texts
+    [caption] = [b.caption for b in blocks if isinstance(b, Figure) and b.key == "detection-sweep"]
+    assert "f between 0 and 0.5 µm; f_true between 0 and 0.5 µm" in caption and "no star is drawn" in caption
+    assert not any("interpolated linearly" in t for t in texts)
+    assert any("lies between 0 and that level, and no value inside is resolved" in t for t in texts)
+    assert not any("never reaches" in t for t in texts)
+    # a resolved value (as a finer sweep gives): a star, and only f_true's bracket in the caption
+    analysis["minimum_detectable_status"].loc[dict(feature="f")] = 1
+    analysis["minimum_detectable_backlash"].loc[dict(feature="f")] = 1.19e-6
+    analysis["minimum_detectable_backlash_ci"].loc[dict(feature="f")] = [0.0, 2e-6]
+    [caption] = [b.caption for b in _section_blocks(observability, results, analysis)
+                 if isinstance(b, Figure) and b.key == "detection-sweep"]
+    assert "(f_true between 0 and 0.5 µm)" in caption
+
+
+def test_the_separation_map_says_why_a_column_is_blank():
+    """A reference data set below the detection floor (58 < 59 ok runs) sets no threshold: its column is blank and the
+    caption gives the floor and the analysis's reason."""
+    from reports.sections import observability
+
+    status = np.full((3, RUNS), "ok", dtype=object)
+    status[1, 58:] = "error"
+    results = results_of(status=status)
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    [caption] = [b.caption for b in _section_blocks(observability, results, analysis)
+                 if isinstance(b, Figure) and b.key == "separation-f"]
+    assert ("Blank columns (b1): insufficient data for a threshold, fewer than 59 ok runs: with fewer, not even the "
+            "largest run bounds the 95 % quantile that sets the detection threshold from above with 95 % confidence."
+            in caption)
+
+
+def _first_order_table(results, analysis) -> Table:
+    from reports.sections import correlations
+
+    [table] = [t for t in _section_blocks(correlations, results, analysis)
+               if isinstance(t, Table) and "first-order index" in t.caption]
+    return table
+
+
+def test_the_first_order_table_gives_the_interval_only_where_the_index_is_withheld():
+    """60 runs, below the first-order floor (200): every row shows its interval only, greyed, with the reason; an
+    index given by the analysis is shown with its interval; one outside its interval says so. Rows are ranked by the
+    lower bound of the interval."""
+    results = results_of(gain_effect=0.5e-6)
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=50)
+    table = _first_order_table(results, analysis)
+    rows = [r for r in table.rows if r[0] == "f"]
+    assert all(r[3].startswith("interval only: [") and "index withheld: 60 ok runs < 200" in r[7] for r in rows)
+    assert all(table.muted) and all(r[4].startswith("[") for r in rows)  # the effect size as its interval too
+    for name in NAMES:  # the gain (a 0.5 µm effect against 0.1 µm noise) ranks first in every data set
+        assert [r[2] for r in rows if r[1] == name][0] == "p.gain"
+    cell = dict(dataset="b1", feature="f", parameter="p.gain")
+    analysis["first_order_index_flag"].loc[cell] = 0
+    analysis["first_order_index"].loc[cell] = 0.634
+    analysis["first_order_index_ci"].loc[cell] = [0.412, 0.857]
+    analysis["effect_size"].loc[cell] = 3e-6
+    row = next(r for r in _first_order_table(results, analysis).rows if r[:3] == ("f", "b1", "p.gain"))
+    assert row[3:5] == ("0.63 [0.41, 0.86]", "3 µm") and row[6:] == ("yes", "–")
+    analysis["first_order_index_flag"].loc[cell] = 2
+    row = next(r for r in _first_order_table(results, analysis).rows if r[:3] == ("f", "b1", "p.gain"))
+    assert row[3] == "interval only: [0.41, 0.86]"
+    assert row[7] == "index withheld: the estimate fell outside its own bootstrap interval"

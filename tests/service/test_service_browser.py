@@ -24,6 +24,14 @@ def not_blank(png: Path) -> tuple[float, int]:
     return float(pixels.mean(axis=2).std()), colours
 
 
+def accessible(page) -> None:
+    """axe-core finds no serious or critical violation on the page (issue 31)."""
+    from axe_check import serious_violations
+
+    violations = serious_violations(page)
+    assert not violations, f"{page.url}:\n" + "\n".join(violations)
+
+
 def _evaluate(page, script: str):
     """``script``'s value in the page, or ``None`` while the page is between two documents (it reloads when done)."""
     try:
@@ -40,18 +48,22 @@ def test_submit_through_the_form_watch_the_bar_open_the_report(service, tmp_path
         page.set_default_timeout(120_000)
         page.goto(f"{service.url}/")
         assert "/login" in page.url
+        accessible(page)
         page.fill("#token", "bt_wrong")
         page.click("button[type=submit]")
         assert "unknown or revoked token" in page.inner_text("#login-error")
+        accessible(page)
         page.fill("#token", service.tokens["submitter"])
         page.click("button[type=submit]")
         page.wait_for_url(f"{service.url}/")
+        accessible(page)
 
         # a broken spec: the errors appear beside it, nothing is queued
         page.goto(f"{service.url}/submit")
         page.fill("#spec", SPEC.read_text().replace("runs_per_dataset = 2", "runs_per_dataset = -1"))
         page.click(".overrides button[type=submit]")
         assert "runs_per_dataset" in page.inner_text("#errors")
+        accessible(page)
         page.screenshot(path=str(tmp_path / "submit-errors.png"), full_page=True)
 
         page.fill("#spec", SPEC.read_text())
@@ -64,7 +76,14 @@ def test_submit_through_the_form_watch_the_bar_open_the_report(service, tmp_path
         page.wait_for_selector("#report-link", timeout=budget_ms)  # the page reloads when the campaign is done
         assert page.inner_text("[data-field=state]") == "done"
         assert page.locator("#verdicts li").count() == 4  # one verdict line per feature of the spec
+        accessible(page)
         page.screenshot(path=str(tmp_path / "campaign.png"), full_page=True)
+        campaign_page = page.url
+        page.goto(f"{service.url}/")  # the list with a finished campaign in it
+        accessible(page)
+        page.goto(f"{service.url}/campaigns/no-such-campaign")  # the message page
+        accessible(page)
+        page.goto(campaign_page)
         page.click("#report-link")
         page.wait_for_load_state("load")
         assert page.url.endswith("/files/report.html")

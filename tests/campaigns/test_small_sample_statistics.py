@@ -1,0 +1,256 @@
+"""Known answers of the small-sample rules of the analysis (issue 33): the order-statistic floor of the detection
+threshold, the first-order index's chance level against the number of runs, and analysis.nc in CF form.
+
+Coverage tolerances are binomial: a count K of R seeded repetitions whose true probability is p lies below the
+0.1 % quantile of Binomial(R, p) with probability 0.001, so a test that asks K to reach that quantile of the
+nominal rate fails by chance once in a thousand seeds (and, seeded, never from one run to the next).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+from scipy import stats
+
+from campaigns import sensitivity
+from campaigns.analysis import (
+    MIN_DETECTION_RUNS,
+    analysis_dataset,
+    analyze,
+    detection_run_floor,
+    min_runs_for_quantile_bound,
+    quantile_bound_rank,
+)
+
+# --- the detection threshold's floor ------------------------------------------------------------------------------
+
+
+def test_the_detection_floor_is_the_closed_form_of_the_order_statistics():
+    """P(X_(r) >= xi_q) = P(Binomial(n, q) <= r - 1), written out with math.comb; the sample maximum bounds the 95 %
+    quantile at 95 % from 59 runs on (1 - 0.95^59 = 0.9515, 1 - 0.95^58 = 0.9490)."""
+
+    def coverage(n, r, q):
+        return sum(math.comb(n, k) * q**k * (1 - q) ** (n - k) for k in range(r))
+
+    assert min_runs_for_quantile_bound(0.95, 0.95) == 59 == MIN_DETECTION_RUNS == detection_run_floor()
+    assert 1 - 0.95**59 >= 0.95 > 1 - 0.95**58
+    assert min_runs_for_quantile_bound(0.9, 0.9) == 22 and min_runs_for_quantile_bound(0.99, 0.95) == 299
+    assert detection_run_floor(0.1, 0.8, 0.9) == 22 and detection_run_floor(0.05, 0.99, 0.95) == 299
+    for n in (59, 60, 100, 200, 1000):
+        r = quantile_bound_rank(n, 0.95, 0.95)
+        assert coverage(n, r, 0.95) >= 0.95 > coverage(n, r - 1, 0.95), n
+    assert quantile_bound_rank(59, 0.95, 0.95) == 59 and quantile_bound_rank(58, 0.95, 0.95) is None
+    assert quantile_bound_rank(200, 0.95, 0.95) == 196
+
+
+@pytest.mark.parametrize("n", [59, 200])
+def test_the_order_statistic_bound_covers_the_quantile_at_its_nominal_rate(n):
+    """R = 20000 seeded normal references of n runs: X_(r) (rank from quantile_bound_rank) lies above the true 95 %
+    quantile (1.645) in a fraction K/R whose expectation is P(Binomial(n, 0.95) <= r - 1) >= 0.95 (0.9515 at 59 runs,
+    0.9740 at 200). K must reach the 0.1 % quantile of Binomial(R, 0.95) and stay within the 0.1-99.9 % band of its
+    exact rate (the bound is neither short nor looser than the closed form)."""
+    repetitions, rng = 20_000, np.random.default_rng(n)
+    r = quantile_bound_rank(n, 0.95, 0.95)
+    bound = np.sort(rng.standard_normal((repetitions, n)), axis=1)[:, r - 1]
+    covered = int((bound >= stats.norm.ppf(0.95)).sum())
+    exact = stats.binom.cdf(r - 1, n, 0.95)
+    assert covered >= stats.binom.ppf(0.001, repetitions, 0.95)
+    assert stats.binom.ppf(0.001, repetitions, exact) <= covered <= stats.binom.ppf(0.999, repetitions, exact)
+
+
+def test_the_old_floor_did_not_bound_the_threshold():
+    """At 20 runs the sample maximum covers the 95 % quantile in 1 - 0.95^20 = 64 % of references, and the threshold
+    the analysis uses (numpy's interpolated 95 % quantile, 0.05 of the way from X_(19) to X_(20)) in about 26 %
+    (P(Binomial(20, 0.95) <= 18) = 0.264): far below 95 %."""
+    repetitions, rng = 20_000, np.random.default_rng(20)
+    samples = rng.standard_normal((repetitions, 20))
+    xi = stats.norm.ppf(0.95)
+    maximum = int((samples.max(axis=1) >= xi).sum())
+    threshold = int((np.quantile(samples, 0.95, axis=1) >= xi).sum())
+    assert stats.binom.ppf(0.001, repetitions, 1 - 0.95**20) <= maximum <= stats.binom.ppf(0.999, repetitions,
+                                                                                         1 - 0.95**20)
+    assert threshold < maximum < stats.binom.ppf(0.001, repetitions, 0.95)
+
+
+# --- the first-order index at small n -----------------------------------------------------------------------------
+
+#: Tolerances of Table 9.5 that the thesis specs sample (the count the chance level is measured for).
+TOLERANCES = 38
+
+
+def _additive_sample(n: int, rng: np.random.Generator):
+    """y = 2 x1 + x2 + e with 38 inert inputs beside them, truncated-Gaussian inputs (like Table 9.5's) and unit
+    noise: S1 = b^2 var(x) / (5 var(x) + 1), i.e. 0.664 and 0.166, and 0 for the inert ones."""
+    X = stats.truncnorm.rvs(-3, 3, size=(n, 2 + TOLERANCES), random_state=rng)
+    return X, 2.0 * X[:, 0] + X[:, 1] + rng.normal(size=n)
+
+
+def test_the_first_order_index_of_inert_inputs_against_n_sets_the_minimum_runs():
+    """The measurement behind sensitivity.MIN_RUNS, on an additive model with known indices (300 seeded repetitions
+    per n). The estimator's bias for an inert input is small (mean within 0.005 of 0 at 150 and 200 runs; standard
+    error 0.0003), but the largest of 38 inert indices, which a table of the largest indices shows, averages 0.109 at
+    150 runs and 0.083 at 200 (standard error 0.0016): 200 is the first multiple of 50 where it stays below
+    0.1. The active inputs are recovered on average (0.664, 0.166; standard error 0.003)."""
+    var_x = stats.truncnorm.var(-3, 3)
+    truth = np.array([4.0, 1.0]) * var_x / (5.0 * var_x + 1.0)
+    largest, bias = {}, {}
+    for n in (150, sensitivity.MIN_RUNS):
+        rng = np.random.default_rng(n)
+        indices = np.array([sensitivity.first_order_index(*_additive_sample(n, rng)) for _ in range(300)])
+        largest[n] = indices[:, 2:].max(axis=1).mean()
+        bias[n] = indices[:, 2:].mean()
+        np.testing.assert_allclose(indices[:, :2].mean(axis=0), truth, atol=0.02)
+    assert sensitivity.MIN_RUNS == 200
+    assert largest[150] > 0.1 + 0.005 and largest[200] < 0.1 - 0.01
+    assert abs(bias[150]) < 0.005 and abs(bias[200]) < 0.005
+
+
+def test_below_50_runs_the_bias_itself_appears():
+    """At 30 runs the Tissot-Prieur correction (lambda = 2M/n = 0.67) no longer centres an inert index on 0: its mean
+    is about +0.07 (permutation null, 4000 seeded permutations; standard error 0.005)."""
+    rng = np.random.default_rng(30)
+    y = rng.normal(size=30)
+    signals = np.array([y[rng.permutation(30)][sensitivity._easi_order(30)] for _ in range(4000)])
+    assert sensitivity._first_order_of_signals(signals).mean() > 0.04
+
+
+def test_unresolved_flags_known_answers():
+    index = np.array([0.52, 0.10, math.nan, 0.30])
+    ci = np.array([[-0.30, 0.51], [0.0, 0.2], [math.nan, math.nan], [0.35, 0.6]])
+    assert sensitivity.unresolved(index, ci, 250).tolist() == [2, 0, 0, 2]  # the ds6 row of issue 33, and one below
+    assert sensitivity.unresolved(index, ci, 199).tolist() == [3, 1, 1, 3]
+    assert sensitivity.unresolved(index[1:2], ci[1:2], sensitivity.MIN_RUNS).tolist() == [0]
+
+
+def _results(n: int, parameters: int, seed: int) -> xr.Dataset:
+    """A results.nc-like dataset of two data sets: feature f = 2 p0 + noise [m], the other parameters inert."""
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1, 1, (parameters, 2, n))
+    f = 2e-6 * X[0] + 1e-6 * rng.normal(size=(2, n))
+    data = {"f": (("dataset", "run"), f, {"role": "feature", "units": "m"}),
+            "status": (("dataset", "run"), np.full((2, n), "ok", dtype=object)),
+            "condition_backlash": ("dataset", np.array([0.0, 5e-6]), {"units": "m"})}
+    data |= {f"p{j}": (("dataset", "run"), X[j], {"role": "sampled", "units": "1"}) for j in range(parameters)}
+    spec = {"spec": {"observability": {"sweep": ["d0", "d1"]}}}
+    return xr.Dataset(data, coords={"dataset": ["d0", "d1"], "run": np.arange(n)},
+                      attrs={"spec_json": json.dumps(spec), "title": "test campaign", "history": "made by a test"})
+
+
+def test_no_printed_index_lies_outside_its_interval_and_the_flags_say_why():
+    """200 runs, 40 parameters (39 inert): at the minimum the indices are resolved, except where the estimate fell
+    outside its own percentile interval (1-6 % of inert inputs): flag 2 there. Every unflagged index lies inside its
+    interval. At 100 runs every index is flagged (1), the intervals still given."""
+    a = analysis_dataset(_results(200, 40, 7), n_boot=20, sensitivity_boot=100)
+    flag = a["first_order_index_flag"].values
+    index, ci = a["first_order_index"].values, a["first_order_index_ci"].values
+    outside = (flag & sensitivity.OUTSIDE_INTERVAL) > 0
+    assert outside.sum() >= 1 and not (flag & sensitivity.BELOW_MIN_RUNS).any()
+    assert ((index[outside] < ci[..., 0][outside]) | (index[outside] > ci[..., 1][outside])).all()
+    given = flag == 0
+    assert ((ci[..., 0][given] <= index[given]) & (index[given] <= ci[..., 1][given])).all()
+    assert index[..., 0].min() > 0.5  # the active parameter: S1 = (4/3)/(4/3 + 1) = 0.57
+    small = analysis_dataset(_results(100, 5, 8), n_boot=20, sensitivity_boot=50)
+    assert (small["first_order_index_flag"] & sensitivity.BELOW_MIN_RUNS).all()
+    assert np.isfinite(small["first_order_index_ci"]).all()
+
+
+# --- analysis.nc in CF form ---------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def analysis_file(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cf")
+    results = _results(60, 3, 9)
+    results["g"] = (("dataset", "run"), results["f"].values * 1e6, {"role": "feature", "units": "N m"})
+    results.to_netcdf(folder / "results.nc", engine="netcdf4")
+    return analyze(folder / "results.nc", n_boot=20, sensitivity_boot=10)
+
+
+def test_every_numeric_variable_has_units_or_is_a_flag(analysis_file):
+    """Units on every numeric variable; features of several units (m and N m here) are named per feature by the
+    feature_units coordinate; flags carry numeric flag_values or flag_masks of their own type and one
+    space-separated meaning each."""
+    with xr.open_dataset(analysis_file, engine="netcdf4") as a:
+        for name, variable in a.data_vars.items():
+            if variable.dtype.kind not in "iuf":
+                continue
+            attrs = variable.attrs
+            flags = attrs.get("flag_values", attrs.get("flag_masks"))
+            if flags is not None:
+                assert np.asarray(flags).dtype == variable.dtype, name
+                assert len(attrs["flag_meanings"].split(" ")) == len(np.atleast_1d(flags)), name
+                continue
+            assert "units" in attrs or "feature_units" in attrs.get("comment", ""), name
+        assert a["feature_units"].values.tolist() == ["m", "N m"]
+        assert a["first_order_index_flag"].attrs["flag_meanings"] == "below_minimum_runs estimate_outside_interval"
+        assert a["minimum_detectable_status"].attrs["flag_meanings"] == (
+            "insufficient_data resolved between_adjacent_levels beyond_sweep")
+
+
+def test_coordinates_are_labels_without_fill_values_and_the_file_says_what_it_is(analysis_file):
+    with netCDF4.Dataset(analysis_file) as nc:
+        for name in ("dataset", "feature", "parameter", "bound", "status", "sweep_point", "reference"):
+            variable = nc[name]
+            assert variable.dtype == np.dtype("S1") and len(variable.dimensions) == 2, name  # CF 6.1 labels
+            assert "_FillValue" not in variable.ncattrs(), name
+        assert nc.Conventions == "CF-1.8" and nc.title.startswith("Analysis of test campaign")
+        lines = nc.history.splitlines()
+        assert lines[0] == "made by a test" and lines[1].endswith(": campaigns.analysis.analyze(results.nc)")
+        assert nc.min_detection_runs == 59 and nc.first_order_min_runs == sensitivity.MIN_RUNS
+    with xr.open_dataset(analysis_file, engine="netcdf4") as a:  # and xarray reads the labels back as coordinates
+        assert a["dataset"].values.tolist() == ["d0", "d1"] and float(a["n_used"].sel(dataset="d1", feature="f")) == 60
+
+
+def test_the_cf_compliance_checker_finds_no_high_priority_issue(analysis_file):
+    """The IOOS compliance checker (CF 1.8): no failed high-priority check, and no check that crashes (string
+    coordinate variables used to crash its monotonicity check)."""
+    pytest.importorskip("compliance_checker")
+    from compliance_checker.base import BaseCheck
+    from compliance_checker.suite import CheckSuite
+
+    suite = CheckSuite()
+    suite.load_all_available_checkers()
+    groups, errors = suite.run_all(suite.load_dataset(str(analysis_file)), ["cf:1.8"])["cf:1.8"]
+
+    def failed(result) -> bool:
+        value = result.value
+        return value[0] < value[1] if isinstance(value, tuple) else value is False
+
+    assert [(r.name, r.msgs) for r in groups if r.weight == BaseCheck.HIGH and failed(r)] == []
+    assert errors == {}
+
+
+# --- scripts/findings_tables.py prints what analysis.nc resolves ----------------------------------------------------
+
+
+def _findings_tables():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[2] / "scripts" / "findings_tables.py"
+    spec = importlib.util.spec_from_file_location("findings_tables", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_findings_tables_print_the_interval_only_where_the_index_is_withheld(capsys):
+    results = _results(100, 3, 10)
+    a = analysis_dataset(results, n_boot=20, sensitivity_boot=50)
+    _findings_tables().tolerance_table(results, a)
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| d0 | f | ")]
+    assert len(lines) == 3 and lines[0].startswith("| d0 | f | p0 | – (")  # ranked by the lower bound: p0 first
+    assert all(", interval only: 100 ok runs < 200" in line and line.split(" | ")[4].startswith("(") for line in lines)
+    # p2's estimate also fell outside its own interval (this sample), and the line says so
+    assert lines[1].startswith("| d0 | f | p2 | – (") and lines[1].endswith(
+        "100 ok runs < 200; the estimate fell outside its own interval | (0.000 – 0.682) | -0.21 | -0.06 |")
+    a["first_order_index_flag"][:] = 0
+    a["first_order_index"].loc[dict(dataset="d0", feature="f", parameter="p0")] = 0.57
+    _findings_tables().tolerance_table(results, a)
+    [line] = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| d0 | f | p0 |")]
+    assert line.startswith("| d0 | f | p0 | 0.57 (")
