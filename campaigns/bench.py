@@ -18,12 +18,12 @@ from campaigns.catalog import CONDITION_UNITS, condition_units, lookup_nominal
 from campaigns.runs import RunRequest
 from twin.control.margins import LOOPS, METRICS, loop_margins
 from twin.engine.model import load_system_parameters
-from twin.simulation import solver_label
 from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
+from twin.simulation import DEFAULT_LANES, solver_label
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
@@ -255,6 +255,33 @@ def simulate_run(request: RunRequest) -> dict:
     }
 
 
+def simulate_group(requests: list[RunRequest]) -> list[dict]:
+    """:func:`simulate_run` of several runs of one data set at once: the untraced ones in the twin's lock-step lanes
+    (:func:`twin.simulate_batch`, the same numbers as each alone), the traced ones one by one (their Dataset).
+    Raises if a request cannot be built (the caller then runs each alone and records its own failure)."""
+    results: dict[int, dict] = {}
+    untraced = [k for k, r in enumerate(requests) if not r.trace_variables]
+    for k, request in enumerate(requests):
+        if request.trace_variables:
+            results[k] = simulate_run(request)
+    if untraced:
+        first = requests[untraced[0]]
+        options = {key: value for key, value in first.solver.items() if value is not None}
+        options.update(throw=False, outputs=list(first.outputs) or None)
+        runs = [(_scene(requests[k].scene).with_conditions(requests[k].conditions),
+                 _parameters(requests[k].parameters).with_values(requests[k].parameter_values),
+                 requests[k].noise_rng()) for k in untraced]
+        for k, summary in zip(untraced, twin.simulate_batch(runs, lanes=len(runs), **options), strict=True):
+            request = requests[k]
+            results[k] = {"status": summary.status, "failure_reason": summary.failure_reason,
+                          "t_reached": summary.t_reached,
+                          "features": {f: float(summary.features[f]) for f in request.features
+                                       if f in summary.features},
+                          "trace": None, "fidelity": summary.fidelity,
+                          "integrator": solver_label(summary.integrator, summary.dt)}
+    return [results[k] for k in range(len(requests))]
+
+
 def _warm_up(request: RunRequest) -> None:
     """Load (or compile) the compiled loop with a 10 ms run of the request's configuration, before the
     run's clock starts (:func:`campaigns.runs.warm_up`)."""
@@ -265,6 +292,9 @@ def _warm_up(request: RunRequest) -> None:
 
 
 simulate_run.warm_up = _warm_up
+simulate_run.run_group = simulate_group
+#: Runs a group takes at once: the twin's lane count (the results do not depend on it).
+simulate_run.lanes = DEFAULT_LANES
 #: Wall time of one 10 s data-set run, auto fidelity: 1.0-1.7 s measured on a loaded 2-core machine (2026-11).
 simulate_run.typical_run_seconds = 1.2
 #: Samples of a trace before decimation: 10 s at the 1 ms output spacing, both ends included.

@@ -56,9 +56,9 @@ from campaigns.catalog import Catalog
 from campaigns.fidelity_audit import audit_campaign, has_automatic_choice
 from campaigns.files import CampaignError, CampaignInterrupted
 from campaigns.provenance import provenance
-from campaigns.runs import RunFunction, RunRequest, execute, record, run_function_name
+from campaigns.runs import RunFunction, RunRequest, execute_group, record, run_function_name
 from campaigns.sampling import sample
-from campaigns.sandbox import STOP_SIGNALS, Sandbox, children_ignore_stop_signals, run_isolated
+from campaigns.sandbox import STOP_SIGNALS, Sandbox, children_ignore_stop_signals, run_group_isolated
 from campaigns.spec import BOUNDS, CampaignSpec, load_spec
 from campaigns.storage import ChunkStore, OutputLock
 from twin.scenes import split_targets
@@ -100,9 +100,17 @@ def chunk_size(run_time: float | None, remaining: int, slots: int) -> int:
 
 
 def run_chunk(run_function: RunFunction, requests: list[RunRequest], isolation: str) -> list[dict]:
-    """Dask task: execute the runs of one chunk and return their records."""
-    run = run_isolated if isolation == "process" else execute
-    return [run(run_function, r) for r in requests]
+    """Dask task: execute the runs of one chunk, in lane groups of ``run_function.lanes`` where the run function
+    takes groups (:func:`campaigns.runs.execute_group`), and return their records in order."""
+    lanes = group_lanes(run_function)
+    run = run_group_isolated if isolation == "process" else execute_group
+    return [record for first in range(0, len(requests), lanes)
+            for record in run(run_function, requests[first:first + lanes])]
+
+
+def group_lanes(run_function: RunFunction) -> int:
+    """How many runs the run function takes at once (1 without ``run_group``)."""
+    return int(getattr(run_function, "lanes", 1)) if getattr(run_function, "run_group", None) else 1
 
 
 def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int, *,
@@ -365,10 +373,13 @@ def _execute(client: Client, spec, samples, pending: deque, run_function, store:
         in_flight[future] = (chunk, attempt)
         completed.add(future)
 
+    lanes = group_lanes(run_function)
+
     def next_chunk() -> list[RunRequest]:
         size = spec.execution.chunk_size or chunk_size(
             statistics.median(run_times) if run_times else None, len(pending), slots
         )
+        size = lanes * math.ceil(size / lanes)  # whole lane groups (the pilot: one group)
         d = pending[0][0]
         chunk = []
         while pending and len(chunk) < size and pending[0][0] == d:

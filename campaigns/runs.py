@@ -24,6 +24,10 @@ once ``request.wall_time_limit`` seconds have passed (returning status
 
 Optional attributes of a run function:
 
+``run_group(requests)``
+    runs several requests of one data set together (the bench twin's lock-step lanes) and returns their results
+    in order, each what ``run_function(request)`` returns for it alone, bit for bit; ``lanes`` is how many it takes
+    at once. :func:`execute_group` calls it and falls back to one run after the other if the group call raises;
 ``warm_up(request)``
     loads or compiles what the run needs (imports, numba's compiled loop); called
     once per process and model configuration *before* the run's clock starts, so
@@ -183,6 +187,26 @@ def execute(run_function: RunFunction, request: RunRequest) -> dict:
         last = traceback.extract_tb(exc.__traceback__)[-1]
         reason = f"{type(exc).__name__}: {exc} (at {last.filename}:{last.lineno})"
         return record(request, "error", reason, math.nan, time.perf_counter() - start)
+
+
+def execute_group(run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+    """Call ``run_function.run_group`` on ``requests`` and return one record per request, in order; never raises.
+
+    A group's budget is the sum of its runs' budgets (it may not take longer than running them one after the
+    other); each run is charged its share of the group's wall time. If the group call raises (a request the
+    group cannot take, e.g. a broken parameter set), every request is executed alone (:func:`execute`) so that
+    each failure is recorded with its own reason.
+    """
+    if len(requests) == 1 or getattr(run_function, "run_group", None) is None:
+        return [execute(run_function, request) for request in requests]
+    warm_up(run_function, requests[0])
+    start = time.perf_counter()
+    try:
+        results = run_function.run_group(requests)
+    except Exception:  # noqa: BLE001 - each request is then run alone, and its own failure recorded
+        return [execute(run_function, request) for request in requests]
+    share = (time.perf_counter() - start) / len(requests)
+    return [_checked(request, result, share) for request, result in zip(requests, results, strict=True)]
 
 
 def _checked(request: RunRequest, result: dict, wall_time: float) -> dict:

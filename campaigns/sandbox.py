@@ -37,7 +37,7 @@ import threading
 import time
 from multiprocessing.connection import Connection
 
-from campaigns.runs import RunFunction, RunRequest, execute, kill_grace, record, warm_up
+from campaigns.runs import RunFunction, RunRequest, execute_group, kill_grace, record, warm_up
 
 #: Seconds a fresh child may take to import and warm up what a request needs (not counted in the
 #: run's budget): a cold numba compilation of the bench loop on a loaded machine fits well within it.
@@ -114,49 +114,61 @@ class Sandbox:
 
     def run(self, run_function: RunFunction, request: RunRequest) -> dict:
         """Execute one request in the child; return its record (never raises for run failures)."""
+        return self.run_group(run_function, [request])[0]
+
+    def run_group(self, run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+        """Execute requests together in the child (:func:`campaigns.runs.execute_group`); return their records in
+        order (never raises for run failures). The group's budget is the sum of its runs' budgets; a group killed
+        for overrunning it records every run as a timeout."""
         if self._proc is None or self._proc.poll() is not None:
             self.close()
             self._start()
-        self._to_child.send((run_function, request))
-        # The clock starts once the child has unpickled the request and warmed up
-        # (a fresh child's imports and compilation are not the run's time).
+        self._to_child.send((run_function, requests))
+        # The clock starts once the child has unpickled the requests and warmed up
+        # (a fresh child's imports and compilation are not the runs' time).
         if not self._from_child.poll(STARTUP_TIMEOUT):
             self._kill()
-            return record(request, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"),
-                          float("nan"))
+            return [record(r, "error", f"run process did not start within {STARTUP_TIMEOUT:g} s", float("nan"),
+                           float("nan")) for r in requests]
         start = time.perf_counter()
         try:
             message = self._from_child.recv()
         except EOFError:
-            return self._died(request, start)
+            return self._died(requests, start)
         if message != "started":
-            return record(request, "error", message, float("nan"), float("nan"))
-        grace = kill_grace(request.wall_time_limit)
-        if not self._from_child.poll(request.wall_time_limit + grace):
+            return [record(r, "error", message, float("nan"), float("nan")) for r in requests]
+        budget = sum(r.wall_time_limit for r in requests)
+        grace = kill_grace(budget)
+        if not self._from_child.poll(budget + grace):
             self._kill()
             elapsed = time.perf_counter() - start
-            reason = (
-                f"killed after {elapsed:.3g} s wall clock (budget {request.wall_time_limit:g} s + {grace:.3g} s grace)")
-            return record(request, "timeout", reason, float("nan"), elapsed)
+            together = f" with its {len(requests)}-run lane group" if len(requests) > 1 else ""
+            reason = f"killed{together} after {elapsed:.3g} s wall clock (budget {budget:g} s + {grace:.3g} s grace)"
+            return [record(r, "timeout", reason, float("nan"), elapsed / len(requests)) for r in requests]
         try:
             return self._from_child.recv()
         except EOFError:
-            return self._died(request, start)
+            return self._died(requests, start)
 
-    def _died(self, request: RunRequest, start: float) -> dict:
+    def _died(self, requests: list[RunRequest], start: float) -> list[dict]:
         code = self._proc.wait()
         self.close()
-        return record(request, "error", f"run process died (exit code {code})", float("nan"),
-                      time.perf_counter() - start)
+        elapsed = (time.perf_counter() - start) / len(requests)
+        return [record(r, "error", f"run process died (exit code {code})", float("nan"), elapsed) for r in requests]
 
 
 def run_isolated(run_function: RunFunction, request: RunRequest) -> dict:
     """Execute ``request`` in this thread's :class:`Sandbox` (created on first use)."""
+    return run_group_isolated(run_function, [request])[0]
+
+
+def run_group_isolated(run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+    """Execute ``requests`` together in this thread's :class:`Sandbox` (created on first use)."""
     sandbox = getattr(_local, "sandbox", None)
     if sandbox is None:
         sandbox = _local.sandbox = Sandbox()
         atexit.register(sandbox.close)  # the worker's exit ends its sandbox cleanly
-    return sandbox.run(run_function, request)
+    return sandbox.run_group(run_function, requests)
 
 
 def _die_with_parent() -> None:
@@ -173,12 +185,12 @@ def serve(read_fd: int, write_fd: int) -> None:
     requests, records = Connection(read_fd, writable=False), Connection(write_fd, readable=False)
     while True:
         try:
-            run_function, request = requests.recv()
+            run_function, group = requests.recv()
         except EOFError:
             return
         except Exception as exc:  # e.g. the run function's module does not import here
             records.send(f"cannot load the request in the run process: {type(exc).__name__}: {exc}")
             continue
-        warm_up(run_function, request)
+        warm_up(run_function, group[0])
         records.send("started")
-        records.send(execute(run_function, request))
+        records.send(execute_group(run_function, group))
