@@ -47,6 +47,7 @@ from sensors.analog import (
     analog_init,
     analog_parameters,
     analog_read,
+    with_integration_step,
 )
 from sensors.encoder import (
     ENC_SIZE,
@@ -57,6 +58,7 @@ from sensors.encoder import (
     linear_encoder_parameters,
     torque_meter_encoder_parameters,
 )
+from sensors.lanes import one_lane
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
@@ -122,7 +124,8 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
     n_samples : int
         Number of acquisition samples of the run.
     dt : float
-        Integration step [s] (sets how many steps before a reading a memoryless channel is stepped).
+        Integration step [s] (sets how many steps before a reading a memoryless channel is stepped, and the
+        conditioners' lag coefficients, :func:`sensors.analog.with_integration_step`).
     torque_meter_refresh : bool
         Model the torque meter's 1 kHz sample-and-hold (True) or read it continuously.
     """
@@ -152,6 +155,7 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
             rows[channel, AN_GAIN] = 1.0
             rows[channel, AN_OFFSET] = 0.0
             rows[channel, AN_NOISE_HALF_WIDTH] = 0.0
+        rows[channel, :AN_SIZE] = with_integration_step(rows[channel, :AN_SIZE], dt)
         noise[:, channel] = draw_uniform_noise(rng, n_samples, rows[channel, AN_NOISE_HALF_WIDTH])
     return Instruments(rows, codes, _lookback(rows, dt), noise, dict(levels))
 
@@ -189,13 +193,17 @@ def screw_angle_measurand(x, c):
 
 @numba.njit(cache=True)
 def instruments_init(state, rows, x, c, t, torque, preload, external):
-    """Zero the encoders and settle the analog channels on the initial state."""
-    encoder_init(state[LINEAR_ENCODER], sled_measurand(x, c), t, rows[LINEAR_ENCODER])
-    encoder_init(state[TORQUE_METER_ENCODER], screw_angle_measurand(x, c), t, rows[TORQUE_METER_ENCODER])
-    analog_init(state[TORQUE_METER], torque, t, rows[TORQUE_METER])
-    analog_init(state[PRELOAD_CELL], preload, t, rows[PRELOAD_CELL])
-    analog_init(state[LOAD_CELL], external, t, rows[LOAD_CELL])
-    analog_init(state[CURRENT_MONITOR], sensed_current(x, c), t, rows[CURRENT_MONITOR])
+    """Zero the encoders and settle the analog channels on the initial state.
+
+    Each instrument's row of ``state`` and ``rows`` is a one-lane group of the lane-form sensor functions
+    (:func:`sensors.lanes.one_lane`, lane 0)."""
+    encoder_init(one_lane(state[LINEAR_ENCODER]), one_lane(rows[LINEAR_ENCODER]), 0, sled_measurand(x, c), t)
+    encoder_init(one_lane(state[TORQUE_METER_ENCODER]), one_lane(rows[TORQUE_METER_ENCODER]), 0,
+                 screw_angle_measurand(x, c), t)
+    analog_init(one_lane(state[TORQUE_METER]), one_lane(rows[TORQUE_METER]), 0, torque, t)
+    analog_init(one_lane(state[PRELOAD_CELL]), one_lane(rows[PRELOAD_CELL]), 0, preload, t)
+    analog_init(one_lane(state[LOAD_CELL]), one_lane(rows[LOAD_CELL]), 0, external, t)
+    analog_init(one_lane(state[CURRENT_MONITOR]), one_lane(rows[CURRENT_MONITOR]), 0, sensed_current(x, c), t)
 
 
 @numba.njit(cache=True)
@@ -222,7 +230,7 @@ def linear_encoder_position(state, rows, levels, x, c):
     """Sled position read by the linear encoder, zeroed at the start [m]."""
     if levels[LINEAR_ENCODER] == 0:
         return x[S.NUT1_POSITION] - c[K.NUT1_ZERO]
-    return encoder_reading(state[LINEAR_ENCODER], rows[LINEAR_ENCODER])
+    return encoder_reading(one_lane(state[LINEAR_ENCODER]), one_lane(rows[LINEAR_ENCODER]), 0)
 
 
 @numba.njit(cache=True)
@@ -230,7 +238,7 @@ def screw_angle_measured(state, rows, levels, x, c):
     """Screw angle read by the torque meter's encoder, zeroed at the start [rad]."""
     if levels[TORQUE_METER_ENCODER] == 0:
         return x[S.SCREW_ANGLE] - c[K.SCREW_ANGLE_ZERO]
-    return encoder_reading(state[TORQUE_METER_ENCODER], rows[TORQUE_METER_ENCODER])
+    return encoder_reading(one_lane(state[TORQUE_METER_ENCODER]), one_lane(rows[TORQUE_METER_ENCODER]), 0)
 
 
 @numba.njit(cache=True)
@@ -238,7 +246,7 @@ def sled_speed_measured(state, rows, levels, x, t):
     """Sled speed by the period/frequency method of the linear encoder [m/s]."""
     if levels[LINEAR_ENCODER] == 0:
         return x[S.NUT1_SPEED]
-    return encoder_speed(state[LINEAR_ENCODER], t, rows[LINEAR_ENCODER])
+    return encoder_speed(one_lane(state[LINEAR_ENCODER]), one_lane(rows[LINEAR_ENCODER]), 0, t)
 
 
 @numba.njit(cache=True)
@@ -247,7 +255,7 @@ def motor_angle_measured(rows, levels, x, c):
     angle = c[K.RATIO] * x[S.REDUCER_ANGLE]
     if levels[RESOLVER] == 0:
         return angle
-    return resolver_angle(angle, rows[RESOLVER])
+    return resolver_angle(one_lane(rows[RESOLVER]), 0, angle)
 
 
 @numba.njit(cache=True)
@@ -255,5 +263,5 @@ def analog_measured(state, rows, levels, channel, true_value, noise):
     """DAQ reading of an analog channel (true value at the ideal level)."""
     if levels[channel] == 0:
         return true_value
-    return analog_read(state[channel], noise, rows[channel])
+    return analog_read(one_lane(state[channel]), one_lane(rows[channel]), 0, noise)
 

@@ -12,7 +12,8 @@ import numpy as np
 
 from sensors.acquisition import convert
 from sensors.analog import AN_REFRESH_PERIOD, AN_TAU, AS_NEXT_REFRESH, analog_step
-from sensors.encoder import encoder_advance
+from sensors.encoder import encoder_step
+from sensors.lanes import one_lane
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.integrators import WORK_VECTORS, step
@@ -213,7 +214,7 @@ def speed_sample(x, c, u, memory, rows, levels, sample_time):
 def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, steps_to_sample, force_table):
     """Advance the instruments to time ``t``, the end of an integration step of ``dt``.
 
-    The encoders skip the steps in which no edge can occur (:func:`sensors.encoder.encoder_advance`);
+    The encoders are stepped at every step (:func:`sensors.encoder.encoder_step`);
     an analog channel is stepped, and its measurand computed, only when a reading depends on the step
     (:func:`twin.engine.instrumentation.analog_due`). One flat function: this runs after every step,
     and every call that passes arrays costs more than the tests it would save.
@@ -221,7 +222,7 @@ def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, s
     for encoder in (ins.LINEAR_ENCODER, ins.TORQUE_METER_ENCODER):
         if levels[encoder] > 0:
             measurand = ins.sled_measurand(x, c) if encoder == ins.LINEAR_ENCODER else ins.screw_angle_measurand(x, c)
-            encoder_advance(instrument_state[encoder], measurand, t, rows[encoder])
+            encoder_step(one_lane(instrument_state[encoder]), one_lane(rows[encoder]), 0, measurand, t)
     for channel in ins.ANALOG:
         if ins.analog_due(levels[channel], lookback[channel], steps_to_sample, rows[channel, AN_TAU],
                           rows[channel, AN_REFRESH_PERIOD], instrument_state[channel, AS_NEXT_REFRESH], t, dt):
@@ -234,7 +235,7 @@ def instruments_advance(t, dt, x, c, instrument_state, rows, levels, lookback, s
                 measurand = external_force(t, x, c, force_table)
             else:
                 measurand = sensed_current(x, c)
-            analog_step(instrument_state[channel], measurand, t, rows[channel])
+            analog_step(one_lane(instrument_state[channel]), one_lane(rows[channel]), 0, measurand, t)
 
 
 @numba.njit(cache=True)
