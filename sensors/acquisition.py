@@ -10,20 +10,25 @@ simulate the measurement noise and the sensor characteristics effect on the
 read signal resolution"), Sec. 9.4 and Table 9.5 (electrical noise ±2.5 %FS,
 uniform), Table B.3 (drive analog input 11 bits + sign, ±10 V), Table B.5
 (torque-meter 16-bit D/A). Conventions are documented in ``docs/sensors.md``.
+
+The compiled functions are scalar laws of floats (``numerics.jit.SCALAR``: inlined into their caller, IEEE
+division), branch-free in their data and free of libm calls, so a loop over lanes that calls them vectorises and
+gives every lane the same bits whatever its lane mates (``sensors.lanes``).
 """
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
+
+from numerics.elementary import SHIFTER, SHIFTER_BITS, as_int, expm1, pow2i
+from numerics.jit import SCALAR
 
 #: A Table 9.5 Gaussian "± range" is read as ± this many standard deviations.
 RANGE_SIGMAS = 3.0
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def quantize(value, lsb):
     """Mid-tread quantisation of ``value`` to a multiple of ``lsb``.
 
@@ -42,12 +47,33 @@ def quantize(value, lsb):
     Returns
     -------
     float
-        ``lsb * floor(value / lsb + 1/2)``.
+        ``lsb * floor(value / lsb + 1/2)``. ``np.floor``, not ``math.floor``:
+        numba's ``math.floor`` returns an int64 (a float->int conversion,
+        garbage beyond 2^63 and for NaN, and no single vector instruction);
+        ``np.floor`` stays a float (exact, vectorises). NaN stays NaN.
     """
-    return lsb * math.floor(value / lsb + 0.5)
+    return lsb * np.floor(value / lsb + 0.5)
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
+def power_of_two(n):
+    """``2**n`` for an integer-valued float ``-1022 <= n <= 1023``, exactly.
+
+    No ``pow`` call (a libm call would stop a lane loop from vectorising) and no float->int value conversion:
+    the low bits of ``n + 1.5*2^52`` are the integer ``n`` (the shifter of :mod:`numerics.elementary`), read by a
+    bit cast, and :func:`numerics.elementary.pow2i` builds the power from its exponent bits.
+    """
+    return pow2i(as_int(n + SHIFTER) - SHIFTER_BITS)
+
+
+@numba.njit(**SCALAR)
+def converter_lsb(full_scale, bits):
+    """Step of a bipolar converter of ``bits`` bits (sign included) over ±``full_scale``:
+    ``full_scale / 2**(bits - 1)``."""
+    return full_scale / power_of_two(bits - 1.0)
+
+
+@numba.njit(**SCALAR)
 def convert(value, full_scale, bits):
     """Bipolar A/D or D/A conversion: saturation then mid-tread quantisation.
 
@@ -64,18 +90,42 @@ def convert(value, full_scale, bits):
     full_scale : float
         Half range of the converter, > 0 (10 V for every channel of the bench).
     bits : float
-        Word length including the sign bit, integer-valued, >= 2.
+        Word length including the sign bit, integer-valued, 2 ... 1023.
 
     Returns
     -------
     float
-        The reconstructed (converted) value.
+        The reconstructed (converted) value; NaN for a NaN input (a diverged
+        signal is not a reading: it is not saturated into a code).
     """
-    lsb = full_scale / 2.0 ** (bits - 1.0)
-    return min(max(quantize(value, lsb), -full_scale), full_scale - lsb)
+    lsb = converter_lsb(full_scale, bits)
+    level = quantize(value, lsb)
+    saturated = min(max(level, -full_scale), full_scale - lsb)
+    return level if level != level else saturated
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
+def lag_gain(dt, tau):
+    """``1 - exp(-dt / tau)``: the fraction of a step input a first-order lag of time constant ``tau`` reaches
+    in ``dt`` (accurate for ``dt << tau``: computed as ``-expm1(-dt / tau)``, :mod:`numerics.elementary`)."""
+    return -expm1(-dt / tau)
+
+
+@numba.njit(**SCALAR)
+def lag_step(y0, u0, u1, gain, tau_over_dt):
+    """Exact discretisation of ``tau dy/dt + y = u`` over one step, from its coefficients.
+
+    With the input linear between its step-end values ``u0`` and ``u1``:
+
+        y1 = u1 + a (y0 - u0) - (u1 - u0) (tau / dt) (1 - a),  a = exp(-dt / tau)
+
+    ``gain`` is ``1 - a`` (:func:`lag_gain`) and ``tau_over_dt`` is ``tau / dt``; a caller with a fixed step
+    computes both once (``sensors.analog``), :func:`first_order_lag` computes them per call.
+    """
+    return u1 + (1.0 - gain) * (y0 - u0) - (u1 - u0) * tau_over_dt * gain
+
+
+@numba.njit(**SCALAR)
 def first_order_lag(y0, u0, u1, dt, tau):
     """Exact discretisation of ``tau dy/dt + y = u`` over one step.
 
@@ -87,7 +137,8 @@ def first_order_lag(y0, u0, u1, dt, tau):
         y1 = u1 + a (y0 - u0) - (u1 - u0) (tau / dt) (1 - a),  a = exp(-dt / tau)
 
     Used for the Hall current sensor (Sec. 9.3, "a simple first order transfer
-    function") and the preload conditioner (Table B.8, 10 kHz cut-off).
+    function") and the preload conditioner (Table B.8, 10 kHz cut-off). The law
+    is :func:`lag_step`; branch-free (a select returns ``y0`` for ``dt <= 0``).
 
     Parameters
     ----------
@@ -105,10 +156,8 @@ def first_order_lag(y0, u0, u1, dt, tau):
     float
         Output at the end of the step.
     """
-    if dt <= 0.0:
-        return y0
-    one_minus_a = -math.expm1(-dt / tau)  # accurate for dt << tau
-    return u1 + (1.0 - one_minus_a) * (y0 - u0) - (u1 - u0) * (tau / dt) * one_minus_a
+    y1 = lag_step(y0, u0, u1, lag_gain(dt, tau), tau / dt)
+    return y1 if dt > 0.0 else y0
 
 
 def validate_converter(name: str, full_scale: float, bits: float) -> None:

@@ -13,8 +13,13 @@ result to simulate the measurement noise and the sensor characteristics"):
 Only the parameter builders differ per sensor (``torque_meter.py``,
 ``load_cell.py``); the compiled functions here serve all three.
 
-Parameter array layout (float64, length ``AN_SIZE``), built by
-:func:`analog_parameters`:
+Lane form (``sensors.lanes``): parameters and state are ``[row, lane]`` arrays
+(rows below, one column per lane); :func:`analog_init`, :func:`analog_step` and
+:func:`analog_read` take ``(state, params, lane, ...)`` and act on column ``lane``,
+branch-free (every case computed, the answer chosen by selects).
+
+Parameter rows (float64, ``AN_SIZE``), built by :func:`analog_parameters` for
+one lane, completed for the integration step by :func:`with_integration_step`:
 
 ==========================  ====================================================
 ``AN_FULL_SCALE``           measurand mapped to the output full scale [N or N*m]
@@ -27,9 +32,12 @@ Parameter array layout (float64, length ``AN_SIZE``), built by
 ``AN_DAQ_FULL_SCALE``       DAQ input range [V]
 ``AN_DAQ_BITS``             DAQ word length (sign incl.)
 ``AN_NOISE_HALF_WIDTH``     electrical-noise half width for this channel [V]
+``AN_LAG_GAIN``             conditioner lag over one integration step,
+                            ``1 - exp(-dt/tau)`` (NaN until the step is set)
+``AN_LAG_TAU_OVER_DT``      ``tau / dt`` (NaN until the step is set)
 ==========================  ====================================================
 
-State array layout (float64, length ``AS_SIZE``), set by :func:`analog_init`:
+State rows (float64, ``AS_SIZE``), set by :func:`analog_init`:
 
 ==========================  ====================================================
 ``AS_T``                    time of the last step [s]
@@ -48,7 +56,8 @@ from collections.abc import Mapping, Sequence
 import numba
 import numpy as np
 
-from sensors.acquisition import convert, first_order_lag, validate_converter
+from numerics.jit import SCALAR
+from sensors.acquisition import convert, lag_gain, lag_step, validate_converter
 
 AN_FULL_SCALE = 0
 AN_OUTPUT_FULL_SCALE = 1
@@ -60,7 +69,9 @@ AN_OUTPUT_BITS = 6
 AN_DAQ_FULL_SCALE = 7
 AN_DAQ_BITS = 8
 AN_NOISE_HALF_WIDTH = 9
-AN_SIZE = 10
+AN_LAG_GAIN = 10
+AN_LAG_TAU_OVER_DT = 11
+AN_SIZE = 12
 
 AS_T = 0
 AS_INPUT = 1
@@ -83,7 +94,10 @@ def analog_parameters(
     daq_bits: float,
     noise_half_width: float,
 ) -> np.ndarray:
-    """Validate and pack an analog channel's parameters (layout in the module docstring).
+    """Validate and pack one lane's channel parameters (rows in the module docstring).
+
+    The conditioner's lag coefficients depend on the integration step and are left NaN here, so that a channel
+    stepped before :func:`with_integration_step` reads NaN instead of a silently wrong lag.
 
     Raises
     ------
@@ -113,91 +127,129 @@ def analog_parameters(
     p[AN_DAQ_FULL_SCALE] = daq_full_scale
     p[AN_DAQ_BITS] = daq_bits
     p[AN_NOISE_HALF_WIDTH] = noise_half_width
+    p[AN_LAG_GAIN] = np.nan
+    p[AN_LAG_TAU_OVER_DT] = np.nan
     return p
 
 
-@numba.njit(cache=True)
-def transducer_voltage(x, p):
-    """Transducer output voltage for measurand ``x`` (before conditioning).
+def with_integration_step(p: np.ndarray, dt: float) -> np.ndarray:
+    """A copy of channel parameters ``p`` (one lane's vector or a ``[row, lane]`` group) completed for a fixed
+    integration step ``dt`` [s]: the conditioner's lag coefficients ``1 - exp(-dt/tau)`` (:func:`lag_gain`, the
+    same function and bits as computing it at every step) and ``tau / dt``, so that no exponential runs per step.
+
+    :func:`analog_step` then assumes that every step lasts ``dt`` (the fixed-step loop's ``t_k - t_(k-1)``,
+    equal to ``dt`` up to the rounding of the clock); a caller with another step sets it again.
+    """
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt: the integration step must be a finite time > 0 s, got {dt!r}")
+    q = np.array(p, dtype=np.float64, copy=True)
+    taus = q[AN_TAU].reshape(-1)
+    gains = np.array([lag_gain(dt, float(tau)) for tau in taus])
+    q[AN_LAG_GAIN] = gains.reshape(q[AN_LAG_GAIN].shape)
+    q[AN_LAG_TAU_OVER_DT] = q[AN_TAU] / dt
+    return q
+
+
+@numba.njit(**SCALAR)
+def transducer_voltage(params, lane, x):
+    """Transducer output voltage of column ``lane`` for measurand ``x`` (before conditioning).
 
     ``V = V_FS * (gain * x / x_FS + offset)``: sensitivity errors and their
     temperature effect act on the gain (%Nom), zero errors and their
     temperature effect on the offset (%FS), Sec. 9.4.
     """
-    return p[AN_OUTPUT_FULL_SCALE] * (p[AN_GAIN] * x / p[AN_FULL_SCALE] + p[AN_OFFSET])
+    gain, offset = params[AN_GAIN, lane], params[AN_OFFSET, lane]
+    return params[AN_OUTPUT_FULL_SCALE, lane] * (gain * x / params[AN_FULL_SCALE, lane] + offset)
 
 
-@numba.njit(cache=True)
-def _output(v, p):
-    """Sensor-side output stage: the D/A if the sensor has one, else the analog voltage."""
-    if p[AN_OUTPUT_BITS] > 0.0:
-        return convert(v, p[AN_OUTPUT_FULL_SCALE], p[AN_OUTPUT_BITS])
-    return v
+@numba.njit(**SCALAR)
+def output_stage(params, lane, v):
+    """Sensor-side output stage: the D/A if the sensor has one (``AN_OUTPUT_BITS > 0``), else the analog
+    voltage ``v`` (a select: the conversion is computed either way)."""
+    bits = params[AN_OUTPUT_BITS, lane]
+    converted = convert(v, params[AN_OUTPUT_FULL_SCALE, lane], bits)
+    return converted if bits > 0.0 else v
 
 
-@numba.njit(cache=True)
-def analog_init(state, x0, t0, p):
-    """Initialise ``state`` at time ``t0`` in steady state with measurand ``x0``.
+@numba.njit(**SCALAR)
+def analog_init(state, params, lane, x0, t0):
+    """Initialise column ``lane`` of ``state`` at time ``t0`` in steady state with measurand ``x0``.
 
     The output holds the converted ``x0`` and the next refresh is one period
     after ``t0``.
     """
-    v = transducer_voltage(x0, p)
-    state[AS_T] = t0
-    state[AS_INPUT] = v
-    state[AS_FILTERED] = v
-    state[AS_NEXT_REFRESH] = t0 + p[AN_REFRESH_PERIOD]
-    state[AS_OUTPUT] = _output(v, p)
+    v = transducer_voltage(params, lane, x0)
+    state[AS_T, lane] = t0
+    state[AS_INPUT, lane] = v
+    state[AS_FILTERED, lane] = v
+    state[AS_NEXT_REFRESH, lane] = t0 + params[AN_REFRESH_PERIOD, lane]
+    state[AS_OUTPUT, lane] = output_stage(params, lane, v)
 
 
-@numba.njit(cache=True)
-def analog_step(state, x, t, p):
-    """Advance the channel to time ``t`` where the true measurand is ``x``.
+@numba.njit(**SCALAR)
+def analog_step(state, params, lane, x, t):
+    """Advance column ``lane`` of the channel to time ``t`` where the true measurand is ``x``.
 
-    Call at every integration step (call pattern (a)). With a refresh period
-    the output is a sample-and-hold of the (conditioned) signal taken at the
-    refresh instants, linearly interpolated inside the step: a peak falling
-    between two refresh instants is lost (Sec. 9.3, torque meter). If a step
-    spans several refresh instants only the last one is visible.
+    Call at every integration step (call pattern (a)) of the step ``dt`` set by
+    :func:`with_integration_step`. The conditioner is the exact first-order lag
+    with the input linear over the step (:func:`sensors.acquisition.lag_step`,
+    its coefficients precomputed). With a refresh period the output is a
+    sample-and-hold of the (conditioned) signal taken at the refresh instants,
+    linearly interpolated inside the step: a peak falling between two refresh
+    instants is lost (Sec. 9.3, torque meter). If a step spans several refresh
+    instants only the last one is visible. A refresh instant equal to the step's
+    end ``t`` is taken in this step.
+
+    Branch-free: the lag, the refresh and the held output are computed in every
+    case and chosen by selects (no lag without a conditioner, no change for a
+    step of zero length, the output refreshed when a refresh instant is due or
+    continuously without a hold).
 
     Parameters
     ----------
     state : numpy.ndarray
-        Channel state (layout in the module docstring), updated in place.
+        Channel states ``[AS_SIZE, L]``, column ``lane`` updated in place.
+    params : numpy.ndarray
+        Channel parameters ``[AN_SIZE, L]`` (:func:`analog_parameters`, :func:`with_integration_step`).
+    lane : int
+        Lane: the column of ``state`` and ``params`` this call reads and writes.
     x : float
         True measurand at ``t`` [N or N*m].
     t : float
-        Time at the end of the step [s], > ``state[AS_T]``.
-    p : numpy.ndarray
-        Channel parameters from :func:`analog_parameters`.
+        Time at the end of the step [s], > ``state[AS_T, lane]``.
     """
-    t_prev = state[AS_T]
+    # every value is loaded and computed first, the selects choose between scalars (a select between array
+    # loads or calls would stay a branch: LLVM cannot speculate it, and the lane loop would not vectorise)
+    t_prev = state[AS_T, lane]
+    u_prev = state[AS_INPUT, lane]
+    y_prev = state[AS_FILTERED, lane]
+    t_next = state[AS_NEXT_REFRESH, lane]
+    output_before = state[AS_OUTPUT, lane]
+    tau = params[AN_TAU, lane]
+    period = params[AN_REFRESH_PERIOD, lane]
     dt = t - t_prev
-    u = transducer_voltage(x, p)
-    y_prev = state[AS_FILTERED]
-    if p[AN_TAU] > 0.0:
-        y = first_order_lag(y_prev, state[AS_INPUT], u, dt, p[AN_TAU])
-    else:
-        y = u
-    period = p[AN_REFRESH_PERIOD]
-    if period > 0.0:
-        t_next = state[AS_NEXT_REFRESH]
-        if t >= t_next:
-            n_refresh = math.floor((t - t_next) / period) + 1.0
-            t_refresh = t_next + (n_refresh - 1.0) * period
-            y_refresh = y_prev + (y - y_prev) * (t_refresh - t_prev) / dt if dt > 0.0 else y
-            state[AS_OUTPUT] = _output(y_refresh, p)
-            state[AS_NEXT_REFRESH] = t_next + n_refresh * period
-    else:
-        state[AS_OUTPUT] = _output(y, p)
-    state[AS_T] = t
-    state[AS_INPUT] = u
-    state[AS_FILTERED] = y
+    u = transducer_voltage(params, lane, x)
+    lagged = lag_step(y_prev, u_prev, u, params[AN_LAG_GAIN, lane], params[AN_LAG_TAU_OVER_DT, lane])
+    lagged = lagged if dt > 0.0 else y_prev
+    y = lagged if tau > 0.0 else u
+
+    held = period > 0.0
+    due = held & (t >= t_next)
+    n_refresh = np.floor((t - t_next) / period) + 1.0   # refreshes in this step, when due
+    t_refresh = t_next + (n_refresh - 1.0) * period     # the last of them
+    y_refresh = y_prev + (y - y_prev) * (t_refresh - t_prev) / dt
+    y_refresh = y_refresh if dt > 0.0 else y
+    presented = output_stage(params, lane, y_refresh if held else y)
+    state[AS_OUTPUT, lane] = presented if (due | (not held)) else output_before
+    state[AS_NEXT_REFRESH, lane] = t_next + n_refresh * period if due else t_next
+    state[AS_T, lane] = t
+    state[AS_INPUT, lane] = u
+    state[AS_FILTERED, lane] = y
 
 
-@numba.njit(cache=True)
-def analog_read(state, noise, p):
-    """DAQ reading of the channel in engineering units (call pattern (b)).
+@numba.njit(**SCALAR)
+def analog_read(state, params, lane, noise):
+    """DAQ reading of column ``lane`` of the channel in engineering units (call pattern (b)).
 
     The output voltage plus one pre-drawn electrical-noise sample ``noise``
     [V] is converted by the DAQ and scaled back with the *nominal*
@@ -206,20 +258,22 @@ def analog_read(state, noise, p):
     Parameters
     ----------
     state : numpy.ndarray
-        Channel state, already stepped to the sample instant.
+        Channel states ``[AS_SIZE, L]``, already stepped to the sample instant.
+    params : numpy.ndarray
+        Channel parameters ``[AN_SIZE, L]``.
+    lane : int
+        Lane: the column of ``state`` and ``params`` this call reads and writes.
     noise : float
         Noise sample [V], e.g. from :func:`sensors.acquisition.draw_uniform_noise`
-        with half width ``p[AN_NOISE_HALF_WIDTH]``.
-    p : numpy.ndarray
-        Channel parameters.
+        with half width ``params[AN_NOISE_HALF_WIDTH, lane]``.
 
     Returns
     -------
     float
         Measured value [N or N*m].
     """
-    v = convert(state[AS_OUTPUT] + noise, p[AN_DAQ_FULL_SCALE], p[AN_DAQ_BITS])
-    return v * p[AN_FULL_SCALE] / p[AN_OUTPUT_FULL_SCALE]
+    v = convert(state[AS_OUTPUT, lane] + noise, params[AN_DAQ_FULL_SCALE, lane], params[AN_DAQ_BITS, lane])
+    return v * params[AN_FULL_SCALE, lane] / params[AN_OUTPUT_FULL_SCALE, lane]
 
 
 def sensor_channel(

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import numba
 
+from numerics.jit import SCALAR
 from sensors.acquisition import first_order_lag
 
 
-@numba.njit(cache=True)
+@numba.njit(**SCALAR)
 def hall_current_step(i_measured, i_start, i_end, dt, tau):
     """Measured current [A] after a step ``dt`` [s] of the true current from ``i_start`` to ``i_end``.
 

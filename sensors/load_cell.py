@@ -19,9 +19,10 @@ Table 9.5's external load-cell ranges differ from Table B.13's datasheet
 figures (e.g. sensitivity ±0.1 %Nom vs ±1 %/±2 %); the twin follows Table 9.5,
 the uncertainty model of the thesis's Monte Carlo analysis (docs/sensors.md).
 
-The compiled functions are the generic channel's (:mod:`sensors.analog`):
-``analog_init``, ``analog_step`` (every integration step) and ``analog_read``
-(sample instants).
+The compiled functions are the generic channel's (:mod:`sensors.analog`, lane
+form): ``analog_init``, ``analog_step`` (every integration step) and
+``analog_read`` (sample instants), with the builders' vectors completed by
+:func:`sensors.analog.with_integration_step`.
 """
 
 from __future__ import annotations

@@ -7,10 +7,11 @@ converted by the meter's 16-bit D/A to ±10 V over the selected range (50 or
 5 N*m). Sensitivity tolerance and the temperature effects on zero (%FS/K) and
 on sensitivity (%Nom/K) follow Table 9.5, driven by room temperature - 25 °C.
 
-The compiled functions are the generic channel's (:mod:`sensors.analog`):
-``analog_init(state, T0, t0, p)``, ``analog_step(state, T, t, p)`` at every
-integration step and ``analog_read(state, noise, p)`` at sample instants,
-with ``p`` from :func:`torque_meter_parameters`. The torque meter's angle
+The compiled functions are the generic channel's (:mod:`sensors.analog`, lane
+form): ``analog_init(state, p, l, T0, t0)``, ``analog_step(state, p, l, T, t)``
+at every integration step and ``analog_read(state, p, l, noise)`` at sample
+instants, with ``p`` the lanes' vectors from :func:`torque_meter_parameters`
+completed by :func:`sensors.analog.with_integration_step`. The torque meter's angle
 comes from its encoder (:func:`sensors.encoder.torque_meter_encoder_parameters`).
 
 Table 9.5 lists the range-I temperature effects as ±0.01 %FS/K on offset and

@@ -7,8 +7,12 @@ import pytest
 
 from sensors.acquisition import (
     convert,
+    converter_lsb,
     draw_uniform_noise,
     first_order_lag,
+    lag_gain,
+    lag_step,
+    power_of_two,
     quantize,
     sigma_from_range,
     validate_converter,
@@ -93,3 +97,23 @@ def test_first_order_lag_is_the_exact_discretisation():
         u0, u1 = 10.0 * 0.5, 10.0 * (0.5 + dt)
         assert first_order_lag(u0 - 10.0 * tau, u0, u1, dt, tau) == pytest.approx(u1 - 10.0 * tau, rel=1e-12)
     assert first_order_lag(0.7, 1.0, 5.0, 0.0, tau) == 0.7
+
+
+def test_converter_step_is_full_scale_over_two_to_the_bits_less_one_exactly():
+    """lsb = FS / 2^(bits - 1), the power of two built from its exponent bits (no pow call): exact for every word
+    length, e.g. 10 V / 2^15 for the 16-bit DAQ and 10 V / 2^11 for the drive's 11 bits + sign."""
+    for n in range(-1022, 1024, 7):
+        assert power_of_two(float(n)) == 2.0**n
+    assert converter_lsb(10.0, 16.0) == 10.0 / 32768.0 and converter_lsb(10.0, 12.0) == 10.0 / 2048.0
+    for bits in range(2, 54):
+        assert converter_lsb(10.0, float(bits)) == 10.0 / 2.0 ** (bits - 1)
+
+
+def test_lag_from_precomputed_coefficients_is_the_lag():
+    """first_order_lag is lag_step with its coefficients 1 - exp(-dt/tau) and tau/dt computed per call: the same
+    bits as computing them once for a fixed step (what the analog channels do)."""
+    tau, dt = 1.59e-5, 6.25e-5
+    gain, tau_over_dt = lag_gain(dt, tau), tau / dt
+    assert gain == pytest.approx(1.0 - math.exp(-dt / tau), rel=1e-15)
+    for y0, u0, u1 in ((0.0, 1.0, 1.0), (2.5, -1.0, 3.0), (-7.0, 4.0, 4.5)):
+        assert lag_step(y0, u0, u1, gain, tau_over_dt) == first_order_lag(y0, u0, u1, dt, tau)

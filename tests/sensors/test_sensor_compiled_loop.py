@@ -1,4 +1,4 @@
-"""The sensor functions as the engine calls them: inside one compiled loop, noise pre-drawn."""
+"""The sensor functions as an engine calls them: inside one compiled loop, one lane, noise pre-drawn."""
 
 import math
 
@@ -7,7 +7,7 @@ import numpy as np
 from bench_helpers import bench_sensors
 
 from sensors.acquisition import draw_uniform_noise
-from sensors.analog import AN_NOISE_HALF_WIDTH, AS_SIZE, analog_init, analog_read, analog_step
+from sensors.analog import AN_NOISE_HALF_WIDTH, AS_SIZE, analog_init, analog_read, analog_step, with_integration_step
 from sensors.encoder import (
     ENC_STATE_SIZE,
     encoder_init,
@@ -17,6 +17,7 @@ from sensors.encoder import (
     linear_encoder_parameters,
 )
 from sensors.hall import hall_current_step
+from sensors.lanes import lane_group
 from sensors.resolver import resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
 
@@ -25,33 +26,33 @@ DT, STEPS_PER_SAMPLE, SAMPLES = 1e-5, 100, 200
 
 @numba.njit
 def _loop(p_enc, p_tm, p_res, noise, out):
-    enc = np.zeros(ENC_STATE_SIZE)
-    tm = np.zeros(AS_SIZE)
-    encoder_init(enc, 0.0, 0.0, p_enc)
-    analog_init(tm, 0.0, 0.0, p_tm)
+    enc = np.zeros((ENC_STATE_SIZE, 1))
+    tm = np.zeros((AS_SIZE, 1))
+    encoder_init(enc, p_enc, 0, 0.0, 0.0)
+    analog_init(tm, p_tm, 0, 0.0, 0.0)
     i_meas, i_prev = 0.0, 0.0
     for j in range(SAMPLES):
         for k in range(STEPS_PER_SAMPLE):
             t = (j * STEPS_PER_SAMPLE + k + 1) * DT
             x = 1e-3 * math.sin(2 * math.pi * 5.0 * t)  # sled: 1 mm at 5 Hz
-            encoder_step(enc, x, t, p_enc)
-            analog_step(tm, 3.0 * math.sin(2 * math.pi * 5.0 * t), t, p_tm)
+            encoder_step(enc, p_enc, 0, x, t)
+            analog_step(tm, p_tm, 0, 3.0 * math.sin(2 * math.pi * 5.0 * t), t)
             i_new = math.sin(2 * math.pi * 50.0 * t)
             i_meas = hall_current_step(i_meas, i_prev, i_new, DT, 3.18e-5)
             i_prev = i_new
-        out[j, 0] = encoder_reading(enc, p_enc)
-        out[j, 1] = encoder_speed(enc, t, p_enc)
-        out[j, 2] = analog_read(tm, noise[j], p_tm)
-        out[j, 3] = resolver_angle(100.0 * t, p_res)
+        out[j, 0] = encoder_reading(enc, p_enc, 0)
+        out[j, 1] = encoder_speed(enc, p_enc, 0, t)
+        out[j, 2] = analog_read(tm, p_tm, 0, noise[j])
+        out[j, 3] = resolver_angle(p_res, 0, 100.0 * t)
         out[j, 4] = i_meas
 
 
 def _run(seed):
     p_enc = linear_encoder_parameters(bench_sensors({"sensors.linear_encoder_phase_error": 0.3}))
-    p_tm = torque_meter_parameters(bench_sensors(), room_temperature=303.15)
+    p_tm = with_integration_step(torque_meter_parameters(bench_sensors(), room_temperature=303.15), DT)
     noise = draw_uniform_noise(np.random.default_rng(seed), SAMPLES, p_tm[AN_NOISE_HALF_WIDTH])
     out = np.empty((SAMPLES, 5))
-    _loop(p_enc, p_tm, resolver_parameters(bench_sensors()), noise, out)
+    _loop(lane_group([p_enc]), lane_group([p_tm]), lane_group([resolver_parameters(bench_sensors())]), noise, out)
     return out
 
 

@@ -25,20 +25,25 @@ WINDOW = 1.0e-3  # sampling period = frequency-method window
 DT = 1.0e-5  # integration step
 
 
+
+def _lane(p):
+    """One lane's parameter vector as a one-lane group (lane 0, ``sensors.lanes``)."""
+    return np.ascontiguousarray(p.reshape(-1, 1))
+
 def _constant_speed_run(p, v, duration):
     """Per-sample (period, frequency, switched) estimates at constant speed v, after warm-up."""
-    state = np.zeros(ENC_STATE_SIZE)
+    state = np.zeros((ENC_STATE_SIZE, 1))
     x0 = 0.37 * RES  # edges not aligned with the steps
-    encoder_init(state, x0, 0.0, p)
+    encoder_init(state, _lane(p), 0, x0, 0.0)
     steps_per_sample = round(WINDOW / DT)
     out = []
     for k in range(1, round(duration / DT) + 1):
         t = k * DT
-        encoder_step(state, x0 + v * t, t, p)
+        encoder_step(state, _lane(p), 0, x0 + v * t, t)
         if k % steps_per_sample == 0:
-            period = encoder_period_speed(state, t, p)
-            frequency = encoder_frequency_speed(state, t, p)
-            switched = encoder_speed(state, t, p)
+            period = encoder_period_speed(state, _lane(p), 0, t)
+            frequency = encoder_frequency_speed(state, _lane(p), 0, t)
+            switched = encoder_speed(state, _lane(p), 0, t)
             if t > 3.0 * RES / v + 2.0 * WINDOW:  # two edges and one full window seen
                 out.append((period, frequency, switched))
     return np.array(out)
@@ -90,33 +95,33 @@ def test_frequency_method_is_accurate_and_chosen_at_high_speed(v):
 def test_period_method_reads_zero_on_dither_and_decays_after_a_stop():
     p = linear_encoder_parameters(bench_sensors(), fidelity=1)
     tick = 2.5e-8
-    state = np.zeros(ENC_STATE_SIZE)
-    encoder_init(state, 0.5e-6, 0.0, p)
+    state = np.zeros((ENC_STATE_SIZE, 1))
+    encoder_init(state, _lane(p), 0, 0.5e-6, 0.0)
     v = 1e-3
     t = 0.0
     for k in range(1, 1001):  # 10 ms at 1 mm/s, then stop at x_stop
         t = k * DT
-        encoder_step(state, 0.5e-6 + v * t, t, p)
+        encoder_step(state, _lane(p), 0, 0.5e-6 + v * t, t)
     x_stop = 0.5e-6 + v * t
-    assert encoder_period_speed(state, t, p) == pytest.approx(v, rel=1e-3)
+    assert encoder_period_speed(state, _lane(p), 0, t) == pytest.approx(v, rel=1e-3)
     t_late = t + 0.05
-    encoder_step(state, x_stop, t_late, p)
+    encoder_step(state, _lane(p), 0, x_stop, t_late)
     last_edge = math.floor(x_stop / RES) * RES - 0.5e-6
     elapsed_ticks = math.floor(t_late / tick) - math.floor(last_edge / v / tick)
-    assert encoder_period_speed(state, t_late, p) == pytest.approx(RES / (elapsed_ticks * tick), rel=1e-12)
+    assert encoder_period_speed(state, _lane(p), 0, t_late) == pytest.approx(RES / (elapsed_ticks * tick), rel=1e-12)
     # dither across the edge just below: back then forward -> same edge twice
     edge = math.floor(x_stop / RES) * RES
-    encoder_step(state, edge - 1e-9, t_late + DT, p)
-    encoder_step(state, edge + 1e-9, t_late + 2 * DT, p)
-    assert encoder_period_speed(state, t_late + 2 * DT, p) == 0.0
+    encoder_step(state, _lane(p), 0, edge - 1e-9, t_late + DT)
+    encoder_step(state, _lane(p), 0, edge + 1e-9, t_late + 2 * DT)
+    assert encoder_period_speed(state, _lane(p), 0, t_late + 2 * DT) == 0.0
 
 
 def test_fidelity_zero_speed_is_the_exact_window_mean():
     p = linear_encoder_parameters(bench_sensors(), fidelity=0)
-    state = np.zeros(ENC_STATE_SIZE)
-    encoder_init(state, 0.0, 0.0, p)
-    encoder_step(state, 1.234567e-7, 1e-3, p)
-    assert encoder_speed(state, 1e-3, p) == pytest.approx(1.234567e-4, rel=1e-12)
+    state = np.zeros((ENC_STATE_SIZE, 1))
+    encoder_init(state, _lane(p), 0, 0.0, 0.0)
+    encoder_step(state, _lane(p), 0, 1.234567e-7, 1e-3)
+    assert encoder_speed(state, _lane(p), 0, 1e-3) == pytest.approx(1.234567e-4, rel=1e-12)
 
 
 def test_phase_error_shows_as_period_method_ripple():

@@ -1,4 +1,7 @@
-"""Torque meter, load cells, preload conditioner and Hall sensor readings."""
+"""Torque meter, load cells, preload conditioner and Hall sensor readings.
+
+The channel functions are in lane form (``sensors.lanes``): one lane's parameter vector from a builder, completed
+for the integration step (``with_integration_step``), is stepped as lane 0 of a one-lane group."""
 
 import math
 
@@ -22,6 +25,7 @@ from sensors.analog import (
     analog_read,
     analog_step,
     transducer_voltage,
+    with_integration_step,
 )
 from sensors.hall import hall_current_step
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
@@ -32,14 +36,24 @@ T25 = 298.15  # K, the nominal 25 degC of Sec. 9.4
 FINE_DAQ = {"sensors.daq_bits": 32.0}  # isolates the sensor model from DAQ quantisation
 
 
+def _lane(p, dt):
+    """One lane's channel vector completed for the fixed step ``dt``, as a one-lane group (lane 0)."""
+    return np.ascontiguousarray(with_integration_step(p, dt).reshape(-1, 1))
+
+
+def _state():
+    return np.zeros((AS_SIZE, 1))
+
+
 def _read_series(p, t, x):
-    """Noise-free readings after each step of the measurand series x(t)."""
-    state = np.zeros(AS_SIZE)
-    analog_init(state, x[0], 0.0, p)
+    """Noise-free readings after each step of the measurand series x(t), stepped from t = 0 at the fixed step t[0]."""
+    lane = _lane(p, t[0])
+    state = _state()
+    analog_init(state, lane, 0, x[0], 0.0)
     out = np.empty(t.size)
     for k in range(t.size):
-        analog_step(state, x[k], t[k], p)
-        out[k] = analog_read(state, 0.0, p)
+        analog_step(state, lane, 0, x[k], t[k])
+        out[k] = analog_read(state, lane, 0, 0.0)
     return out
 
 
@@ -113,7 +127,7 @@ def test_temperature_shift_is_sensitivity_times_dt_plus_offset_times_dt(builder,
     full_scale = cold[AN_FULL_SCALE]
     expected = force * sum(gain_tcs) * delta_t + full_scale * sum(offset_tcs) * delta_t
     # transducer voltage, no quantisation: exact to rounding
-    shift_v = transducer_voltage(force, warm) - transducer_voltage(force, cold)
+    shift_v = transducer_voltage(_lane(warm, 1e-3), 0, force) - transducer_voltage(_lane(cold, 1e-3), 0, force)
     assert shift_v * full_scale / 10.0 == pytest.approx(expected, rel=1e-9)
     # full chain through a fine DAQ (16-bit torque-meter D/A: within its lsb)
     t = np.array([1e-3, 2e-3, 3e-3])
@@ -140,16 +154,19 @@ def test_static_errors_act_on_gain_and_offset():
     assert q[AN_FULL_SCALE] == 10e3 and q[AN_OFFSET] == pytest.approx(2e-3)  # 20 N on the 10 kN range
 
 
-def test_preload_conditioner_is_an_exact_first_order_lag_for_any_step():
+@pytest.mark.parametrize("dt", [1e-7, 3e-6, 2e-5, 1e-4])
+def test_preload_conditioner_is_an_exact_first_order_lag_for_any_step(dt):
+    """A ramp of 4e6 N/s, then a hold from t_hold (a step ends at the ramp's corner), through the 10 kHz conditioner
+    (tau = 15.9 us) stepped at a fixed dt from 1e-7 s (<< tau) to 1e-4 s (>> tau): the filtered voltage is the
+    exact ramp response, then the exact decay, at every step (the lag's coefficients computed once for dt)."""
     p = preload_load_cell_parameters(bench_sensors(), room_temperature=T25)
     tau = p[AN_TAU]
     assert tau == pytest.approx(1 / (2 * math.pi * 10e3))  # 10 kHz cut-off, Table B.8
     rate = 4e6  # N/s ramp, then hold from t_hold
     t_hold = 1e-3
-    rng = np.random.default_rng(4)
-    dts = rng.choice([1e-7, 3e-6, 2e-5, 1e-4], size=200)
-    t = np.cumsum(dts)
-    t = np.sort(np.append(t[t < 2.5e-3], t_hold))  # a step ends at the ramp's corner
+    steps = round(min(2.5e-3, 400 * dt) / dt)
+    t = np.arange(1, steps + 1) * dt
+    t_hold = min(t_hold, t[steps // 2])  # a step ends at the corner
 
     def exact(tt):  # ramp response, then the decay after the corner
         ramp = rate * (tt - tau * (1.0 - np.exp(-tt / tau)))
@@ -157,12 +174,26 @@ def test_preload_conditioner_is_an_exact_first_order_lag_for_any_step():
         hold = rate * t_hold + (at_hold - rate * t_hold) * np.exp(-(tt - t_hold) / tau)
         return np.where(tt <= t_hold, ramp, hold)
 
-    state = np.zeros(AS_SIZE)
-    analog_init(state, 0.0, 0.0, p)
+    lane = _lane(p, dt)
+    state = _state()
+    analog_init(state, lane, 0, 0.0, 0.0)
     volts_per_newton = 10.0 / 10e3
     for tk in t:
-        analog_step(state, rate * min(tk, t_hold), tk, p)
-        assert state[AS_FILTERED] / volts_per_newton == pytest.approx(exact(tk), rel=1e-9, abs=1e-9)
+        analog_step(state, lane, 0, rate * min(tk, t_hold), tk)
+        assert state[AS_FILTERED, 0] / volts_per_newton == pytest.approx(exact(tk), rel=1e-9, abs=1e-9)
+
+
+def test_a_channel_stepped_before_its_step_is_set_reads_nan():
+    """The conditioner's coefficients depend on the integration step: until ``with_integration_step`` they are NaN,
+    so a forgotten call shows as NaN readings, never as a silently wrong lag."""
+    p = preload_load_cell_parameters(bench_sensors(), room_temperature=T25)
+    lane = np.ascontiguousarray(p.reshape(-1, 1))
+    state = _state()
+    analog_init(state, lane, 0, 500.0, 0.0)
+    analog_step(state, lane, 0, 600.0, 1e-4)
+    assert math.isnan(analog_read(state, lane, 0, 0.0))
+    with pytest.raises(ValueError, match="dt"):
+        with_integration_step(p, 0.0)
 
 
 def test_hall_sensor_is_an_exact_first_order_lag():
@@ -181,9 +212,10 @@ def test_noise_sample_adds_to_the_reading_in_volts():
     p = load_cell_parameters(bench_sensors(FINE_DAQ), room_temperature=T25)
     assert p[AN_NOISE_HALF_WIDTH] == pytest.approx(0.25)  # ±2.5 %FS of 10 V
     assert p[AN_DAQ_BITS] == 32.0
-    state = np.zeros(AS_SIZE)
-    analog_init(state, 5e3, 0.0, p)
-    assert analog_read(state, 0.1, p) - analog_read(state, 0.0, p) == pytest.approx(0.1 * 20e3 / 10.0)
+    lane = _lane(p, 1e-4)
+    state = _state()
+    analog_init(state, lane, 0, 5e3, 0.0)
+    assert analog_read(state, lane, 0, 0.1) - analog_read(state, lane, 0, 0.0) == pytest.approx(0.1 * 20e3 / 10.0)
 
 
 def test_bad_inputs_name_the_field():
@@ -220,12 +252,13 @@ def test_range_selection_picks_the_range_full_scale_and_errors(builder, selector
 def test_a_step_spanning_several_refreshes_shows_the_last_one():
     p = torque_meter_parameters(bench_sensors({"sensors.torque_meter_dac_bits": 32.0, **FINE_DAQ}),
                                 room_temperature=T25)
-    state = np.zeros(AS_SIZE)
-    analog_init(state, 0.0, 0.0, p)
-    analog_step(state, 25.0, 2.5e-3, p)  # ramp 0 -> 25 N*m over one 2.5 ms step; refreshes at 1 and 2 ms
-    assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)
-    analog_step(state, 25.0, 2.9e-3, p)  # no refresh until 3 ms
-    assert analog_read(state, 0.0, p) == pytest.approx(20.0, rel=1e-9)
+    lane = _lane(p, 2.5e-3)
+    state = _state()
+    analog_init(state, lane, 0, 0.0, 0.0)
+    analog_step(state, lane, 0, 25.0, 2.5e-3)  # ramp 0 -> 25 N*m over one 2.5 ms step; refreshes at 1 and 2 ms
+    assert analog_read(state, lane, 0, 0.0) == pytest.approx(20.0, rel=1e-9)
+    analog_step(state, lane, 0, 25.0, 2.9e-3)  # no refresh until 3 ms
+    assert analog_read(state, lane, 0, 0.0) == pytest.approx(20.0, rel=1e-9)
 
 
 CHANNEL = dict(full_scale=100.0, output_full_scale=10.0, gain=1.0, offset=0.0, tau=0.0, refresh_period=0.0,
@@ -235,15 +268,15 @@ CHANNEL = dict(full_scale=100.0, output_full_scale=10.0, gain=1.0, offset=0.0, t
 def test_sensor_output_converter_quantises_before_the_daq():
     """A sensor with its own D/A (the torque meter's) reads the D/A code, converted again by the DAQ: with a
     coarse 4-bit output the reading falls on the D/A's grid, not on the 16-bit DAQ's."""
-    coarse = analog_parameters(**{**CHANNEL, "output_bits": 4.0})
-    state = np.zeros(AS_SIZE)
-    analog_init(state, 33.0, 0.0, coarse)
+    coarse = _lane(analog_parameters(**{**CHANNEL, "output_bits": 4.0}), 1e-4)
+    state = _state()
+    analog_init(state, coarse, 0, 33.0, 0.0)
     volts = convert(convert(3.3, 10.0, 4.0), 10.0, 16.0)
-    assert analog_read(state, 0.0, coarse) == pytest.approx(volts * 100.0 / 10.0, rel=1e-12)
-    assert abs(analog_read(state, 0.0, coarse) - 33.0) > 1.0  # the 4-bit step is 1.4 V = 14 units
-    smooth = analog_parameters(**CHANNEL)
-    analog_init(state, 33.0, 0.0, smooth)
-    assert analog_read(state, 0.0, smooth) == pytest.approx(33.0, abs=100.0 / 2**15)
+    assert analog_read(state, coarse, 0, 0.0) == pytest.approx(volts * 100.0 / 10.0, rel=1e-12)
+    assert abs(analog_read(state, coarse, 0, 0.0) - 33.0) > 1.0  # the 4-bit step is 1.25 V = 12.5 units
+    smooth = _lane(analog_parameters(**CHANNEL), 1e-4)
+    analog_init(state, smooth, 0, 33.0, 0.0)
+    assert analog_read(state, smooth, 0, 0.0) == pytest.approx(33.0, abs=100.0 / 2**15)
 
 
 @pytest.mark.parametrize("field, value", [("gain", -0.5), ("full_scale", -0.5), ("tau", -0.5),

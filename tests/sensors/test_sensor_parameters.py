@@ -130,3 +130,28 @@ def test_the_values_of_a_parameter_set_pass_unchanged():
     values = sensor_values(ps.values())
     assert values["sensors.linear_encoder_precision"] == -3e-6
     assert len(values) == len(ps)
+
+
+#: Uncertainties the bench has and Table 9.5 does not list (issue 33): nominal = the model before them.
+EXTENSION_ROWS = {
+    "linear_encoder_mounting_phase": ("1", 0.0, 1.0, "Linear encoder / Mounting phase: 0÷1 signal period (4 µm), U"),
+    "torque_meter_encoder_mounting_phase": (
+        "1", 0.0, 1.0, "Torque meter encoder / Mounting phase: 0÷1 signal period (2π/2000 rad), U"),
+    "resolver_mounting_angle": ("rad", 0.0, 2 * math.pi, "Motor resolver / Mounting angle: 0÷2π rad, U"),
+}
+
+
+def test_extension_rows_are_marked_nominal_zero_bounded_and_documented(entries):
+    """The mounting phases and angle: nominal 0 (nothing moves unless a campaign samples them), bounds one period,
+    an assumption that says it extends Table 9.5, the proposed row in a commented `table_9_5_extension` line (a
+    key the parameter loader does not accept yet), and a place in docs/sensors.md."""
+    text = SENSORS_TOML.read_text()
+    doc = (ROOT / "docs" / "sensors.md").read_text()
+    for key, (unit, low, high, row) in EXTENSION_ROWS.items():
+        e = entries[key]
+        assert e["value"] == 0.0 and e["unit"] == unit, key
+        assert e["min"] == low and e["max"] == pytest.approx(high, rel=1e-15), key
+        assert e["assumption"].startswith("EXTENSION of Table 9.5"), key
+        assert "table_9_5" not in e, key  # not a thesis row
+        assert f'# table_9_5_extension = "{row}"' in text, key
+        assert f"`sensors.{key}`" in doc and row in doc, key
