@@ -26,6 +26,7 @@ guard that trips beats a silently wrong sine).
 import math
 
 import numba
+import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
@@ -60,6 +61,14 @@ def as_float(typingctx, i):
         return builder.bitcast(value, ir.DoubleType())
 
     return types.float64(i), codegen
+
+
+if numba.config.DISABLE_JIT:  # pure Python (the mutation runs): the bit casts on Python ints, wrapped to int64
+    def as_int(x):  # noqa: F811
+        return int(np.float64(x).view(np.int64))
+
+    def as_float(i):  # noqa: F811
+        return float(np.int64((int(i) + 2**63) % 2**64 - 2**63).view(np.float64))
 
 
 SHIFTER = 6755399441055744.0          # 1.5 * 2^52: (y + SHIFTER) - SHIFTER = rint(y) for |y| < 2^51

@@ -20,7 +20,7 @@ from types import MappingProxyType
 from twin.errors import ParameterError
 
 BUILTIN_DIR = Path(__file__).parent
-_ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5"}
+_ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5", "table_9_5_extension"}
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,7 @@ class Parameter:
     gt: float | None = None
     max: float | None = None
     table_9_5: str | None = None
+    table_9_5_extension: str | None = None  # an uncertainty the bench has that Table 9.5 does not list (issue 33)
 
     @property
     def is_assumption(self) -> bool:
@@ -218,6 +219,7 @@ def _parse_entry(name: str, entry) -> tuple[Parameter | None, list[str]]:
         gt=entry.get("gt"),
         max=entry.get("max"),
         table_9_5=entry.get("table_9_5"),
+        table_9_5_extension=entry.get("table_9_5_extension"),
     )
     problem = parameter.check(entry["value"])
     if problem:
