@@ -15,10 +15,9 @@ from pathlib import Path
 import twin
 from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
-from twin.simulation import solver_label
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import SCENE_PREFIX, split_targets
-from twin.simulation import AUTO, DEFAULT_INTEGRATOR
+from twin.simulation import DEFAULT_INTEGRATOR, solver_label
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
@@ -131,7 +130,7 @@ def cmd_simulate(args) -> int:
                 f"{label}: measured {float(ds[name]) * 1e6:.4f} um, "
                 f"true signals {float(ds[name + '_true']) * 1e6:.4f} um")
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
-    print(f"integrator: {ds.attrs.get('integrator_choice') or solver_label(ds.attrs['integrator'], ds.attrs['dt'])}")
+    print(f"integrator: {solver_label(ds.attrs['integrator'], ds.attrs['dt'])}")
     if args.out:
         write_netcdf(ds, args.out, title=f"BenchTwin run of scene {scene.name}",
                      history=getattr(args, "command_line", f"twin simulate {scene.name}"))
@@ -341,7 +340,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", type=_parse_assignment, metavar="NAME=VALUE",
                    help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5, "
                         "scene.zero_procedure=preloaded, scene.cylinder=detached)")
-    p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=[AUTO, *sorted(INTEGRATORS)],
+    p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=sorted(INTEGRATORS),
                    help="default rk4 at 62.5 us; auto (opt-in): imex_euler where the nuts stay held on a flank, "
                         "else rk4 at the 125 us drive period where that is stable, else at 62.5 us (twin.simulate, "
                         "docs/accuracy.md)")

@@ -13,10 +13,8 @@ paired runs. The largest paired difference, the Monte Carlo error of the mean
 (``1.96 sigma / sqrt(N)``) and the KS p-value are reported beside it (the KS test is no part of the
 verdict: paired samples are not independent, and at ten runs it has no power).
 
-A campaign that asks for the opt-in automatic integrator (``integrator = "auto"``,
-:mod:`twin.engine.solver_choice`) is audited against full fidelity *and* the default integrator: the
-automatic choice of the method is judged with the automatic choice of the levels, by the same rule (the
-implicit step it may keep is the one that can shift a feature where a held contact vibrates, docs/accuracy.md).
+The full-fidelity runs take the full model's default step (62.5 us: the screw's axial mode and the analog current
+loop are back), so the audit judges the automatic levels and the step they allow together.
 
 The verdict is a result, not an error: it is recorded in ``results.nc`` (``fidelity_audit*``
 attributes, one statement per data set and feature, printed verbatim by the CLI and the report), and
@@ -36,7 +34,6 @@ from campaigns.comparison import VERDICTS, compare_features, paired_shift_verdic
 from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
 from campaigns.storage import write_netcdf
 from twin.scenes import list_scenes, load_scene
-from twin.simulation import AUTO, DEFAULT_INTEGRATOR
 
 MEAN_SHIFT_TOLERANCE = 1.0e-7  # m: 0.1 um, a tenth of the 1 um backlash the bench must detect (Table 9.3)
 #: Per built-in scene and feature, the spread of tight runs that differ only in their step or by picometres [m]
@@ -57,17 +54,15 @@ _COMPARISON_META = {
 
 
 def has_automatic_choice(spec: CampaignSpec) -> bool:
-    """Whether the spec leaves something to an automatic choice the audit can check: the fidelity levels
-    (anything but ``"full"``) or the integrator (``"auto"``)."""
-    return spec.solver.fidelity != "full" or spec.solver.integrator == AUTO
+    """Whether the spec leaves the fidelity levels to the automatic choice the audit checks (anything but
+    ``"full"``)."""
+    return spec.solver.fidelity != "full"
 
 
 def full_fidelity_variant(spec: CampaignSpec, runs: int) -> CampaignSpec:
-    """The spec's first ``runs`` runs of every data set at full fidelity (and with the default integrator where the
-    spec asks for the automatic one), without traces or audit."""
+    """The spec's first ``runs`` runs of every data set at full fidelity (with the full model's default step unless
+    the spec names one), without traces or audit."""
     solver = {"fidelity": "full"}
-    if spec.solver.integrator == AUTO:
-        solver.update(integrator=DEFAULT_INTEGRATOR, dt=None)
     return spec.model_copy(update={
         "name": f"{spec.name}_full_fidelity",
         "runs_per_dataset": runs,
@@ -142,8 +137,7 @@ def overall_verdict(audit: xr.Dataset) -> str:
              for d in audit.dataset.values for f in audit.feature.values}
     worst = worst_verdict(cells.values())
     meaning = {"met": "auto is within the tolerance of full fidelity on every data set and feature",
-               "not met": "auto differs from full fidelity (the fidelity rule to fix, or with integrator 'auto' "
-                           "the integrator's choice)",
+               "not met": "auto differs from full fidelity (the fidelity rule to fix)",
                "undetermined": "the audit's runs cannot resolve the tolerance",
                "insufficient data": "too few paired runs"}[worst]
     named = [f"{d}/{f}" for (d, f), v in cells.items() if v == worst]
