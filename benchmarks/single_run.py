@@ -2,8 +2,9 @@
 
 All figures are measured in this one process, one configuration after the other, and repeated (min / median of
 ``--repeats``), so their ratios hold on a loaded machine while their absolute values do not (the load average is
-printed with them). CPU time (``time.process_time``) includes the Python side of every run (parameters, model
-build, instruments and noise, features); compilation is done before the clock starts.
+printed with them). CPU time (``time.process_time``) includes the Python side of every run (model build, instruments and noise,
+features); the scene and the parameter files are read once, as a campaign's worker does, and compilation is done
+before the clock starts.
 
 * the default: RK4 at the 125 us drive period with the quasi-static screw axial (the automatic fidelity of the
   thesis campaign), as one lane (a replay, ``twin.simulate_features``) and in groups of 8 and 16 lanes
@@ -19,6 +20,7 @@ Usage: python benchmarks/single_run.py [--repeats N] [--quick]   (--quick: 1 s r
 from __future__ import annotations
 
 import argparse
+import functools
 import statistics
 import time
 
@@ -35,12 +37,20 @@ THESIS_OUTPUTS = ["backlash_feature", "backlash_feature_true", "backlash_hystere
 PREVIOUS_DEFAULT = {"dt": 6.25e-5, "fidelity": {"screw_axial": "dynamic"}}
 
 
+@functools.cache
+def _inputs(dataset: str) -> tuple:
+    """The data set's scene and the bench parameters, loaded once (a campaign loads them once per worker)."""
+    return twin.load_scene(dataset), twin.load_parameters("bench")
+
+
 def cpu_per_sample(dataset: str, lanes: int, duration: float, seed: int, **options) -> float:
     """CPU seconds per sample of ``lanes`` runs of ``dataset`` (one group, or one run for one lane)."""
-    runs = [(dataset, None, seed + k) for k in range(lanes)]
+    scene, params = _inputs(dataset)
+    runs = [(scene, params, seed + k) for k in range(lanes)]
     start = time.process_time()
     if lanes == 1:
-        twin.simulate_features(dataset, rng=seed, duration=duration, outputs=THESIS_OUTPUTS, throw=False, **options)
+        twin.simulate_features(scene, params, rng=seed, duration=duration, outputs=THESIS_OUTPUTS, throw=False,
+                               **options)
     else:
         twin.simulate_batch(runs, lanes=lanes, duration=duration, outputs=THESIS_OUTPUTS, throw=False, **options)
     return (time.process_time() - start) / lanes

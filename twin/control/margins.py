@@ -37,22 +37,23 @@ figures by the phase of that delay (``docs/control_design.md`` lists both).
 
 Method: each ``L`` is evaluated on a fixed logarithmic frequency grid (up to the Nyquist frequency for the
 digital loops, which is always included: ``L(-1)`` is real); gain crossings and phase crossings are located
-between grid points by interpolation in ``log w``. This costs a few milliseconds per loop;
+between grid points by interpolation in ``log w``;
 ``tests/control/test_margins.py`` cross-checks it against python-control's ``stability_margins`` on the same
 loops (:func:`loop_systems`).
 
 The margins are stored per run (``results.nc``), so they must be the same bits on every machine: the matrix
 algebra goes through :mod:`numerics.linalg` (fixed operation order) instead of BLAS/LAPACK, and the complex
-arithmetic and elementary functions are Python's and the C library's on scalars instead of numpy's
-CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs them under other kernels).
+arithmetic is compiled scalar code (numba without fastmath: no fused multiply-adds) with the C library's elementary
+functions, instead of numpy's CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs them under other kernels).
 """
 
 from __future__ import annotations
 
-import cmath
+import functools
 import math
 from dataclasses import asdict, dataclass
 
+import numba
 import numpy as np
 
 from numerics.linalg import expm, matmul, state_space_response
@@ -102,16 +103,20 @@ class LoopMargins:
         return asdict(self)
 
 
+@functools.lru_cache(maxsize=16)
 def frequency_grid(sample_time: float) -> np.ndarray:
     """Angular frequencies [rad/s] from :data:`LOWEST_HZ` to the Nyquist frequency (included), or to
     :data:`CURRENT_LOOP_HIGHEST_HZ` for a continuous loop (``sample_time == 0``): geometrically spaced, both ends
-    exact, each point from its index by the C library's ``exp`` (no CPU-dispatched array kernel)."""
+    exact, each point from its index by the C library's ``exp`` (no CPU-dispatched array kernel). Kept per sample
+    time (every run of a campaign shares it), so the array is read-only."""
     top = 0.5 / sample_time if sample_time > 0 else CURRENT_LOOP_HIGHEST_HZ
     n = int(math.ceil(POINTS_PER_DECADE * math.log10(top / LOWEST_HZ))) + 1
     span = math.log(top / LOWEST_HZ)
     hz = [LOWEST_HZ * math.exp(span * i / (n - 1)) for i in range(n)]
     hz[0], hz[-1] = LOWEST_HZ, top
-    return np.array([2.0 * math.pi * f for f in hz])
+    grid = np.array([2.0 * math.pi * f for f in hz])
+    grid.flags.writeable = False
+    return grid
 
 
 # ---------------------------------------------------------------- state-space helpers (fixed operation order)
@@ -168,31 +173,76 @@ def _response(a, b, c, d, points):
                                 np.asarray(points, dtype=np.complex128))
 
 
-def _polyval(coefficients, x: complex) -> complex:
-    """A polynomial (highest power first) at ``x`` by Horner's rule on Python scalars."""
+# Complex arithmetic on the frequency grid: compiled loops over scalars (numba without fastmath keeps every
+# multiply and add apart, as Python does; numpy's complex array kernels may fuse them on some CPUs), the elementary
+# functions from the C library.
+
+@numba.njit(cache=True)
+def _polyval(coefficients, x):
+    """A polynomial (highest power first) at the complex ``x`` by Horner's rule."""
     value = 0j
     for coefficient in coefficients:
-        value = value * x + float(coefficient)
+        value = value * x + coefficient
     return value
 
 
-def _unit_circle(w: np.ndarray, sample_time: float) -> np.ndarray:
+@numba.njit(cache=True)
+def _continuous_pi_response(kp, ki, numerators, denominators, omega):
+    """``(kp + ki/s) prod_k num_k(s)/den_k(s)`` at ``s = j w`` (the blocks' polynomials as rows, highest power
+    first, zero-padded in front)."""
+    out = np.empty(omega.shape[0], dtype=np.complex128)
+    for q in range(omega.shape[0]):
+        s = complex(0.0, omega[q])
+        value = kp + ki / s
+        for k in range(numerators.shape[0]):
+            value *= _polyval(numerators[k], s) / _polyval(denominators[k], s)
+        out[q] = value
+    return out
+
+
+@numba.njit(cache=True)
+def _unit_circle(omega, sample_time):
     """``exp(j w T)`` at each frequency, from the C library's cosine and sine."""
-    return np.array([complex(math.cos(x * sample_time), math.sin(x * sample_time)) for x in w.tolist()])
+    out = np.empty(omega.shape[0], dtype=np.complex128)
+    for q in range(omega.shape[0]):
+        out[q] = complex(math.cos(omega[q] * sample_time), math.sin(omega[q] * sample_time))
+    return out
 
 
+@numba.njit(cache=True)
 def _pi(kp, ki, sample_time, z):
     """``pi_step`` as a transfer function: ``kp + ki T / (z - 1)`` (forward-Euler integral), at each point."""
-    return np.array([kp + ki * sample_time / (point - 1.0) for point in np.asarray(z).tolist()])
+    out = np.empty(z.shape[0], dtype=np.complex128)
+    for q in range(z.shape[0]):
+        out[q] = kp + ki * sample_time / (z[q] - 1.0)
+    return out
 
 
-def _product(*factors: np.ndarray) -> np.ndarray:
-    """Elementwise product of complex arrays on Python scalars (numpy's complex kernels may fuse
-    multiply-adds on some CPUs)."""
-    values = [complex(v) for v in factors[0].tolist()]
-    for factor in factors[1:]:
-        values = [v * complex(f) for v, f in zip(values, factor.tolist(), strict=True)]
-    return np.array(values)
+@numba.njit(cache=True)
+def _backward_difference(z, sample_time):
+    """The drive's speed estimate ``(1 - z^-1)/T`` at each point."""
+    out = np.empty(z.shape[0], dtype=np.complex128)
+    for q in range(z.shape[0]):
+        out[q] = (1.0 - 1.0 / z[q]) / sample_time
+    return out
+
+
+@numba.njit(cache=True)
+def _product(first, second):
+    """Elementwise product of two complex arrays."""
+    out = np.empty(first.shape[0], dtype=np.complex128)
+    for q in range(first.shape[0]):
+        out[q] = first[q] * second[q]
+    return out
+
+
+def _padded(polynomials) -> np.ndarray:
+    """Polynomials (highest power first) as the rows of one array, zero-padded in front."""
+    width = max(len(p) for p in polynomials)
+    rows = np.zeros((len(polynomials), width))
+    for k, polynomial in enumerate(polynomials):
+        rows[k, width - len(polynomial):] = polynomial
+    return rows
 
 
 # ---------------------------------------------------------------- the loops
@@ -291,16 +341,10 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
     out = {}
     if "current" in loops:
         w = frequency_grid(0.0)
-        kp, ki = p["controller.current_kp"], p["controller.current_ki"]
         blocks = (winding_admittance(p), hall_sensor(p))
-        values = []
-        for x in w.tolist():
-            s = complex(0.0, x)
-            value = kp + ki / s
-            for num, den in blocks:
-                value *= _polyval(num, s) / _polyval(den, s)
-            values.append(value)
-        out["current"] = (0.0, w, np.array(values))
+        out["current"] = (0.0, w, _continuous_pi_response(
+            p["controller.current_kp"], p["controller.current_ki"], _padded([num for num, _ in blocks]),
+            _padded([den for _, den in blocks]), w))
 
     t = p["controller.position_loop_sample_time"]
     if "speed" in loops or "position" in loops:
@@ -310,9 +354,8 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
         w = frequency_grid(ts)
         z = _unit_circle(w, ts)
         angle = _response(*speed_plant, np.zeros((1, 1)), z)
-        differencing = np.array([(1.0 - 1.0 / point) / ts for point in z.tolist()])
-        out["speed"] = (ts, w, _product(_pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z), differencing,
-                                        angle))
+        out["speed"] = (ts, w, _product(_product(_pi(p["controller.speed_kp"], p["controller.speed_ki"], ts, z),
+                                                 _backward_difference(z, ts)), angle))
     w = frequency_grid(t)
     z = _unit_circle(w, t)
     if "position" in loops:
@@ -325,14 +368,60 @@ def loop_responses(p: dict[str, float], load_system: dict[str, float] | None = N
         ad, bd, c = _force_plant(p, load_system, force)
         refresh_delay = 0.5 / p["sensors.load_cell_measuring_rate"] if load_cell_refresh else 0.0
         delay = _unit_circle(w, -refresh_delay)
-        out["force"] = (t, w, _product(_pi(p["controller.force_kp"], p["controller.force_ki"], t, z),
-                                       _response(ad, bd, c, np.zeros((1, 1)), z), delay))
+        out["force"] = (t, w, _product(_product(_pi(p["controller.force_kp"], p["controller.force_ki"], t, z),
+                                                _response(ad, bd, c, np.zeros((1, 1)), z)), delay))
     return out
 
 
+@numba.njit(cache=True)
 def _interpolate(x0, x1, y0, y1, target):
     """``x`` at which the line through ``(x0, y0)``, ``(x1, y1)`` reaches ``target``."""
     return x0 + (x1 - x0) * (target - y0) / (y1 - y0)
+
+
+@numba.njit(cache=True)
+def _phase_degrees(value):
+    return math.degrees(math.atan2(value.imag, value.real))
+
+
+@numba.njit(cache=True)
+def _margins(sample_time, omega, values):
+    """``(gain margin [dB], phase margin [deg], crossover [Hz], |S|max)`` of :func:`margins_from_response`."""
+    n = omega.shape[0]
+    log_w = np.empty(n)
+    log_mag = np.empty(n)
+    for i in range(n):
+        log_w[i] = math.log(omega[i])
+        log_mag[i] = math.log(abs(values[i]))
+    crossover, phase_margin = math.nan, math.nan
+    for i in range(n - 1):
+        if (log_mag[i] >= 0.0) == (log_mag[i + 1] >= 0.0):
+            continue
+        lw = _interpolate(log_w[i], log_w[i + 1], log_mag[i], log_mag[i + 1], 0.0)
+        fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
+        # the phase of values[i] (values[i + 1] / values[i]) ** fraction: rotate by fraction of the step's angle
+        ratio = values[i + 1] / values[i]
+        turn = fraction * math.atan2(ratio.imag, ratio.real)
+        phase = _phase_degrees(values[i] * complex(math.cos(turn), math.sin(turn)))
+        margin = (phase + 180.0) % 360.0
+        margin = margin - 360.0 if margin > 180.0 else margin
+        if math.isnan(phase_margin) or margin < phase_margin:
+            crossover, phase_margin = math.exp(lw) / (2 * math.pi), margin
+    gain_margin = math.inf
+    for i in range(n - 1):
+        if (values[i].imag > 0.0) == (values[i + 1].imag > 0.0):
+            continue
+        lw = _interpolate(log_w[i], log_w[i + 1], values[i].imag, values[i + 1].imag, 0.0)
+        fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
+        value = values[i] + (values[i + 1] - values[i]) * fraction
+        if value.real < 0.0:
+            gain_margin = min(gain_margin, -20.0 * math.log10(abs(value.real)))
+    if sample_time > 0 and values[n - 1].real < 0.0 and abs(omega[n - 1] * sample_time - math.pi) < 1e-9:
+        gain_margin = min(gain_margin, -20.0 * math.log10(abs(values[n - 1].real)))  # Nyquist: L(-1) is real
+    peak = 0.0
+    for i in range(n):
+        peak = max(peak, 1.0 / abs(1.0 + values[i]))
+    return gain_margin, phase_margin, crossover, peak
 
 
 def margins_from_response(loop: str, sample_time: float, omega: np.ndarray, response: np.ndarray) -> LoopMargins:
@@ -342,36 +431,13 @@ def margins_from_response(loop: str, sample_time: float, omega: np.ndarray, resp
     interpolated in ``log w`` between grid points; the reported phase margin and crossover are those of
     the crossing with the smallest phase margin, the gain margin the smallest ``1/|L|`` over the phase
     crossings (``inf`` without one). A loop that never crosses unit gain has ``nan`` phase margin and
-    crossover. Scalar arithmetic throughout (module docstring: the same bits on every machine).
+    crossover. Compiled scalar arithmetic and the C library's functions (module docstring: the same bits on
+    every machine).
     """
-    w = [float(x) for x in np.asarray(omega).tolist()]
-    values = [complex(v) for v in np.asarray(response).tolist()]
-    log_w = [math.log(x) for x in w]
-    log_mag = [math.log(abs(v)) for v in values]
-    crossover, phase_margin = math.nan, math.nan
-    for i in range(len(values) - 1):
-        if (log_mag[i] >= 0.0) == (log_mag[i + 1] >= 0.0):
-            continue
-        lw = _interpolate(log_w[i], log_w[i + 1], log_mag[i], log_mag[i + 1], 0.0)
-        fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
-        phase = math.degrees(cmath.phase(values[i] * (values[i + 1] / values[i]) ** fraction))
-        margin = (phase + 180.0) % 360.0
-        margin = margin - 360.0 if margin > 180.0 else margin
-        if math.isnan(phase_margin) or margin < phase_margin:
-            crossover, phase_margin = math.exp(lw) / (2 * math.pi), margin
-    gain_margin = math.inf
-    for i in range(len(values) - 1):
-        if (values[i].imag > 0.0) == (values[i + 1].imag > 0.0):
-            continue
-        lw = _interpolate(log_w[i], log_w[i + 1], values[i].imag, values[i + 1].imag, 0.0)
-        fraction = (lw - log_w[i]) / (log_w[i + 1] - log_w[i])
-        value = values[i] + (values[i + 1] - values[i]) * fraction
-        if value.real < 0.0:
-            gain_margin = min(gain_margin, -20.0 * math.log10(abs(value.real)))
-    if sample_time > 0 and values[-1].real < 0.0 and abs(w[-1] * sample_time - math.pi) < 1e-9:
-        gain_margin = min(gain_margin, -20.0 * math.log10(abs(values[-1].real)))  # Nyquist: L(-1) is real
-    peak = max(1.0 / abs(1.0 + v) for v in values)
-    return LoopMargins(loop, float(sample_time), float(gain_margin), float(phase_margin), float(crossover), peak)
+    gain_margin, phase_margin, crossover, peak = _margins(
+        float(sample_time), np.ascontiguousarray(omega, dtype=float), np.ascontiguousarray(response, dtype=complex))
+    return LoopMargins(loop, float(sample_time), float(gain_margin), float(phase_margin), float(crossover),
+                       float(peak))
 
 
 def loop_margins(p: dict[str, float], load_system: dict[str, float] | None = None, force: float = 0.0, *,
