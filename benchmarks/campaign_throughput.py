@@ -6,7 +6,7 @@ Usage::
     python benchmarks/campaign_throughput.py --runs 10          # the real bench (demo spec)
     python benchmarks/campaign_throughput.py --quick            # synthetic model, 10 runs per data set
     python benchmarks/campaign_throughput.py --thesis 60        # the thesis study end to end, 7 x 60 runs
-    python benchmarks/campaign_throughput.py --thesis 60 --integrator rk4 auto   # the default and the opt-in, in turn
+    python benchmarks/campaign_throughput.py --thesis 60 --configuration default previous   # both, in turn
 
 ``--thesis N`` times the thesis spec (campaigns/specs/thesis_backlash.toml, N runs per data set) end to
 end on a fresh local cluster of 2 workers, stage by stage (compilation check, cluster start, runs with
@@ -123,15 +123,18 @@ def measure(args, workers: int, tmp: Path) -> dict:
     }
 
 
-THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 16)
+THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 32)
+#: Solver settings of the configurations timed: the default (the lane engine at its own choice of level and step)
+#: and the previous default (RK4 at 62.5 us with the screw's axial mass), on the same engine.
+CONFIGURATIONS = {"default": {}, "previous": {"dt": 6.25e-5, "fidelity": {"screw_axial": "dynamic"}}}
 
 
-def thesis_end_to_end(runs: int, workers: int, tmp: Path, integrator: str | None = None) -> None:
-    """Run the thesis spec with ``runs`` runs per data set (with ``integrator`` instead of the spec's, if given),
-    end to end, and print the stages and the rates."""
+def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default") -> None:
+    """Run the thesis spec with ``runs`` runs per data set in one of :data:`CONFIGURATIONS`, end to end, and print
+    the stages and the rates."""
     spec = campaigns.load_spec(SPECS / "thesis_backlash.toml", runs=runs)
-    if integrator:
-        spec = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": integrator})})
+    if CONFIGURATIONS[configuration]:
+        spec = spec.model_copy(update={"solver": spec.solver.model_copy(update=CONFIGURATIONS[configuration])})
     marks: list[tuple[str, float]] = []
     start = time.perf_counter()
     results = campaigns.run_campaign(spec, tmp / "thesis", workers=workers, progress=False,
@@ -156,8 +159,8 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, integrator: str | None
         methods, counts = np.unique(ds["integrator"].values.astype(str), return_counts=True)
     solved_by = ", ".join(f"{m}: {c}" for m, c in zip(methods, counts, strict=True))
     total = end - start
-    print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, integrator "
-          f"{spec.solver.integrator} (runs solved by {solved_by}), end to end {total:.1f} s:")
+    print(f"thesis spec, {len(spec.datasets)} x {runs} = {n} runs ({ok} ok) on {workers} workers, {configuration} "
+          f"configuration (runs solved by {solved_by}), end to end {total:.1f} s:")
     for stage, seconds in stages.items():
         print(f"  {stage:32s} {seconds:8.1f} s  {100 * seconds / total:5.1f} %")
     print(f"  mean run {1e3 * compute / n:.0f} ms wall inside the workers; fidelity audit: {audit}")
@@ -181,14 +184,14 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="synthetic model, 10 runs per data set (seconds)")
     parser.add_argument("--thesis", type=int, metavar="N",
                         help="time the thesis spec end to end with N runs per data set")
-    parser.add_argument("--integrator", nargs="+", default=[None], metavar="NAME",
-                        help="with --thesis: integrators to time one after the other (default: the spec's)")
+    parser.add_argument("--configuration", nargs="+", default=["default"], choices=list(CONFIGURATIONS),
+                        help="with --thesis: configurations to time one after the other (default: default)")
     args = parser.parse_args()
     header("campaign throughput", args.quick)
     if args.thesis:
-        for integrator in args.integrator:
+        for configuration in args.configuration:
             with tempfile.TemporaryDirectory() as tmp:
-                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), integrator)
+                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration)
         return
     if args.quick:
         args.synthetic, args.runs = True, 10

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from twin.engine.group import group_key, solve_group
-from twin.engine.instrumentation import build_instruments
+from twin.engine.instrumentation import build_instruments, group_timing
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.model import CURVATURE_FORMULAS, build_model
 from twin.engine.reference import METHODS as REFERENCE_METHODS
@@ -255,8 +255,9 @@ def _solved(prepared: list[_Prepared], lanes: int = 1) -> list[_Simulated]:
             done[k] = _reference(p)
         else:
             run = p.run
-            groups[(group_key(p.model), run.integrator, run.dt, run.n_steps, run.speed_every, run.position_every,
-                    run.output_every if p.record else 0, p.tolerance.tobytes())].append(k)
+            groups[(group_key(p.model), group_timing(p.instruments), run.integrator, run.dt, run.n_steps,
+                    run.speed_every, run.position_every, run.output_every if p.record else 0,
+                    p.tolerance.tobytes())].append(k)
     for members in groups.values():
         for first in range(0, len(members), lanes):
             chunk = members[first:first + lanes]

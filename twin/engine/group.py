@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW, Instruments
+from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW, Instruments, group_timing
 from twin.engine.integrators import Workspace
 from twin.engine.loop import run_loop
 from twin.engine.model import Model
@@ -53,9 +53,10 @@ def solve_group(models: Sequence[Model], instruments: Sequence[Instruments], *, 
     """
     if not models or len(models) != len(instruments):
         raise ValueError("solve_group: one Instruments per Model, at least one run")
-    key = group_key(models[0])
-    if any(group_key(m) != key for m in models[1:]):
-        raise ValueError("solve_group: the runs differ in fidelity levels, integrated states or demand tables")
+    key = (group_key(models[0]), group_timing(instruments[0]))
+    if any((group_key(m), group_timing(i)) != key for m, i in zip(models[1:], instruments[1:], strict=True)):
+        raise ValueError("solve_group: the runs differ in fidelity levels, integrated states, demand tables or their "
+                         "analog channels' timing")
     lanes = len(models)
     first = models[0]
     x = np.ascontiguousarray(np.stack([m.initial_state for m in models], axis=1))

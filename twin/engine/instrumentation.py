@@ -29,12 +29,14 @@ current monitor          Hall-sensor current         acquisition
 
 A group's instruments are two arrays: ``parameters[instrument, row, lane]`` and ``states[instrument, row, lane]``
 (each instrument's rows in its sensor module's layout, ``ENC_*``, ``AN_*``, ``AS_*``, ``RES_*``), and the pre-drawn
-noise ``noise[sample, instrument, lane]``. The encoders and the analog channels are stepped after every
-integration step (every lane computes its count and its channels: a select is cheaper than a branch here).
+noise ``noise[sample, instrument, lane]``. The encoders are stepped after every integration step (every lane
+computes its count: a select is cheaper than a branch here); an analog channel only where a reading depends on the
+step (:func:`channel_due`, decided for the whole group).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -49,6 +51,8 @@ from sensors.analog import (
     AN_OFFSET,
     AN_REFRESH_PERIOD,
     AN_SIZE,
+    AN_TAU,
+    AS_NEXT_REFRESH,
     AS_SIZE,
     analog_init,
     analog_parameters,
@@ -210,16 +214,46 @@ def _channel_advance(t, x, c, w, parameters, states, lanes, channel, current_loo
         analog_step(state, p, lane, _analog_measurand(x, c, w, lane, channel, current_loop), t)
 
 
+@numba.njit(**SCALAR)
+def channel_due(parameters, states, channel, t, dt, steps_to_sample):
+    """Whether analog channel ``channel`` must be stepped at the end ``t`` of a step of ``dt``, ``steps_to_sample``
+    steps before the next acquisition instant (0 at the instant itself); the same answer for every lane of a group,
+    whose channels share their time constant and refresh period (:func:`group_timing`).
+
+    Stepping at every step gives the same readings as stepping: a filtered channel (``tau > 0``) or a continuous
+    one without a refresh at every step; an unfiltered channel with a refresh only in the last
+    ``ceil(refresh / dt) + 1`` steps before a reading (its value at the last refresh, and the step before for the
+    interpolation's start), and of those only the step that contains a refresh instant and the step before it.
+    """
+    tau = parameters[channel, AN_TAU, 0]
+    period = parameters[channel, AN_REFRESH_PERIOD, 0]
+    if tau > 0.0 or period == 0.0:
+        return tau > 0.0 or steps_to_sample < 1
+    if steps_to_sample >= math.ceil(period / dt - 1e-9) + 1:
+        return False
+    # the next step ends at about t + dt: half a step of margin absorbs the rounding of both clocks
+    return t + 1.5 * dt >= states[channel, AS_NEXT_REFRESH, 0]
+
+
+def group_timing(instruments: Instruments) -> tuple:
+    """What the analog channels' stepping decision (:func:`channel_due`) reads, for a group key: runs share a group
+    only if their channels share it."""
+    return tuple(float(instruments.parameters[channel, row]) for channel in ANALOG
+                 for row in (AN_TAU, AN_REFRESH_PERIOD))
+
+
 @numba.njit(**KERNEL)
-def instruments_advance(t, x, c, w, levels, parameters, states):
-    """Advance every lane's instruments to time ``t``, the end of an integration step (``w`` holds the measurands
-    at ``t``: :func:`twin.engine.plant.measurands`)."""
+def instruments_advance(t, dt, x, c, w, levels, parameters, states, steps_to_sample):
+    """Advance every lane's instruments to time ``t``, the end of an integration step of ``dt`` (``w`` holds the
+    measurands at ``t``: :func:`twin.engine.plant.measurands`), ``steps_to_sample`` steps before the next
+    acquisition instant: the encoders every step, an analog channel when :func:`channel_due`."""
     lanes = x.shape[1]
     if levels[ENCODERS] != IDEAL:
         _encoders_advance(t, x, c, parameters, states, lanes)
     if levels[ANALOG_SENSORS] != IDEAL:
         for channel in ANALOG:
-            _channel_advance(t, x, c, w, parameters, states, lanes, channel, levels[CURRENT_LOOP])
+            if channel_due(parameters, states, channel, t, dt, steps_to_sample):
+                _channel_advance(t, x, c, w, parameters, states, lanes, channel, levels[CURRENT_LOOP])
 
 
 @numba.njit(**SCALAR)

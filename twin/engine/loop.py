@@ -341,4 +341,4 @@ def run_loop(x, c, levels, position_table, force_table, active, pairs, n_steps, 
         to_output -= 1
         to_jacobian -= 1
         measurands(t + dt, x, c, w, lanes, levels, force_table)
-        ins.instruments_advance(t + dt, x, c, w, levels, parameters, states)
+        ins.instruments_advance(t + dt, dt, x, c, w, levels, parameters, states, to_acquisition)

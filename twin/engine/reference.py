@@ -115,5 +115,6 @@ def run_reference(model, instruments, n_speed_samples: int, speed_ts: float, pos
             status = STATUS_NONFINITE if code == 1 else STATUS_OUT_OF_BOUNDS
             return status, code, t + speed_ts, rows, "", stats
         measurands(t + speed_ts, lane_x, c, w, 1, levels, force_table)
-        instruments_advance(t + speed_ts, lane_x, c, w, levels, parameters, states)
+        instruments_advance(t + speed_ts, speed_ts, lane_x, c, w, levels, parameters, states,
+                            (position_ratio - (j + 1) % position_ratio) % position_ratio)
     return STATUS_OK, 0, n_speed_samples * speed_ts, rows, "", stats
