@@ -16,6 +16,8 @@ from lane_helpers import OneLane
 
 import twin
 from twin.engine.codes import CONTACT, SCREW_AXIAL, SCREW_AXIAL_DYNAMIC
+from twin.engine.group import group_key
+from twin.engine.instrumentation import build_instruments, group_timing
 from twin.engine.integrators import RK4
 from twin.engine.model import build_model
 from twin.engine.plant import BALANCE_TOLERANCE, W
@@ -77,6 +79,13 @@ def test_the_runs_share_groups(alone):
     fidelities = {alone[k].fidelity for k, (scene, _, _) in enumerate(runs) if scene.name != "ds3"}
     assert len(fidelities) == 1
     assert {alone[k].fidelity for k, (scene, _, _) in enumerate(runs) if scene.name == "ds3"} != fidelities
+    keys = []
+    for scene, params, _ in runs:  # what simulate_batch groups by (besides the options, common to all)
+        fidelity = resolve_fidelity(scene, params)
+        instruments = build_instruments(params.values(), scene.condition("room_temperature"), fidelity.levels,
+                                        np.random.default_rng(0), 2, alone[0].dt)
+        keys.append((group_key(build_model(scene, params, fidelity)), group_timing(instruments)))
+    assert len(set(keys)) == 2 and keys.count(keys[0]) == len(runs) - 2
     for summary in alone:
         assert summary.status == "ok"
         assert math.isfinite(summary.features["backlash_feature"])
