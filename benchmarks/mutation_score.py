@@ -44,8 +44,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-COPIED = ("app", "twin", "sensors", "campaigns", "reports", "tests", "docs", "pyproject.toml")
-PROJECT_PACKAGES = ("app", "twin", "sensors", "campaigns", "reports")
+COPIED = ("app", "twin", "sensors", "numerics", "campaigns", "reports", "tests", "docs", "pyproject.toml")
+PROJECT_PACKAGES = ("app", "twin", "sensors", "numerics", "campaigns", "reports")
 
 _ANALYSIS_TESTS = ["tests/campaigns/test_analysis_known_answers.py", "tests/campaigns/test_campaign_analysis.py",
                    "tests/campaigns/test_campaign_verdict.py", "tests/campaigns/test_campaign_sensitivity.py",
@@ -68,8 +68,7 @@ TESTS = {
                                "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/analog.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/encoder.py": ["tests/sensors/test_sensor_encoder.py", "tests/sensors/test_sensor_encoder_speed.py",
-                           "tests/sensors/test_sensor_encoder_timing.py",
-                           "tests/sensors/test_sensor_encoder_advance.py",
+                           "tests/sensors/test_sensor_encoder_timing.py", "tests/sensors/test_sensor_lanes.py",
                            "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/hall.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/load_cell.py": ["tests/sensors/test_sensor_force_torque.py"],
@@ -111,8 +110,10 @@ REPLAYS = {
         "twin/engine/model.py", "contact_constants(c, p, curvature)", 'contact_constants(c, p, "thesis")',
         ["tests/engine/test_simulate_api.py", "-k", "iso_curvature"]),
     "torque-meter quantisation removed": (
-        "twin/engine/instrumentation.py", "    if levels[TORQUE_METER_ENCODER] == 0:\n        return x[S.SCREW_ANGLE]",
-        "    if True:\n        return x[S.SCREW_ANGLE]",
+        "twin/engine/instrumentation.py",
+        "memory[M.SCREW_ANGLE, lane] = encoder_reading(states[TORQUE_METER_ENCODER], parameters[TORQUE_METER_ENCODER],"
+        "\n                                                      lane)",
+        "memory[M.SCREW_ANGLE, lane] = screw_angle_measurand(x, c, lane)",
         ["tests/engine/test_instruments_in_loop.py", "-k", "torque_meter_encoder_is_floor"]),
     "errors() returning 0": (
         "app/studies/work_precision.py",

@@ -3,7 +3,8 @@
 Times the same scene with every instrument ideal (true signals, no sensor model runs) and at
 the quantized and full (edge-accurate with errors and noise) levels; prints the overhead.
 The instruments' level is set through the fidelity request (``encoders`` and ``analog_sensors``);
-the plant stays at full fidelity so that only the sensor models differ.
+the plant stays the same (the full plant at two fixed steps, and the campaigns' automatic plant at its default
+step, RK4 at the drive period) so that only the sensor models differ.
 Usage: python benchmarks/sensor_overhead.py [--scene ds2] [--repeats 5] [--quick]
 """
 
@@ -16,9 +17,10 @@ from machine import header
 import twin
 
 
-def instruments(level: str) -> dict[str, str]:
-    """Full plant, every instrument at ``level`` (the torque meter's 1 kHz refresh only when modelled)."""
-    return {"default": "full", "encoders": level, "analog_sensors": level,
+def instruments(level: str, plant: str = "full") -> dict[str, str]:
+    """The plant at ``plant`` ("full", or "auto": the automatic fidelity of the campaigns), every instrument at
+    ``level`` (the torque meter's 1 kHz refresh only when modelled)."""
+    return {"default": plant, "encoders": level, "analog_sensors": level,
             "torque_meter_refresh": "ideal" if level == "ideal" else "modelled"}
 
 
@@ -43,11 +45,16 @@ def main() -> None:
         scene, args.repeats = scene.with_duration(1.0), 1
     header("sensor overhead: the same scene with ideal, quantized and full instruments", args.quick)
     print(f"# scene '{scene.name}' ({scene.duration} s), median of {args.repeats} runs after compilation")
-    for integrator, dt in (("rk4", 6.25e-5), ("semi_implicit_euler", 3.125e-5)):
-        base = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments("ideal"))
+    # the full plant at two fixed steps, and the automatic plant at its default step (the quasi-static screw axial:
+    # RK4 at the drive period), as a campaign runs it
+    for integrator, dt, plant in (("rk4", 6.25e-5, "full"), ("semi_implicit_euler", 3.125e-5, "full"),
+                                  ("rk4", None, "auto")):
+        base = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments("ideal", plant))
+        step = twin.simulate(scene, duration=0.01, integrator=integrator, dt=dt,
+                             fidelity=instruments("ideal", plant)).attrs["dt"]
         for level in ("quantized", "full"):
-            wall = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments(level))
-            print(f"{integrator:20s} dt={dt:.4g} ideal {base:.3f} s   {level:9s} {wall:.3f} s   "
+            wall = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments(level, plant))
+            print(f"{integrator:20s} dt={step:.4g} {plant:4s} plant  ideal {base:.3f} s   {level:9s} {wall:.3f} s   "
                   f"overhead {100 * (wall / base - 1):5.1f} %")
 
 

@@ -1,9 +1,10 @@
 """Speed against accuracy at the default configuration (issue: speed versus accuracy).
 
 Prints, for the nominal and data-set-2 scenes (10 s): the default configuration's wall time on one
-core (median after compilation), the scipy reference path's wall time and the feature difference
-between them (timed side by side in this run), the python-control baseline on the open-loop plant,
-and the estimated wall time of the thesis study (7 x 1000 runs) on this machine's cores.
+core (median after compilation; ``twin.simulate``, one lane with its recorded signals), the scipy reference
+path's wall time and the feature difference between them (timed side by side in this run), the python-control
+baseline on the open-loop plant, and the estimated wall time of the thesis study (7 x 1000 runs) on this
+machine's cores from a lane group of thesis runs (``twin.simulate_batch``, as a campaign runs them).
 Usage: python benchmarks/speed_accuracy.py [--reference-duration 2.0] [--quick]
 """
 
@@ -13,6 +14,7 @@ import statistics
 import time
 
 from machine import header
+from single_run import THESIS_DATASETS, THESIS_OUTPUTS
 
 import twin
 import twin.simulation
@@ -40,16 +42,17 @@ def main() -> None:
     if args.quick:
         args.reference_duration = 0.2
     header("speed against accuracy at the default configuration", args.quick)
-    print(f"# {os.cpu_count()} cores; default: {twin.simulation.DEFAULT_INTEGRATOR} "
-          f"dt={twin.simulation.DEFAULT_DT:g} s")
-    walls = []
+    drive_period = twin.load_parameters().value("drive.speed_loop_sample_time")
+    print(f"# {os.cpu_count()} cores; default: {twin.simulation.DEFAULT_INTEGRATOR} at the {drive_period:g} s drive "
+          f"period at the automatic fidelity (quasi-static screw axial, ideal current loop), "
+          f"{twin.simulation.DEFAULT_DT:g} s where a faster mode is modelled (twin.simulation.default_step)")
     for name in ("nominal", "ds2"):
         full_duration = twin.load_scene(name).duration
         scene = twin.load_scene(name).with_duration(1.0 if args.quick else full_duration)
         wall, ds = median_wall(scene, repeats)
-        walls.append(wall * full_duration / scene.duration)  # per full-length run, for the study estimate
         print(f"{name:8s} {scene.duration:4.1f} s scene: {wall:.3f} s per run "
-              f"({scene.duration / wall:.0f}x real time), f_b {float(ds.backlash_feature) * 1e6:.4f} um")
+              f"({scene.duration / wall:.0f}x real time, {ds.attrs['integrator']} at {ds.attrs['dt']:g} s), "
+              f"f_b {float(ds.backlash_feature) * 1e6:.4f} um")
     for name in ("ds2", "nominal"):
         scene = twin.load_scene(name).with_duration(args.reference_duration)
         ideal = full_plant()  # the solvers are compared on the plant, seen through ideal instruments
@@ -68,9 +71,19 @@ def main() -> None:
     for row in compare():
         print(
             f"open-loop plant 0.05 s: {row['method']:50s} {row['wall_time']:.4f} s, max nut error {row['error']:.2e} m")
+    # the thesis runs as a campaign runs them: a lane group per data set, the thesis outputs (automatic fidelity)
+    lanes, duration = twin.simulation.DEFAULT_LANES, 1.0 if args.quick else None
+    walls = []
+    for name in THESIS_DATASETS[:2] if args.quick else THESIS_DATASETS:
+        runs = [(name, None, seed) for seed in range(lanes)]
+        twin.simulate_batch(runs[:1], duration=0.01, outputs=THESIS_OUTPUTS)  # compile
+        start = time.perf_counter()
+        twin.simulate_batch(runs, lanes=lanes, duration=duration, outputs=THESIS_OUTPUTS, throw=False)
+        scale = twin.load_scene(name).duration / (duration or twin.load_scene(name).duration)
+        walls.append((time.perf_counter() - start) / lanes * scale)  # per full-length run
     per_run = statistics.mean(walls)
-    print(f"thesis study estimate: 7000 runs x {per_run:.3f} s / {os.cpu_count()} cores = "
-          f"{7000 * per_run / os.cpu_count() / 60:.1f} min (plus scheduling and storage)")
+    print(f"thesis study estimate: 7000 runs x {per_run:.3f} s ({lanes} lanes a group) / {os.cpu_count()} cores = "
+          f"{7000 * per_run / os.cpu_count() / 60:.1f} min (plus scheduling, storage and the fidelity audit)")
 
 
 if __name__ == "__main__":

@@ -30,8 +30,9 @@ import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
 import numpy as np  # noqa: E402
 
 import twin  # noqa: E402
+from twin.engine.codes import CONTACT  # noqa: E402
 from twin.engine.model import build_model, contact_position_for_force  # noqa: E402
-from twin.engine.plant import ball_screw_outputs, internal_forces  # noqa: E402
+from twin.engine.plant import ball_screw_outputs, internal_forces, work_rows  # noqa: E402
 from twin.fidelity import resolve_fidelity  # noqa: E402
 from twin.layout import K, S  # noqa: E402
 from twin.physics.ball_groove_friction import catalogue_drag_torque  # noqa: E402
@@ -74,15 +75,17 @@ def steady_efficiency(params, preload: float, load: float, screw_speed: float, s
                       model=None) -> tuple[float, float]:
     """Eq. 5.25 efficiency and ball-groove friction torque [N m] at constant screw speed [rad/s] (module docstring)."""
     model = model if model is not None else _model(params)
-    c, poly = model.constants, model.stiffness_poly
+    c, contact_model = model.constants, int(model.levels[CONTACT])
     x = model.initial_state.copy()
     f1, f2 = nut_loads(preload, load, sharing)
-    x[S.NUT1_POSITION] = -contact_position_for_force(c, poly, f1)
-    x[S.NUT2_POSITION] = -contact_position_for_force(c, poly, f2)
+    x[S.NUT1_POSITION] = -contact_position_for_force(c, contact_model, f1)
+    x[S.NUT2_POSITION] = -contact_position_for_force(c, contact_model, f2)
     x[S.SCREW_SPEED] = screw_speed
     x[S.NUT1_SPEED] = x[S.NUT2_SPEED] = c[K.LEAD_ARM] * screw_speed
-    _, g1, g2, _, _, p1, p2 = internal_forces(0.0, x, c, model.force_table, poly)
-    torque, efficiency, _, _ = ball_screw_outputs(x, c, g1, g2, p1, p2)
+    # one run as a one-lane group of the engine ([row, lane] arrays): the forces, then the outputs from them
+    lane_x, lane_c, w = x.reshape(-1, 1), c.reshape(-1, 1), work_rows(1)
+    internal_forces(0.0, lane_x, lane_c, w, 1, model.levels, model.force_table)
+    torque, efficiency, _, _ = ball_screw_outputs(lane_x, lane_c, w, 0)
     return efficiency, torque
 
 

@@ -18,12 +18,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import twin
-from twin.engine.integrators import INTEGRATORS, WORK_VECTORS, step
+from twin.engine.integrators import INTEGRATORS, Workspace, step
 from twin.engine.model import build_model
-from twin.engine.plant import rhs
+from twin.engine.plant import rhs, work_rows
 from twin.engine.reference import absolute_tolerance
 from twin.fidelity import full_plant, resolve_fidelity
-from twin.layout import N_INPUTS, S, U
+from twin.layout import N_INPUTS, N_STATES, S, U
 
 # The plant alone: full detail, no load system, no sensors in the way.
 OPEN_LOOP_FIDELITY = full_plant("absent")
@@ -33,13 +33,16 @@ DURATION = 0.05     # s
 
 
 @numba.njit(cache=True)
-def _integrate(method, x, c, u, force_table, stiffness_poly, active, pairs, dt, n_steps, record_every, out):
-    work = np.zeros((WORK_VECTORS + x.shape[0], x.shape[0]))
+def _integrate(method, x, c, u, levels, force_table, active, pairs, dt, n_steps, record_every, out, vectors, w,
+               matrices, cache, small):
+    """``n_steps`` steps of one run as a one-lane group (``[row, 1]`` arrays), the master nut's position every
+    ``record_every`` steps into ``out``."""
     for k in range(n_steps):
         if k % record_every == 0:
-            out[k // record_every] = x[S.NUT1_POSITION]
-        step(method, k * dt, x, dt, c, u, force_table, stiffness_poly, work, k == 0, active, pairs)
-    out[n_steps // record_every] = x[S.NUT1_POSITION]
+            out[k // record_every] = x[S.NUT1_POSITION, 0]
+        step(method, k * dt, x, dt, c, u, levels, force_table, vectors, w, matrices, cache, small, k == 0, active,
+             pairs)
+    out[n_steps // record_every] = x[S.NUT1_POSITION, 0]
 
 
 def compare(dt: float = 1.5625e-5, output_dt: float = 1e-3) -> list[dict]:
@@ -49,20 +52,22 @@ def compare(dt: float = 1.5625e-5, output_dt: float = 1e-3) -> list[dict]:
     scene = twin.load_scene("ds5").with_conditions({"zero_procedure": "preloaded"}).with_duration(DURATION)
     params = twin.load_parameters()
     model = build_model(scene, params, resolve_fidelity(scene, params, OPEN_LOOP_FIDELITY))
-    c, force_table, poly = model.constants, model.force_table, model.stiffness_poly
-    inputs = np.zeros(N_INPUTS)
+    # one run as a one-lane group of the engine: every array [row, lane]
+    c, levels, force_table = model.constants.reshape(-1, 1), model.levels, model.force_table
+    inputs = np.zeros((N_INPUTS, 1))
     inputs[U.CURRENT_DEMAND] = CURRENT_STEP
     times = np.arange(0.0, DURATION + 0.5 * output_dt, output_dt)
-    derivative = np.zeros(model.initial_state.size)
-    probe = model.initial_state.copy()
+    derivative = np.zeros((N_STATES, 1))
+    w = work_rows(1)
+    probe = model.initial_state.copy().reshape(-1, 1)
     active = model.active
     y0 = model.initial_state[active]
     nut_index = int(np.flatnonzero(active == S.NUT1_POSITION)[0])
 
     def f(t, y):
-        probe[active] = y
-        rhs(t, probe, c, inputs, force_table, poly, derivative)
-        return derivative[active]
+        probe[active, 0] = y
+        rhs(t, probe, c, inputs, levels, force_table, derivative, w)
+        return derivative[active, 0]
 
     start = time.perf_counter()
     reference = solve_ivp(f, (0.0, DURATION), y0, method="Radau", t_eval=times, rtol=1e-10,
@@ -83,10 +88,14 @@ def compare(dt: float = 1.5625e-5, output_dt: float = 1e-3) -> list[dict]:
     n_steps = int(round(DURATION / dt))
     for method in ("rk4", "semi_implicit_euler"):
         out = np.zeros(n_steps // every + 1)
-        arguments = (c, inputs, force_table, poly, active, model.pairs, dt)
-        _integrate(INTEGRATORS[method], model.initial_state.copy(), *arguments, 1, every, out)
+        vectors, work, matrices, cache, small = Workspace(N_STATES, 1).arrays()
+        arguments = (c, inputs, levels, force_table, active, model.pairs, dt)
+        workspace = (vectors[:6], work, matrices, cache, small)
+        _integrate(INTEGRATORS[method], model.initial_state.copy().reshape(-1, 1), *arguments, 1, every, out,
+                   *workspace)
         start = time.perf_counter()
-        _integrate(INTEGRATORS[method], model.initial_state.copy(), *arguments, n_steps, every, out)
+        _integrate(INTEGRATORS[method], model.initial_state.copy().reshape(-1, 1), *arguments, n_steps, every, out,
+                   *workspace)
         results.append({"method": f"compiled {method} (dt {dt:g} s)", "wall_time": time.perf_counter() - start,
                         "error": float(np.max(np.abs(out - nut)))})
     return results

@@ -2,9 +2,12 @@
 SIMD dispatch and numba's code-generation target (issue 28; docs/campaigns.md, "The same numbers everywhere").
 
 Each case runs, in a fresh process with one part of the environment changed, the golden campaign of
-``test_golden_results.py`` (compared bit for bit with the stored golden file) and one free-nut run, ``ds2`` with
+``test_golden_results.py`` (compared bit for bit with the stored golden file), one free-nut run, ``ds2`` with
 noise seed 3, whose Eq. 9.12 feature amplifies any last-bit difference in the model constants (its f_b moved by
-0.058 um between two OpenBLAS kernels before the run path was cleared of BLAS/LAPACK calls).
+0.058 um between two OpenBLAS kernels before the run path was cleared of BLAS/LAPACK calls), and a lane group of
+three runs of three data sets (``twin.simulate_batch``, 3 lanes against the host's group of 8: another lane count
+and, under the generic target, another vector width for the lane kernels; the same compiled functions, so no extra
+compilation).
 
 Which environments: OpenBLAS picks its kernel from the CPU unless ``OPENBLAS_CORETYPE`` names one, and a kernel the
 CPU cannot execute kills the process (SkylakeX on a CPU without AVX-512), so the cases are chosen from the
@@ -48,8 +51,13 @@ import twin
 if sys.argv[2] != "-":
     with tempfile.TemporaryDirectory() as tmp:
         golden.run_golden_campaign(pathlib.Path(tmp) / "out").to_netcdf(sys.argv[2])
+print(" ".join(float(s.features[f]).hex() for s in twin.simulate_batch(
+    [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)], lanes=3, duration=2.0)
+    for f in ("backlash_feature", "backlash_feature_true")))
 print(float(twin.simulate_features("ds2", rng=3).features["backlash_feature"]).hex())
 """
+#: The lane group of the child, as the host computes it (in one group of the default 8 lanes).
+GROUP = [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)]
 
 
 def _cpu_flags() -> set[str]:
@@ -77,13 +85,15 @@ def _cases() -> list[tuple[str, dict[str, str], bool]]:
     ]
 
 
-def _child(env: dict[str, str], campaign_out: Path | None) -> str:
+def _child(env: dict[str, str], campaign_out: Path | None) -> tuple[str, str]:
+    """The child's single-run f_b and its lane group's features (hex)."""
     environment = {k: v for k, v in os.environ.items() if k not in KERNEL_VARIABLES}
     environment.update(env)
     done = subprocess.run([sys.executable, "-c", CHILD, str(GOLDEN_SCRIPT), str(campaign_out or "-")],
                           env=environment, cwd=ROOT, capture_output=True, text=True)
     assert done.returncode == 0, f"child failed ({done.returncode}):\n{done.stderr[-3000:]}"
-    return done.stdout.strip().splitlines()[-1]
+    group, single = done.stdout.strip().splitlines()[-2:]
+    return single, group
 
 
 @pytest.fixture(scope="module")
@@ -92,12 +102,20 @@ def reference_feature() -> str:
     return float(twin.simulate_features("ds2", rng=3).features["backlash_feature"]).hex()
 
 
+@pytest.fixture(scope="module")
+def reference_group() -> str:
+    """The lane group's features in this process's own environment, in a group of the default lane count."""
+    return " ".join(float(s.features[f]).hex() for s in twin.simulate_batch(GROUP, duration=2.0)
+                    for f in ("backlash_feature", "backlash_feature_true"))
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("label, env, campaign", _cases(), ids=[case[0] for case in _cases()])
-def test_bit_identical_whatever_executes_it(label, env, campaign, reference_feature, tmp_path):
+def test_bit_identical_whatever_executes_it(label, env, campaign, reference_feature, reference_group, tmp_path):
     out = tmp_path / "golden.nc" if campaign else None
-    feature = _child(env, out)
+    feature, group = _child(env, out)
     assert feature == reference_feature, f"{label}: ds2 f_b {float.fromhex(feature)!r} != {reference_feature}"
+    assert group == reference_group, f"{label}: the lane group's features differ: {group} != {reference_group}"
     if campaign:
         with xr.open_dataset(out) as new, xr.open_dataset(golden_results.GOLDEN) as stored:
             differences = golden_results.differences(new.load(), stored.load())

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import twin
+from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_position_for_force
 from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
 from twin.fidelity import resolve_fidelity
@@ -60,7 +61,7 @@ def _friction_width(params, backlash=0.0):
     c = model.constants
     friction = params.value("sled.guide_friction_dynamic")
     axial_stiffness = 1.0 / (1.0 / c[K.BEARING_STIFFNESS] + c[K.SHAFT_LENGTH_0] / c[K.SHAFT_EA])
-    return 2.0 * (contact_position_for_force(c, model.stiffness_poly, friction)
+    return 2.0 * (contact_position_for_force(c, int(model.levels[CONTACT]), friction)
                   + (1.0 + params.value("sled.slave_friction_fraction")) * friction / axial_stiffness)
 
 

@@ -4,31 +4,35 @@ regimes of Fig. 5.13 at their closed-form transition load."""
 import numpy as np
 import pytest
 from bench_helpers import plant_fidelity
+from lane_helpers import OneLane
 from scipy.optimize import brentq, root
 from test_energy_convergence import BALL_GROOVE_FRICTION_OFF, LOSSLESS
 
+from twin.engine.codes import BALL_GROOVE_FRICTION, BALL_GROOVE_FRICTION_CHAPTER5, CONTACT
 from twin.engine.energy import mechanical_energy
-from twin.engine.integrators import INTEGRATORS, step, work_array
+from twin.engine.integrators import INTEGRATORS
 from twin.engine.model import build_model, contact_position_for_force
-from twin.engine.plant import (
-    ball_groove_friction,
-    internal_forces,
-    nut_groove_speed,
-    rhs,
-)
+from twin.engine.plant import W
 from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
 from twin.fidelity import full_plant, resolve_fidelity
-from twin.layout import N_INPUTS, K, S
+from twin.layout import NUT_STATE_STRIDE, K, S
+from twin.physics.ball_groove_friction import tangential_speed
 
 DURATION = 0.02  # s: several periods of the chain's modes, many velocity reversals of the nuts
 DT = 2.0e-6
 
 
-def _friction_power(x, c, force_table, poly):
-    """Power dissipated by the ball-groove friction of both nuts, sum of F_t v_t [W]."""
-    _, _, _, _, _, p1, p2 = internal_forces(0.0, x, c, force_table, poly)
-    return sum(ball_groove_friction(x, c, load, nut) * nut_groove_speed(x, c, nut)
-               for nut, load in ((0, p1), (1, p2)))
+def _friction_power(lane, x):
+    """Power dissipated by the ball-groove friction of both nuts, sum of F_t v_t [W]: the helix friction force of
+    each nut (work rows ``W.NUT_FRICTION``) times its groove speed along the helix."""
+    w, c = lane.forces(0.0, x), lane.model.constants
+    power = 0.0
+    for nut in range(2):
+        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+        speed = tangential_speed(x[S.SCREW_SPEED], x[position + 3], x[S.SCREW_AXIAL_SPEED], x[position + 1],
+                                 c[K.PITCH_RADIUS], c[K.COS_HELIX], c[K.SIN_HELIX])
+        power += w[W.NUT_FRICTION + nut] * speed
+    return power
 
 
 def test_energy_balance_closes_with_ball_groove_friction(bench, scene_factory):
@@ -37,23 +41,23 @@ def test_energy_balance_closes_with_ball_groove_friction(bench, scene_factory):
     params = bench.with_values({k: v for k, v in LOSSLESS.items() if k not in BALL_GROOVE_FRICTION_OFF})
     scene = scene_factory(DURATION, preload=1000.0)
     model = build_model(scene, params, resolve_fidelity(scene, params, plant_fidelity(scene)))
-    c, table, poly = model.constants, model.force_table, model.stiffness_poly
-    assert c[K.BALL_GROOVE_FRICTION] == 1.0 and c[K.SHAFT_TWIST_COMPLIANCE] > 0.0  # the full plant has both
+    # the full plant has both
+    assert model.levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5
+    assert model.constants[K.SHAFT_TWIST_COMPLIANCE] > 0.0
     x = model.initial_state.copy()
     x[S.SCREW_SPEED] = 20.0
     x[S.NUT1_SPEED] = 2e-3
     x[S.NUT2_SPEED] = -1e-3
     x[S.REDUCER_SPEED] = -1.0
-    energy_0 = mechanical_energy(x, c, poly)
-    work = work_array(x.size)
-    held_inputs = np.zeros(N_INPUTS)
-    dissipated, power = 0.0, _friction_power(x, c, table, poly)
+    energy_0 = mechanical_energy(x, model)
+    lane = OneLane(model)
+    dissipated, power = 0.0, _friction_power(lane, x)
     for k in range(int(round(DURATION / DT))):
-        step(INTEGRATORS["rk4"], k * DT, x, DT, c, held_inputs, table, poly, work, False, model.active, model.pairs)
-        new_power = _friction_power(x, c, table, poly)
+        lane.step(INTEGRATORS["rk4"], k * DT, x, DT)
+        new_power = _friction_power(lane, x)
         dissipated += 0.5 * DT * (power + new_power)
         power = new_power
-    lost = energy_0 - mechanical_energy(x, c, poly)
+    lost = energy_0 - mechanical_energy(x, model)
     assert dissipated > 0.02 * energy_0  # the friction does dissipate a share (3 % in 20 ms)
     assert lost == pytest.approx(dissipated, rel=1e-4)
 
@@ -64,25 +68,23 @@ def _static_contact_forces(bench, scene_factory, force, preload=1000.0):
     scene = scene_factory(1.0, force=[{"kind": "smooth_step", "end": 0.01, "to": force}], preload=preload)
     fidelity = resolve_fidelity(scene, bench, full_plant("ideal", nut_rotation="off"))
     model = build_model(scene, bench, fidelity)
-    c, table, poly = model.constants, model.force_table, model.stiffness_poly
+    c, lane = model.constants, OneLane(model)
     unknowns = (S.SCREW_AXIAL, S.NUT1_POSITION, S.NUT2_POSITION)
     accelerations = (S.SCREW_AXIAL_SPEED, S.NUT1_SPEED, S.NUT2_SPEED)
-    dxdt = np.zeros_like(model.initial_state)
-    held_inputs = np.zeros(N_INPUTS)
 
     def balance(values):
         x = model.initial_state.copy()
         x[list(unknowns)] = values * 1e-6
-        rhs(0.5, x, c, held_inputs, table, poly, dxdt)
-        return dxdt[list(accelerations)] * np.array([c[K.SCREW_MASS], c[K.MASS_NUT1], c[K.MASS_NUT2]])
+        dxdt = lane.rhs(0.5, x)
+        return dxdt[list(accelerations)] * np.array([c[K.SCREW_MASS], c[K.NUT1_MASS], c[K.NUT2_MASS]])
 
     result = root(balance, model.initial_state[list(unknowns)] * 1e6, method="hybr", options={"xtol": 1e-11})
     solution = result.x
     assert np.max(np.abs(balance(solution))) < 1e-6 * preload, result.message
     x = model.initial_state.copy()
     x[list(unknowns)] = solution * 1e-6
-    _, f1, f2, spring, _, _, _ = internal_forces(0.5, x, c, table, poly)
-    return f1, f2, spring, model
+    w = lane.forces(0.5, x)
+    return w[W.NUT_FORCE], w[W.NUT_FORCE + 1], w[W.PRELOAD], model
 
 
 def test_fig_5_13_regimes_and_closed_form_transition_load(bench, scene_factory):
@@ -97,10 +99,11 @@ def test_fig_5_13_regimes_and_closed_form_transition_load(bench, scene_factory):
     rigid spacer."""
     f1, f2, spring, model = _static_contact_forces(bench, scene_factory, 0.0)
     assert f1 == pytest.approx(1000.0, rel=1e-6) and f2 == pytest.approx(-1000.0, rel=1e-6)  # f)
-    c, poly = model.constants, model.stiffness_poly
+    c, contact_model = model.constants, int(model.levels[CONTACT])
 
     def closed_form(f):
-        return f - c[K.PRELOAD_STIFFNESS] * (c[K.PRELOAD_COMPRESSION] - contact_position_for_force(c, poly, f))
+        return f - c[K.PRELOAD_STIFFNESS] * (c[K.PRELOAD_COMPRESSION]
+                                             - contact_position_for_force(c, contact_model, f))
 
     transition = brentq(closed_form, 500.0, 3000.0, xtol=1e-9)
     assert 1000.0 < transition < 1100.0

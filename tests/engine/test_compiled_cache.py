@@ -12,17 +12,21 @@ from numerics import compiled_cache
 
 ROOT = Path(twin.__file__).resolve().parent.parent
 
-# transmitted_torque (twin/engine/plant.py) calls elasto_backlash (twin/physics/coupling.py): a deflection
-# of 1e-3 rad past a 0 backlash at stiffness 2 and no damping transmits 2e-3 N m.
+# measurands (twin/engine/plant.py) puts the torque of elasto_backlash (twin/physics/coupling.py, inlined into the
+# lane kernel) into the work rows: a deflection of 1e-3 rad past a 0 backlash at stiffness 2 and no damping transmits
+# 2e-3 N m (one lane, no load system).
 PROBE = """
 import numpy as np
 import twin
 from twin.layout import K, N_CONSTANTS, N_STATES, S
-from twin.engine.plant import transmitted_torque
-x = np.zeros(N_STATES); c = np.zeros(N_CONSTANTS)
+from twin.levels import SUBSYSTEMS, level_codes
+from twin.engine.plant import W, measurands, work_rows
+x = np.zeros((N_STATES, 1)); c = np.zeros((N_CONSTANTS, 1)); w = work_rows(1)
+levels = level_codes({name: ("absent" if name == "pneumatics" else s.full) for name, s in SUBSYSTEMS.items()})
 x[S.REDUCER_ANGLE] = 1e-3
 c[K.TORSION_STIFFNESS] = 2.0
-print(repr(transmitted_torque(x, c)))
+measurands(0.0, x, c, w, 1, levels, np.zeros((1, 8)))
+print(repr(float(w[W.TORQUE, 0])))
 print(os.environ["NUMBA_CACHE_DIR"])
 """
 
@@ -50,7 +54,8 @@ def test_an_edited_callee_in_another_module_is_recompiled(tmp_path):
 
     coupling = copy / "twin" / "physics" / "coupling.py"
     text = coupling.read_text()
-    edited = text.replace("return elastic + saturated_damping_force", "return 3.0 * elastic + saturated_damping_force")
+    edited = text.replace("torque = elastic + saturated_damping_force",
+                          "torque = 3.0 * elastic + saturated_damping_force")
     assert edited != text
     coupling.write_text(edited)
 

@@ -3,13 +3,14 @@
 import numpy as np
 import pytest
 from bench_helpers import plant_fidelity
+from lane_helpers import OneLane
 from scipy.stats import linregress
 
 from twin.engine.energy import mechanical_energy
-from twin.engine.integrators import INTEGRATORS, ORDER, step, work_array
+from twin.engine.integrators import INTEGRATORS, ORDER
 from twin.engine.model import build_model
 from twin.fidelity import resolve_fidelity
-from twin.layout import N_INPUTS, S
+from twin.layout import S
 
 #: The ball-groove friction of the reduced Ch. 5 model (twin.physics.ball_groove_friction), off.
 BALL_GROOVE_FRICTION_OFF = {
@@ -44,16 +45,14 @@ def _free_motion(bench, scene_factory, method, dt, energy_history=None):
     x[S.NUT1_SPEED] = 2e-3
     x[S.NUT2_SPEED] = -1e-3
     x[S.REDUCER_SPEED] = -1.0
-    energy_0 = mechanical_energy(x, model.constants, model.stiffness_poly)
-    work = work_array(x.size)
+    energy_0 = mechanical_energy(x, model)
+    lane = OneLane(model)  # held inputs zero: no current demand; the load system is absent
     code = INTEGRATORS[method]
-    held_inputs = np.zeros(N_INPUTS)  # no current demand; the load system is absent
     for k in range(int(round(DURATION / dt))):
-        step(code, k * dt, x, dt, model.constants, held_inputs, model.force_table, model.stiffness_poly, work,
-             k % 4 == 0, model.active, model.pairs)
+        lane.step(code, k * dt, x, dt, refresh=k % 4 == 0)
         if energy_history is not None and k % 8 == 7:
-            energy_history.append(mechanical_energy(x, model.constants, model.stiffness_poly))
-    return x, energy_0, mechanical_energy(x, model.constants, model.stiffness_poly)
+            energy_history.append(mechanical_energy(x, model))
+    return x, energy_0, mechanical_energy(x, model)
 
 
 def test_energy_balance_closes_without_losses(bench, scene_factory):

@@ -7,6 +7,7 @@ import pytest
 from bench_helpers import plant_fidelity
 
 import twin
+from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_position_for_force
 from twin.fidelity import resolve_fidelity
 from twin.physics.ball_groove_friction import rolling_coefficient
@@ -110,7 +111,7 @@ def test_backlash_hysteresis_width_and_nut_dwell(bench, scene_factory):
     # that force makes the deflection slightly smaller, never larger.
     model = build_model(scene, bench, resolve_fidelity(scene, bench, plant_fidelity(scene)))
     force = ds.nut1_contact_force.sel(time=slice(1.0, None))
-    elastic = sum(abs(contact_position_for_force(model.constants, model.stiffness_poly, f)) - backlash / 2
+    elastic = sum(abs(contact_position_for_force(model.constants, int(model.levels[CONTACT]), f)) - backlash / 2
                   for f in (float(force.max()), float(force.min())))
     assert backlash < width <= backlash + elastic
     assert elastic < 0.1 * backlash

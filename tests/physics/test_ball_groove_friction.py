@@ -6,8 +6,9 @@ import math
 import numpy as np
 import pytest
 
+from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_position_for_force
-from twin.engine.plant import ball_screw_outputs, internal_forces
+from twin.engine.plant import W, ball_screw_outputs, internal_forces, work_rows
 from twin.fidelity import resolve_fidelity
 from twin.layout import K, S
 from twin.physics.ball_groove_friction import (
@@ -67,9 +68,12 @@ def _moving(model, screw_speed, x=None):
 
 
 def _outputs(model, x):
-    c = model.constants
-    _, f1, f2, _, _, p1, p2 = internal_forces(0.0, x, c, model.force_table, model.stiffness_poly)
-    return ball_screw_outputs(x, c, f1, f2, p1, p2), (f1, f2, p1, p2)
+    """The ball-screw output signals at state ``x`` (one run as a one-lane group), and the nuts' axial forces and
+    per-sphere normal loads ``(f1, f2, p1, p2)``."""
+    lane_x, c, w = x.reshape(-1, 1), model.constants.reshape(-1, 1), work_rows(1)
+    internal_forces(0.0, lane_x, c, w, 1, model.levels, model.force_table)
+    forces = (w[W.NUT_FORCE, 0], w[W.NUT_FORCE + 1, 0], w[W.NUT_NORMAL, 0], w[W.NUT_NORMAL + 1, 0])
+    return ball_screw_outputs(lane_x, c, w, 0), forces
 
 
 # The drag splits 50/50 between the linear sliding part and the P^1.26 rolling part at the 1 kN
@@ -104,7 +108,7 @@ def test_drag_torque_is_zero_without_preload_and_opposes_the_rotation(bench, sce
 def _loaded_master(model, force, screw_speed):
     """Master nut pushed by the screw with ``force`` along +x (no preload, no backlash), all moving."""
     x = model.initial_state.copy()
-    x[S.NUT1_POSITION] = -contact_position_for_force(model.constants, model.stiffness_poly, force)
+    x[S.NUT1_POSITION] = -contact_position_for_force(model.constants, int(model.levels[CONTACT]), force)
     return _moving(model, screw_speed, x)
 
 

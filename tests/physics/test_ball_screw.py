@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from twin.layout import CONTACT_CONSTANT_ANGLE, CONTACT_LINEAR, CONTACT_VARIABLE_ANGLE
 from twin.physics.ball_screw import (
+    CONTACT_CONSTANT_ANGLE,
+    CONTACT_LINEAR,
+    CONTACT_VARIABLE_ANGLE,
     contact_geometry,
     effective_loaded_balls,
     groove_centre_distance,

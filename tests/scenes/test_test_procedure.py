@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import twin
+from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_position_for_force
 from twin.errors import OptionError, SceneError
 from twin.fidelity import resolve_fidelity
@@ -58,7 +59,7 @@ def test_thesis_procedure_starts_unloaded_and_the_springs_load_the_nuts(bench):
     stiffness = 1.0 / (1.0 / bench.value("preload.spring_stiffness") + 1.0 / bench.value("preload.load_cell_stiffness"))
     settled = preload
     for _ in range(50):
-        deflection = contact_position_for_force(model.constants, model.stiffness_poly, settled) - 0.5 * backlash
+        deflection = contact_position_for_force(model.constants, int(model.levels[CONTACT]), settled) - 0.5 * backlash
         settled = preload - stiffness * (backlash + 2.0 * deflection)
     assert float(ds.preload_force[-1]) == pytest.approx(settled, rel=0.01)
     preloaded = twin.simulate(scene.with_conditions({"zero_procedure": "preloaded"}), outputs=["preload_force"],
