@@ -226,6 +226,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("VALVE_COMMAND_BITS", "1", "word length (sign incl.) of the valve-command D/A; 0 = not quantised"),
         _e("FORCE_KP", "V/N", "force-PI proportional gain", "controller.force_kp"),
         _e("FORCE_KI", "V/(N s)", "force-PI integral gain", "controller.force_ki"),
+        _e("FORCE_FEEDBACK_NOISE", "1", "1: the force loop reads the load cell with its electrical noise "
+                                        "(scene noise_path = feedback); 0: without it (recorded)"),
     ), signals=(
         _e("FORCE_DEMAND", "N", "external force demand"),
         _e("VALVE_COMMAND", "V", "effective proportional-valve command"),
@@ -368,11 +370,12 @@ class M(IntEnum):
     TORQUE = 12
     PRELOAD = 13
     EXTERNAL = 14
-    LOCAL_ERROR = 15        # largest step-doubling local-error estimate so far, in tolerance units
-    LOCAL_ERROR_STREAK = 16  # consecutive acquisition instants with the estimate above tolerance
+    FORCE_FEEDBACK = 15     # the load-cell reading the force loop acts on [N] (scene condition noise_path)
+    LOCAL_ERROR = 16        # largest step-doubling local-error estimate so far, in tolerance units
+    LOCAL_ERROR_STREAK = 17  # consecutive acquisition instants with the estimate above tolerance
     # feature accumulators (layout twin.features.A), from true and from measured signals
-    FEATURES_TRUE = 17
-    FEATURES_MEASURED = 17 + N_ACCUMULATORS
+    FEATURES_TRUE = 18
+    FEATURES_MEASURED = 18 + N_ACCUMULATORS
 
 
 N_MEMORY = M.FEATURES_MEASURED + N_ACCUMULATORS

@@ -115,14 +115,15 @@ def record(row, t, x, c, u, w, lane, memory, levels, force_table):
 
 @numba.njit(**SCALAR)
 def force_loop(t, c, u, memory, lane, sample_time, force_table):
-    """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading -> valve command.
+    """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading (``M.FORCE_FEEDBACK``, with or without the
+    electrical noise: the scene's ``noise_path``) -> valve command.
 
     The PI output is a deviation from the valve's mid position, limited to the
     command range; it goes through the output D/A and the valve's hysteresis.
     """
     half_span = 0.5 * (c[K.VALVE_MAX, lane] - c[K.VALVE_MIN, lane])
     deviation, memory[M.FORCE_INTEGRAL, lane] = pi_step(
-        profile_value(force_table, t) - memory[M.EXTERNAL, lane], memory[M.FORCE_INTEGRAL, lane],
+        profile_value(force_table, t) - memory[M.FORCE_FEEDBACK, lane], memory[M.FORCE_INTEGRAL, lane],
         c[K.FORCE_KP, lane], c[K.FORCE_KI, lane], sample_time, half_span)
     if c[K.VALVE_COMMAND_BITS, lane] > 0.0:
         deviation = convert(deviation, half_span, c[K.VALVE_COMMAND_BITS, lane])

@@ -147,6 +147,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
 
     if converters:
         c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
+    c[K.FORCE_FEEDBACK_NOISE] = 1.0 if scene.condition("noise_path") == "feedback" else 0.0
 
     x0 = initial_state(c, contact_model, preload, scene.condition("zero_procedure"), fidelity.level("nut_rotation"))
     # The encoders are zeroed on the initial state, whatever the procedure (docs/model.md).
