@@ -138,7 +138,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("NUT1_SPEED", "m/s", "master nut (sled) speed"),
     )),
     Component("ball_screw_contact", constants=(
-        _e("LEAD_ARM", "m/rad", "p / (2 pi)"),
+        _e("LEAD_ARM", "m/rad", "p(T) / (2 pi): the lead of the screw at the room temperature (Eq. 7.72)"),
+        _e("LEAD_ARM_NOMINAL", "m/rad", "p / (2 pi) of the nominal lead: Eq. 9.12's screw equivalent position"),
         _e("COS_HELIX", "1", "cos(alpha_e)"),
         _e("SIN_HELIX", "1", "sin(alpha_e)"),
         _e("CENTRE_DISTANCE", "m", "A0, distance of the groove curvature centres at first contact (Eq. 9.4)"),
@@ -155,6 +156,21 @@ COMPONENTS: tuple[Component, ...] = (
         _e("BACKLASH", "m", "axial backlash of each nut (scene condition)"),
         _e("LINEAR_CONTACT_STIFFNESS", "N/m", "normal stiffness per sphere of the linear contact level"),
         _e("MAX_NORMAL_APPROACH", "m", "Hertzian validity bound of the normal approach (divergence guard)"),
+    )),
+    Component("lead_error", constants=(
+        # the screw's travel deviation e(phi) of ISO 3408-3 (twin.physics.ball_screw.travel_deviation)
+        _e("LEAD_SLOPE", "1", "mean travel deviation per unit travel s", "ball_screw.lead_mean_deviation_slope"),
+        _e("LEAD_WAVE_AMPLITUDE", "m", "amplitude a_u of the long-wave travel variation",
+           "ball_screw.lead_travel_variation_amplitude"),
+        _e("LEAD_WAVE_NUMBER", "1/rad", "phase of the long-wave variation per rad of screw angle, p / lambda_u"),
+        _e("LEAD_WAVE_PHASE", "rad", "phase phi_u of the long-wave variation at the test zero",
+           "ball_screw.lead_travel_variation_phase"),
+        _e("LEAD_WAVE_AT_ZERO", "1", "sin(phi_u): the long-wave term at the test zero, subtracted"),
+        _e("LEAD_REVOLUTION_AMPLITUDE", "m", "amplitude a_2pi of the travel variation within one revolution",
+           "ball_screw.lead_per_revolution_amplitude"),
+        _e("LEAD_REVOLUTION_PHASE", "rad", "phase phi_2pi of the per-revolution variation at the test zero",
+           "ball_screw.lead_per_revolution_phase"),
+        _e("LEAD_REVOLUTION_AT_ZERO", "1", "sin(phi_2pi): the per-revolution term at the test zero, subtracted"),
     )),
     Component("ball_groove_friction", constants=(
         *(_e(f"FRICTION_G{k}", unit, f"Eq. 5.16 coefficient g_{k}", f"ball_screw.sliding_friction_g{k}")
@@ -208,6 +224,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("NUT1_ZERO", "m", "sled position at which the encoders are zeroed"),
         _e("SCREW_ANGLE_ZERO", "rad", "screw angle at which the encoders are zeroed"),
         _e("ENCODER_SCALE_ORIGIN", "m", "scale position of the sled at t = 0", "sensors.linear_encoder_scale_origin"),
+        _e("SCALE_READING_GAIN", "1", "scale travel per metre of sled travel: the Abbe error of the guides' angular "
+                                      "errors over the thermal expansion of the scale (twin.engine.model)"),
         _e("LINEAR_V_THRESHOLD", "m/s", "sign regularisation of the linear friction laws"),
         _e("ANGULAR_V_THRESHOLD", "rad/s", "sign regularisation of the angular friction laws"),
     ), signals=(

@@ -160,8 +160,11 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
 
 @numba.njit(**SCALAR)
 def sled_measurand(x, c, lane):
-    """Position on the linear encoder's scale [m]."""
-    return c[K.ENCODER_SCALE_ORIGIN, lane] + x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
+    """Position on the linear encoder's scale [m]: the sled's travel since the zero, read at the encoder's reading
+    point (the Abbe error of the guides' angular errors, :mod:`twin.physics.guides`) on a scale expanded by the room
+    temperature, ``K.SCALE_READING_GAIN`` (:func:`twin.engine.model.scale_reading_gain`)."""
+    return c[K.ENCODER_SCALE_ORIGIN, lane] + (x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]) * c[
+        K.SCALE_READING_GAIN, lane]
 
 
 @numba.njit(**SCALAR)
