@@ -49,11 +49,13 @@ COMPONENTS: tuple[Component, ...] = (
         _e("CURRENT", "A", "motor current i (Eq. 9.1)"),
         _e("WINDING_TEMP", "K", "winding temperature T_w (Eq. 9.2)"),
     ), constants=(
-        _e("R20", "ohm", "winding resistance at 20 degC", "motor.winding_resistance_20C"),
+        _e("R20", "ohm", "resistance of the power-consistent equivalent circuit at 20 degC, 1.5 R_UV (Eq. 9.1, "
+                         "twin.physics.motor.equivalent_resistance)"),
         _e("R_TEMP_COEF", "1/K", "resistance temperature coefficient", "motor.resistance_temperature_coefficient"),
-        _e("INDUCTANCE", "H", "winding inductance", "motor.inductance"),
-        _e("TORQUE_CONSTANT", "N m/A", "torque constant k_t", "motor.torque_constant"),
-        _e("SPEED_CONSTANT", "V s/rad", "back-EMF constant k_e", "motor.speed_constant"),
+        _e("INDUCTANCE", "H", "inductance of the power-consistent equivalent circuit, 1.5 L_UV (Eq. 9.1, "
+                              "twin.physics.motor.equivalent_inductance)"),
+        _e("TORQUE_CONSTANT", "N m/A", "torque constant k_t, also the equivalent circuit's back-EMF constant",
+           "motor.torque_constant"),
         _e("MOTOR_VISCOUS", "N m s/rad", "viscous damping b_mr on the motor shaft", "motor.viscous_damping"),
         _e("MR_FRICTION_STATIC", "N m", "motor-reducer breakaway friction", "motor.friction_static_torque"),
         _e("MR_FRICTION_DYNAMIC", "N m", "motor-reducer Coulomb friction", "motor.friction_dynamic_torque"),
@@ -202,7 +204,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("HALL_CURRENT", "A", "first-order Hall sensor output"),
         _e("CURRENT_PI", "V", "analog current-PI integrator"),
     ), constants=(
-        _e("DC_BUS", "V", "DC-bus voltage", "drive.dc_bus_voltage"),
+        _e("VOLTAGE_LIMIT", "V", "largest voltage the inverter applies to the equivalent circuit, "
+                                 "(3/sqrt 2) m_max V_DC (twin.physics.motor.equivalent_voltage_limit)"),
         _e("HALL_TAU", "s", "Hall sensor time constant", "drive.hall_time_constant"),
         _e("CURRENT_AW_TIME", "s", "current-PI anti-windup time", "drive.current_antiwindup_time"),
         _e("CURRENT_KP", "V/A", "current-PI proportional gain", "controller.current_kp"),

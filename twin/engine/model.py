@@ -31,6 +31,7 @@ from twin.physics.ball_screw import (
 )
 from twin.physics.drivetrain import screw_inertia, screw_mass, torsional_stiffness
 from twin.physics.guides import abbe_reading_gain
+from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
 from twin.physics.preload import series_stiffness
 from twin.scenes import Scene
 
@@ -111,7 +112,10 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
         c[constant] = p[name]
     ratio = p["reducer.ratio"]
     room_temperature = scene.condition("room_temperature")
-    # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3)
+    # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3): the power-consistent equivalent circuit (twin.physics.motor)
+    c[K.R20] = equivalent_resistance(p["motor.winding_resistance_20C"])
+    c[K.INDUCTANCE] = equivalent_inductance(p["motor.inductance"])
+    c[K.VOLTAGE_LIMIT] = equivalent_voltage_limit(p["drive.dc_bus_voltage"], p["drive.phase_voltage_amplitude_limit"])
     c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
     c[K.AMBIENT] = room_temperature

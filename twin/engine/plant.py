@@ -344,17 +344,26 @@ def measurands(t, x, c, w, lanes, levels, force_table):
     _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
 
 
+@numba.njit(**SCALAR)
+def current_loop_voltage(x, c, u, lane):
+    """The analog current PI's output (the demanded voltage) and the voltage the inverter applies to the equivalent
+    circuit, limited to ``K.VOLTAGE_LIMIT`` (:func:`twin.physics.motor.equivalent_voltage_limit`) [V]."""
+    demand_voltage = (c[K.CURRENT_KP, lane] * (u[U.CURRENT_DEMAND, lane] - x[S.HALL_CURRENT, lane])
+                      + x[S.CURRENT_PI, lane])
+    limit = c[K.VOLTAGE_LIMIT, lane]
+    return min(max(demand_voltage, -limit), limit), demand_voltage
+
+
 @numba.njit(**KERNEL)
 def _drive_electronics(x, c, u, dxdt, lanes):
-    """Full current loop: winding current (Eq. 9.1), Hall sensor and analog PI with back-calculation anti-windup."""
+    """Full current loop: winding current (Eq. 9.1, power-consistent: :mod:`twin.physics.motor`), Hall sensor and
+    analog PI with back-calculation anti-windup."""
     for lane in range(lanes):
         demand = u[U.CURRENT_DEMAND, lane]
-        demand_voltage = c[K.CURRENT_KP, lane] * (demand - x[S.HALL_CURRENT, lane]) + x[S.CURRENT_PI, lane]
-        bus = c[K.DC_BUS, lane]
-        voltage = min(max(demand_voltage, -bus), bus)
+        voltage, demand_voltage = current_loop_voltage(x, c, u, lane)
         resistance = winding_resistance(x[S.WINDING_TEMP, lane], c[K.R20, lane], c[K.R_TEMP_COEF, lane])
         dxdt[S.CURRENT, lane] = current_derivative(voltage, x[S.CURRENT, lane], x[S.REDUCER_SPEED, lane], resistance,
-                                                   c[K.INDUCTANCE, lane], c[K.SPEED_CONSTANT, lane], c[K.RATIO, lane])
+                                                   c[K.INDUCTANCE, lane], c[K.TORQUE_CONSTANT, lane], c[K.RATIO, lane])
         dxdt[S.CURRENT_PI, lane] = (c[K.CURRENT_KI, lane] * (demand - x[S.HALL_CURRENT, lane])
                                     + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME, lane])
         dxdt[S.HALL_CURRENT, lane] = (x[S.CURRENT, lane] - x[S.HALL_CURRENT, lane]) / c[K.HALL_TAU, lane]
