@@ -431,8 +431,8 @@ def preload_equilibrium(c: np.ndarray, contact_model: int, preload: float, nut_r
     orientation = c[K.PRELOAD_ORIENTATION]
     for force, pos, ang in ((orientation * preload, S.NUT1_POSITION, S.NUT1_ANGLE),
                             (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
-        # the roll balances the contact torque through the local lead arm, at the roll angle it causes (two
-        # substitutions: the arm changes by e'' theta, a relative 1e-12 for a micro-radian roll)
+        # the roll balances the contact torque through the local lead arm at the roll angle it causes: two
+        # substitutions (the arm changes by e'' theta, 1e-8 of itself for the ~3 urad roll at 1 kN; 1e-16 after two)
         angle = 0.0
         if nut_rotation == "on":
             for _ in range(2):
