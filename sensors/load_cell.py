@@ -1,8 +1,8 @@
 """Force readings: external-force load cell and preload load cell + conditioner.
 
-External force: HBM K-U9C 20 kN load cell (Table B.13) with its conditioner
-measuring at 19.2 kHz (modelled as a 19.2 kHz sample-and-hold of the output,
-mapped to ±10 V over ±20 kN). Table 9.5 "Load cell" rows: repeatability
+External force: HBM K-U9C 20 kN load cell (Table B.13) with its conditioner:
+a first-order low-pass at its 3.8 kHz -3 dB cut-off followed by a sample-and-hold
+at its 19.2 kHz measuring rate, mapped to ±10 V over ±20 kN. Table 9.5 "Load cell" rows: repeatability
 (%Read), offset (%FS), sensitivity (%Nom) and their temperature effects.
 Repeatability is a per-test scatter proportional to the reading, so within one
 run it acts as an extra gain error.
@@ -56,6 +56,7 @@ def load_cell_parameters(params: Mapping[str, float], *, room_temperature: float
         sensitivity_tempcos=[v["sensors.load_cell_sensitivity_tempco"]],
         offsets=[v["sensors.load_cell_offset"]],
         offset_tempcos=[v["sensors.load_cell_offset_tempco"]],
+        tau=1.0 / (2.0 * math.pi * v["sensors.load_cell_conditioner_cutoff_frequency"]),
         refresh_period=1.0 / v["sensors.load_cell_measuring_rate"],
     )
 

@@ -49,11 +49,13 @@ COMPONENTS: tuple[Component, ...] = (
         _e("CURRENT", "A", "motor current i (Eq. 9.1)"),
         _e("WINDING_TEMP", "K", "winding temperature T_w (Eq. 9.2)"),
     ), constants=(
-        _e("R20", "ohm", "winding resistance at 20 degC", "motor.winding_resistance_20C"),
+        _e("R20", "ohm", "resistance of the power-consistent equivalent circuit at 20 degC, 1.5 R_UV (Eq. 9.1, "
+                         "twin.physics.motor.equivalent_resistance)"),
         _e("R_TEMP_COEF", "1/K", "resistance temperature coefficient", "motor.resistance_temperature_coefficient"),
-        _e("INDUCTANCE", "H", "winding inductance", "motor.inductance"),
-        _e("TORQUE_CONSTANT", "N m/A", "torque constant k_t", "motor.torque_constant"),
-        _e("SPEED_CONSTANT", "V s/rad", "back-EMF constant k_e", "motor.speed_constant"),
+        _e("INDUCTANCE", "H", "inductance of the power-consistent equivalent circuit, 1.5 L_UV (Eq. 9.1, "
+                              "twin.physics.motor.equivalent_inductance)"),
+        _e("TORQUE_CONSTANT", "N m/A", "torque constant k_t, also the equivalent circuit's back-EMF constant",
+           "motor.torque_constant"),
         _e("MOTOR_VISCOUS", "N m s/rad", "viscous damping b_mr on the motor shaft", "motor.viscous_damping"),
         _e("MR_FRICTION_STATIC", "N m", "motor-reducer breakaway friction", "motor.friction_static_torque"),
         _e("MR_FRICTION_DYNAMIC", "N m", "motor-reducer Coulomb friction", "motor.friction_dynamic_torque"),
@@ -138,7 +140,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("NUT1_SPEED", "m/s", "master nut (sled) speed"),
     )),
     Component("ball_screw_contact", constants=(
-        _e("LEAD_ARM", "m/rad", "p / (2 pi)"),
+        _e("LEAD_ARM", "m/rad", "p(T) / (2 pi): the lead of the screw at the room temperature (Eq. 7.72)"),
+        _e("LEAD_ARM_NOMINAL", "m/rad", "p / (2 pi) of the nominal lead: Eq. 9.12's screw equivalent position"),
         _e("COS_HELIX", "1", "cos(alpha_e)"),
         _e("SIN_HELIX", "1", "sin(alpha_e)"),
         _e("CENTRE_DISTANCE", "m", "A0, distance of the groove curvature centres at first contact (Eq. 9.4)"),
@@ -155,6 +158,21 @@ COMPONENTS: tuple[Component, ...] = (
         _e("BACKLASH", "m", "axial backlash of each nut (scene condition)"),
         _e("LINEAR_CONTACT_STIFFNESS", "N/m", "normal stiffness per sphere of the linear contact level"),
         _e("MAX_NORMAL_APPROACH", "m", "Hertzian validity bound of the normal approach (divergence guard)"),
+    )),
+    Component("lead_error", constants=(
+        # the screw's travel deviation e(phi) of ISO 3408-3 (twin.physics.ball_screw.travel_deviation)
+        _e("LEAD_SLOPE", "1", "mean travel deviation per unit travel s", "ball_screw.lead_mean_deviation_slope"),
+        _e("LEAD_WAVE_AMPLITUDE", "m", "amplitude a_u of the long-wave travel variation",
+           "ball_screw.lead_travel_variation_amplitude"),
+        _e("LEAD_WAVE_NUMBER", "1/rad", "phase of the long-wave variation per rad of screw angle, p / lambda_u"),
+        _e("LEAD_WAVE_PHASE", "rad", "phase phi_u of the long-wave variation at the test zero",
+           "ball_screw.lead_travel_variation_phase"),
+        _e("LEAD_WAVE_AT_ZERO", "1", "sin(phi_u): the long-wave term at the test zero, subtracted"),
+        _e("LEAD_REVOLUTION_AMPLITUDE", "m", "amplitude a_2pi of the travel variation within one revolution",
+           "ball_screw.lead_per_revolution_amplitude"),
+        _e("LEAD_REVOLUTION_PHASE", "rad", "phase phi_2pi of the per-revolution variation at the test zero",
+           "ball_screw.lead_per_revolution_phase"),
+        _e("LEAD_REVOLUTION_AT_ZERO", "1", "sin(phi_2pi): the per-revolution term at the test zero, subtracted"),
     )),
     Component("ball_groove_friction", constants=(
         *(_e(f"FRICTION_G{k}", unit, f"Eq. 5.16 coefficient g_{k}", f"ball_screw.sliding_friction_g{k}")
@@ -186,7 +204,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("HALL_CURRENT", "A", "first-order Hall sensor output"),
         _e("CURRENT_PI", "V", "analog current-PI integrator"),
     ), constants=(
-        _e("DC_BUS", "V", "DC-bus voltage", "drive.dc_bus_voltage"),
+        _e("VOLTAGE_LIMIT", "V", "largest voltage the inverter applies to the equivalent circuit, "
+                                 "(3/sqrt 2) m_max V_DC (twin.physics.motor.equivalent_voltage_limit)"),
         _e("HALL_TAU", "s", "Hall sensor time constant", "drive.hall_time_constant"),
         _e("CURRENT_AW_TIME", "s", "current-PI anti-windup time", "drive.current_antiwindup_time"),
         _e("CURRENT_KP", "V/A", "current-PI proportional gain", "controller.current_kp"),
@@ -208,6 +227,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("NUT1_ZERO", "m", "sled position at which the encoders are zeroed"),
         _e("SCREW_ANGLE_ZERO", "rad", "screw angle at which the encoders are zeroed"),
         _e("ENCODER_SCALE_ORIGIN", "m", "scale position of the sled at t = 0", "sensors.linear_encoder_scale_origin"),
+        _e("SCALE_READING_GAIN", "1", "scale travel per metre of sled travel: the Abbe error of the guides' angular "
+                                      "errors over the thermal expansion of the scale (twin.engine.model)"),
         _e("LINEAR_V_THRESHOLD", "m/s", "sign regularisation of the linear friction laws"),
         _e("ANGULAR_V_THRESHOLD", "rad/s", "sign regularisation of the angular friction laws"),
     ), signals=(
@@ -226,6 +247,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("VALVE_COMMAND_BITS", "1", "word length (sign incl.) of the valve-command D/A; 0 = not quantised"),
         _e("FORCE_KP", "V/N", "force-PI proportional gain", "controller.force_kp"),
         _e("FORCE_KI", "V/(N s)", "force-PI integral gain", "controller.force_ki"),
+        _e("FORCE_FEEDBACK_NOISE", "1", "1: the force loop reads the load cell with its electrical noise "
+                                        "(scene noise_path = feedback); 0: without it (recorded)"),
     ), signals=(
         _e("FORCE_DEMAND", "N", "external force demand"),
         _e("VALVE_COMMAND", "V", "effective proportional-valve command"),
@@ -368,11 +391,12 @@ class M(IntEnum):
     TORQUE = 12
     PRELOAD = 13
     EXTERNAL = 14
-    LOCAL_ERROR = 15        # largest step-doubling local-error estimate so far, in tolerance units
-    LOCAL_ERROR_STREAK = 16  # consecutive acquisition instants with the estimate above tolerance
+    FORCE_FEEDBACK = 15     # the load-cell reading the force loop acts on [N] (scene condition noise_path)
+    LOCAL_ERROR = 16        # largest step-doubling local-error estimate so far, in tolerance units
+    LOCAL_ERROR_STREAK = 17  # consecutive acquisition instants with the estimate above tolerance
     # feature accumulators (layout twin.features.A), from true and from measured signals
-    FEATURES_TRUE = 17
-    FEATURES_MEASURED = 17 + N_ACCUMULATORS
+    FEATURES_TRUE = 18
+    FEATURES_MEASURED = 18 + N_ACCUMULATORS
 
 
 N_MEMORY = M.FEATURES_MEASURED + N_ACCUMULATORS

@@ -64,7 +64,8 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
         Level("absent", "no external force", PNEUMATIC_STATES, PNEUMATIC_SIGNALS),
     )),
     Subsystem("current_loop", "drive current loop and motor winding (Eq. 9.1)", (
-        Level("full", "RL winding with back-EMF, Hall current sensor and analog PI with the DC-bus limit"),
+        Level("full", "power-consistent RL equivalent circuit with back-EMF, Hall current sensor and analog PI "
+                      "with the inverter's voltage limit"),
         Level("ideal", "ideal torque source: the current follows the speed loop's demand through a first-order "
                        "lag at the designed loop bandwidth (controller.current_loop_bandwidth)",
               (S.HALL_CURRENT, S.CURRENT_PI)),

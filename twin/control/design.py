@@ -9,7 +9,8 @@ to print the design table (reproduced in ``docs/control_design.md``).
 Design rules (classic cascade tuning, each loop ~5-10x slower than the inner one):
 
 * **Current loop** (analog PI, Sec. 9.3): plant ``1/(H_m s + R_m)`` of Eq. 9.1
-  with back-EMF treated as a disturbance, Hall sensor ``1/(tau_h s + 1)``.
+  in its power-consistent equivalent circuit (``H_m = 1.5 L_UV``, ``R_m = 1.5 R_UV``,
+  :mod:`twin.physics.motor`) with back-EMF treated as a disturbance, Hall sensor ``1/(tau_h s + 1)``.
   The PI zero cancels the electrical pole (``T_i = H_m/R_m``) and the gain sets
   the crossover ``f_c``: ``K_p = 2 pi f_c H_m``.
 * **Speed loop** (digital PI in the drive, resolver feedback): two-mass torsional
@@ -34,6 +35,7 @@ import numpy as np
 
 from twin.parameters import load_parameters
 from twin.physics.drivetrain import screw_inertia, torsional_stiffness
+from twin.physics.motor import equivalent_inductance, equivalent_resistance
 
 ZERO_RATIO = 5.0
 CURRENT_CROSSOVER_HZ = 1000.0
@@ -67,8 +69,10 @@ def _reflected_inertias(p: dict[str, float]) -> tuple[float, float]:
 
 
 def winding_admittance(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
-    """Winding current per voltage ``1/(H_m s + R_m)`` of Eq. 9.1, back-EMF as a disturbance: ``(num, den)`` in s."""
-    return np.array([1.0]), np.array([p["motor.inductance"], p["motor.winding_resistance_20C"]])
+    """Winding current per voltage ``1/(L_eq s + R_eq)`` of Eq. 9.1 (the power-consistent equivalent circuit,
+    :mod:`twin.physics.motor`, at 20 degC), back-EMF as a disturbance: ``(num, den)`` in s."""
+    return np.array([1.0]), np.array([equivalent_inductance(p["motor.inductance"]),
+                                      equivalent_resistance(p["motor.winding_resistance_20C"])])
 
 
 def hall_sensor(p: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -151,8 +155,8 @@ def design_current_loop(p: dict[str, float]):
     """Analog PI of the current loop; returns the design and its closed loop i/i_ref (``control.TransferFunction``)."""
     import control  # lazy: python-control costs start-up time; only designs/margins need it
 
-    inductance = p["motor.inductance"]
-    resistance = p["motor.winding_resistance_20C"]
+    inductance = equivalent_inductance(p["motor.inductance"])
+    resistance = equivalent_resistance(p["motor.winding_resistance_20C"])
     kp = 2 * math.pi * CURRENT_CROSSOVER_HZ * inductance
     ki = kp * resistance / inductance
     pi = control.tf([kp, ki], [1.0, 0.0])

@@ -180,12 +180,12 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
 def current_loop_jacobian(x, c, u, lane, jacobian):
     """Jacobian of the full current loop (:func:`twin.engine.plant._drive_electronics`) over
     :data:`CURRENT_LOOP_STATES` of lane ``lane`` into ``jacobian[:3, :3]``: the loop is linear (Eq. 9.1, the Hall
-    sensor's first-order lag, the analog PI) between the DC-bus limits; on the limit the voltage is constant and
-    only the anti-windup feedback remains. The back-EMF and temperature couplings are left explicit."""
+    sensor's first-order lag, the analog PI) between the inverter's voltage limits; on the limit the voltage is
+    constant and only the anti-windup feedback remains. The back-EMF and temperature couplings are left explicit."""
     demand_voltage = (c[K.CURRENT_KP, lane] * (u[U.CURRENT_DEMAND, lane] - x[S.HALL_CURRENT, lane])
                       + x[S.CURRENT_PI, lane])
-    bus = c[K.DC_BUS, lane]
-    saturated = min(max(demand_voltage, -bus), bus) != demand_voltage
+    limit = c[K.VOLTAGE_LIMIT, lane]
+    saturated = min(max(demand_voltage, -limit), limit) != demand_voltage
     inductance = c[K.INDUCTANCE, lane]
     jacobian[0, 0] = -winding_resistance(x[S.WINDING_TEMP, lane], c[K.R20, lane], c[K.R_TEMP_COEF, lane]) / inductance
     jacobian[0, 1] = 0.0 if saturated else -c[K.CURRENT_KP, lane] / inductance

@@ -160,8 +160,11 @@ def build_instruments(p: Mapping[str, float], room_temperature: float, levels: M
 
 @numba.njit(**SCALAR)
 def sled_measurand(x, c, lane):
-    """Position on the linear encoder's scale [m]."""
-    return c[K.ENCODER_SCALE_ORIGIN, lane] + x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
+    """Position on the linear encoder's scale [m]: the sled's travel since the zero, read at the encoder's reading
+    point (the Abbe error of the guides' angular errors, :mod:`twin.physics.guides`) on a scale expanded by the room
+    temperature, ``K.SCALE_READING_GAIN`` (:func:`twin.engine.model.scale_reading_gain`)."""
+    return c[K.ENCODER_SCALE_ORIGIN, lane] + (x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]) * c[
+        K.SCALE_READING_GAIN, lane]
 
 
 @numba.njit(**SCALAR)
@@ -268,7 +271,9 @@ def motor_angle_measured(x, c, lane, levels, parameters):
 @numba.njit(**SCALAR)
 def acquire(t, x, c, w, lane, levels, memory, parameters, states, noise, n):
     """Read every channel of lane ``lane`` at an acquisition instant (sample ``n``) into its memory rows
-    ``M.SLED`` ... ``M.EXTERNAL`` (``w`` holds this instant's forces)."""
+    ``M.SLED`` ... ``M.EXTERNAL`` (``w`` holds this instant's forces), and the load-cell reading the force loop
+    acts on into ``M.FORCE_FEEDBACK``: the recorded one under the scene's ``noise_path = "feedback"``, the same
+    conversion without its noise sample under ``"recorded"`` (``K.FORCE_FEEDBACK_NOISE``; a select, both computed)."""
     encoders_ideal = levels[ENCODERS] == IDEAL
     if encoders_ideal:
         memory[M.SLED, lane] = x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
@@ -290,5 +295,7 @@ def acquire(t, x, c, w, lane, levels, memory, parameters, states, noise, n):
             memory[M.PRELOAD, lane] = reading
         elif channel == LOAD_CELL:
             memory[M.EXTERNAL, lane] = reading
+            clean = true_value if analog_ideal else analog_read(states[channel], parameters[channel], lane, 0.0)
+            memory[M.FORCE_FEEDBACK, lane] = reading if c[K.FORCE_FEEDBACK_NOISE, lane] > 0.0 else clean
         else:
             memory[M.CURRENT, lane] = reading

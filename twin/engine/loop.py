@@ -19,7 +19,7 @@ from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.codes import PNEUMATICS, PNEUMATICS_FULL
 from twin.engine.integrators import step
-from twin.engine.plant import W, ball_screw_outputs, internal_forces, measurands
+from twin.engine.plant import W, ball_screw_outputs, internal_forces, lead_deviation, measurands
 from twin.features import MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate
 from twin.layout import STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOUNDS, K, M, S, Signal, U
 from twin.physics.ball_screw import contact_geometry
@@ -39,10 +39,20 @@ LOCAL_ERROR_PERSISTENCE = 3  # checks in a row above tolerance before a run is d
 
 @numba.njit(**SCALAR)
 def _relative_position(x, c, lane, nut):
-    """``dx_i = x_s + p (theta_s - theta_ni) / 2 pi - x_ni`` of one lane at its stored screw-axial displacement."""
+    """``dx_i = x_s + p(T) (theta_s - theta_ni) / 2 pi - x_ni`` of one lane at its stored screw-axial displacement,
+    without the lead error (:func:`_lead_error_bound` bounds it)."""
     position = S.NUT1_POSITION + 4 * nut
     return (x[S.SCREW_AXIAL, lane] + c[K.LEAD_ARM, lane] * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane])
             - x[position, lane])
+
+
+@numba.njit(**SCALAR)
+def _lead_error_bound(x, c, lane, nut):
+    """An upper bound of the lead error's ``|e|`` at nut ``nut`` (:func:`twin.physics.ball_screw.travel_deviation`:
+    each sine difference is at most 2)."""
+    angle = x[S.SCREW_ANGLE, lane] - x[S.NUT1_ANGLE + 4 * nut, lane]
+    return (abs(c[K.LEAD_SLOPE, lane] * c[K.LEAD_ARM_NOMINAL, lane] * angle)
+            + 2.0 * abs(c[K.LEAD_WAVE_AMPLITUDE, lane]) + 2.0 * abs(c[K.LEAD_REVOLUTION_AMPLITUDE, lane]))
 
 
 @numba.njit(**SCALAR)
@@ -63,14 +73,18 @@ def guard(x, c, w, lane, levels):
     if x[S.WINDING_TEMP, lane] > c[K.MAX_TEMPERATURE, lane]:
         return 5
     for nut in range(2):
-        gap = abs(_relative_position(x, c, lane, nut)) - 0.5 * c[K.BACKLASH, lane]
+        relative = _relative_position(x, c, lane, nut)
+        reach = abs(relative) + _lead_error_bound(x, c, lane, nut) - 0.5 * c[K.BACKLASH, lane]
         # The normal approach never exceeds the axial interference (the triangle inequality on
-        # Eq. 9.4's exact form), so the geometry is needed only near the limit.
-        if gap > 0.0 and gap * c[K.COS_HELIX, lane] > (1.0 - _APPROACH_MARGIN) * c[K.MAX_NORMAL_APPROACH, lane]:
-            approach, _ = contact_geometry(gap * c[K.COS_HELIX, lane], c[K.CENTRE_DISTANCE, lane],
-                                           c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane])
-            if approach > c[K.MAX_NORMAL_APPROACH, lane]:
-                return 6
+        # Eq. 9.4's exact form), so the geometry (and the lead error) is needed only near the limit.
+        if reach > 0.0 and reach * c[K.COS_HELIX, lane] > (1.0 - _APPROACH_MARGIN) * c[K.MAX_NORMAL_APPROACH, lane]:
+            deviation, _ = lead_deviation(c, lane, x[S.SCREW_ANGLE, lane] - x[S.NUT1_ANGLE + 4 * nut, lane])
+            gap = abs(relative + deviation) - 0.5 * c[K.BACKLASH, lane]
+            if gap > 0.0:
+                approach, _ = contact_geometry(gap * c[K.COS_HELIX, lane], c[K.CENTRE_DISTANCE, lane],
+                                               c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane])
+                if approach > c[K.MAX_NORMAL_APPROACH, lane]:
+                    return 6
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
         for chamber in (S.CHAMBER1_PRESSURE, S.CHAMBER2_PRESSURE):
             if x[chamber, lane] <= 0.0 or x[chamber, lane] > 2.0 * c[K.P_SUPPLY, lane]:
@@ -88,7 +102,8 @@ def record(row, t, x, c, u, w, lane, memory, levels, force_table):
     row[Signal.NUT1_POSITION] = x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane]
     row[Signal.NUT2_POSITION] = x[S.NUT2_POSITION, lane] - c[K.NUT1_ZERO, lane]
     row[Signal.SCREW_ANGLE] = x[S.SCREW_ANGLE, lane]
-    row[Signal.SCREW_EQUIVALENT_POSITION] = c[K.LEAD_ARM, lane] * (x[S.SCREW_ANGLE, lane] - c[K.SCREW_ANGLE_ZERO, lane])
+    row[Signal.SCREW_EQUIVALENT_POSITION] = c[K.LEAD_ARM_NOMINAL, lane] * (
+        x[S.SCREW_ANGLE, lane] - c[K.SCREW_ANGLE_ZERO, lane])
     (row[Signal.BALL_GROOVE_FRICTION_TORQUE], row[Signal.BALL_SCREW_EFFICIENCY], row[Signal.SCREW_TWIST],
      row[Signal.SCREW_AXIAL_POSITION]) = ball_screw_outputs(x, c, w, lane)
     row[Signal.MOTOR_CURRENT] = x[S.CURRENT, lane]
@@ -115,14 +130,15 @@ def record(row, t, x, c, u, w, lane, memory, levels, force_table):
 
 @numba.njit(**SCALAR)
 def force_loop(t, c, u, memory, lane, sample_time, force_table):
-    """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading -> valve command.
+    """Digital PI force loop of the cRIO (Sec. 9.3): load-cell reading (``M.FORCE_FEEDBACK``, with or without the
+    electrical noise: the scene's ``noise_path``) -> valve command.
 
     The PI output is a deviation from the valve's mid position, limited to the
     command range; it goes through the output D/A and the valve's hysteresis.
     """
     half_span = 0.5 * (c[K.VALVE_MAX, lane] - c[K.VALVE_MIN, lane])
     deviation, memory[M.FORCE_INTEGRAL, lane] = pi_step(
-        profile_value(force_table, t) - memory[M.EXTERNAL, lane], memory[M.FORCE_INTEGRAL, lane],
+        profile_value(force_table, t) - memory[M.FORCE_FEEDBACK, lane], memory[M.FORCE_INTEGRAL, lane],
         c[K.FORCE_KP, lane], c[K.FORCE_KI, lane], sample_time, half_span)
     if c[K.VALVE_COMMAND_BITS, lane] > 0.0:
         deviation = convert(deviation, half_span, c[K.VALVE_COMMAND_BITS, lane])
@@ -154,7 +170,8 @@ def acquisition_sample(t, x, c, u, w, levels, memory, parameters, states, noise,
         memory[M.SPEED_COMMAND, lane] = command
         if levels[PNEUMATICS] == PNEUMATICS_FULL:
             force_loop(t, c, u, memory, lane, sample_time, force_table)
-        arm = c[K.LEAD_ARM, lane]
+        # Eq. 9.12 takes the screw's nominal lead: the bench's engineer does not know the lead error or the expansion
+        arm = c[K.LEAD_ARM_NOMINAL, lane]
         accumulate(memory[M.FEATURES_TRUE:M.FEATURES_TRUE + N_ACCUMULATORS, lane],
                    x[S.NUT1_POSITION, lane] - c[K.NUT1_ZERO, lane],
                    arm * (x[S.SCREW_ANGLE, lane] - c[K.SCREW_ANGLE_ZERO, lane]), w[W.TORQUE, lane], n == 0, threshold)

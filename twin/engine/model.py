@@ -10,6 +10,7 @@ from typing import Protocol
 import numpy as np
 from scipy.optimize import brentq
 
+from numerics.elementary import sin
 from numerics.linalg import lstsq
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
@@ -26,8 +27,11 @@ from twin.physics.ball_screw import (
     helix_angle,
     nut_axial_force,
     stiffness_at,
+    travel_deviation,
 )
 from twin.physics.drivetrain import screw_inertia, screw_mass, torsional_stiffness
+from twin.physics.guides import abbe_reading_gain
+from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
 from twin.physics.preload import series_stiffness
 from twin.scenes import Scene
 
@@ -107,10 +111,14 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     for constant, name in PARAMETER_CONSTANTS.items():
         c[constant] = p[name]
     ratio = p["reducer.ratio"]
-    # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3)
+    room_temperature = scene.condition("room_temperature")
+    # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3): the power-consistent equivalent circuit (twin.physics.motor)
+    c[K.R20] = equivalent_resistance(p["motor.winding_resistance_20C"])
+    c[K.INDUCTANCE] = equivalent_inductance(p["motor.inductance"])
+    c[K.VOLTAGE_LIMIT] = equivalent_voltage_limit(p["drive.dc_bus_voltage"], p["drive.phase_voltage_amplitude_limit"])
     c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
-    c[K.AMBIENT] = scene.condition("room_temperature")
+    c[K.AMBIENT] = room_temperature
     # torsional chain (Sec. 9.3 "Torque meter", Eq. 9.7)
     c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
     c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
@@ -119,6 +127,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.SHAFT_EA] = p["ball_screw.elastic_modulus"] * math.pi * p["ball_screw.screw_root_diameter"] ** 2 / 4.0
     # ball-screw contact (Eqs. 9.4-9.6, 5.5, Sec. 7.3)
     stiffness_poly = contact_constants(c, p, curvature)
+    lead_constants(c, p, room_temperature)
     levels = level_codes(fidelity.levels)
     contact_model = level_code("contact", fidelity.level("contact"))
     if contact_model == CONTACT_LINEAR:
@@ -136,6 +145,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
     c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
     c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
+    c[K.SCALE_READING_GAIN] = scale_reading_gain(p, room_temperature)
     # digital loops (Table B.3, controller.toml)
     converters = fidelity.level("output_converters") == "quantized"
     if converters:
@@ -147,6 +157,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
 
     if converters:
         c[K.VALVE_COMMAND_BITS] = p["controller.valve_command_dac_bits"]
+    c[K.FORCE_FEEDBACK_NOISE] = 1.0 if scene.condition("noise_path") == "feedback" else 0.0
 
     x0 = initial_state(c, contact_model, preload, scene.condition("zero_procedure"), fidelity.level("nut_rotation"))
     # The encoders are zeroed on the initial state, whatever the procedure (docs/model.md).
@@ -167,7 +178,7 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     pitch_radius = p["ball_screw.pitch_radius"]
     alpha_e = helix_angle(lead, pitch_radius)
     alpha_0 = p["ball_screw.contact_angle"]
-    c[K.LEAD_ARM] = lead / (2.0 * math.pi)
+    c[K.LEAD_ARM_NOMINAL] = lead / (2.0 * math.pi)
     c[K.COS_HELIX] = math.cos(alpha_e)
     c[K.CENTRE_DISTANCE] = groove_centre_distance(ball_radius, p["ball_screw.conformity"])
     c[K.CONTACT_ANGLE_0] = alpha_0
@@ -184,6 +195,50 @@ def contact_constants(c: np.ndarray, p: dict[str, float], curvature: str) -> np.
     c[K.CONTACT_DAMPING] = p["ball_screw.contact_damping_coefficient"]
     c[K.LOADED_BALLS] = effective_loaded_balls(p["ball_screw.total_balls"], p["ball_screw.loaded_ball_fraction"])
     return stiffness_poly
+
+
+def lead_constants(c: np.ndarray, p: dict[str, float], room_temperature: float) -> None:
+    """Fill the screw's lead at the room temperature and its travel deviation (:mod:`twin.physics.ball_screw`) into
+    ``c`` (after :func:`contact_constants`, which sets the nominal lead).
+
+    ``p(T) = p (1 + alpha (T - T_ref))``: Sec. 7.7, Eq. 7.72 in its dimensionally consistent form, with the screw at
+    the room temperature of the test (friction heats it by less than 0.4 K in a 10 s test: ``ball_screw.toml``).
+    The travel deviation's offsets at the test zero are computed with the same ``sin`` as the compiled law, so
+    that ``e(0) = 0`` exactly.
+    """
+    expansion = p["ball_screw.thermal_expansion_coefficient"] * (
+        room_temperature - p["ball_screw.thermal_reference_temperature"])
+    c[K.LEAD_ARM] = c[K.LEAD_ARM_NOMINAL] * (1.0 + expansion)
+    c[K.LEAD_WAVE_NUMBER] = p["ball_screw.lead"] / p["ball_screw.lead_travel_variation_wavelength"]
+    c[K.LEAD_WAVE_AT_ZERO] = sin(c[K.LEAD_WAVE_PHASE])
+    c[K.LEAD_REVOLUTION_AT_ZERO] = sin(c[K.LEAD_REVOLUTION_PHASE])
+
+
+def lead_travel(c: np.ndarray, angle: float) -> tuple[float, float]:
+    """Travel of a nut along the screw at the screw angle ``angle`` relative to it, ``p(T) phi / 2 pi + e(phi)``
+    [m], and its rate per angle, the local lead arm ``p(T) / 2 pi + e'(phi)`` [m/rad] (the kinematics of
+    :func:`twin.engine.plant._nut_kinematics` for the initial state)."""
+    deviation, rate = travel_deviation(angle, c[K.LEAD_ARM_NOMINAL], c[K.LEAD_SLOPE], c[K.LEAD_WAVE_AMPLITUDE],
+                                       c[K.LEAD_WAVE_NUMBER], c[K.LEAD_WAVE_PHASE], c[K.LEAD_WAVE_AT_ZERO],
+                                       c[K.LEAD_REVOLUTION_AMPLITUDE], c[K.LEAD_REVOLUTION_PHASE],
+                                       c[K.LEAD_REVOLUTION_AT_ZERO])
+    return c[K.LEAD_ARM] * angle + deviation, c[K.LEAD_ARM] + rate
+
+
+def scale_reading_gain(p: dict[str, float], room_temperature: float) -> float:
+    """Travel on the linear scale per metre of sled travel: the Abbe error of the guides' angular errors
+    (:func:`twin.physics.guides.abbe_reading_gain`) read on a scale expanded by the room temperature.
+
+    A warm scale has wider graduations: ``u - u_0 = (1 + h_z kappa_p - h_y kappa_y) (x - x_0) / (1 + alpha_s (T -
+    T_ref))``, with the zero at the test's start (the mounting phase, ``sensors.linear_encoder_mounting_phase``,
+    places that zero within a signal period). Exactly 1 without angular errors at the reference temperature or
+    with a non-expanding scale.
+    """
+    expansion = p["sensors.linear_encoder_thermal_expansion"] * (
+        room_temperature - p["sensors.linear_encoder_reference_temperature"])
+    abbe = abbe_reading_gain(p["sled.encoder_abbe_offset_vertical"], p["sled.encoder_abbe_offset_lateral"],
+                             p["sled.guide_pitch_rate"], p["sled.guide_yaw_rate"])
+    return abbe / (1.0 + expansion)
 
 
 @lru_cache(maxsize=64)
@@ -374,11 +429,16 @@ def preload_equilibrium(c: np.ndarray, contact_model: int, preload: float, nut_r
     if preload <= 0.0:
         return x
     orientation = c[K.PRELOAD_ORIENTATION]
-    arm = c[K.LEAD_ARM]
     for force, pos, ang in ((orientation * preload, S.NUT1_POSITION, S.NUT1_ANGLE),
                             (-orientation * preload, S.NUT2_POSITION, S.NUT2_ANGLE)):
-        x[ang] = arm * force / c[K.GUIDE_ROLL_STIFFNESS] if nut_rotation == "on" else 0.0
-        x[pos] = -arm * x[ang] - contact_position_for_force(c, contact_model, force)
+        # the roll balances the contact torque through the local lead arm at the roll angle it causes: two
+        # substitutions (the arm changes by e'' theta, 1e-8 of itself for the ~3 urad roll at 1 kN; 1e-16 after two)
+        angle = 0.0
+        if nut_rotation == "on":
+            for _ in range(2):
+                angle = lead_travel(c, -angle)[1] * force / c[K.GUIDE_ROLL_STIFFNESS]
+        x[ang] = angle
+        x[pos] = lead_travel(c, -x[ang])[0] - contact_position_for_force(c, contact_model, force)
     c[K.PRELOAD_COMPRESSION] = (preload / c[K.PRELOAD_STIFFNESS]
                                 + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION]))
     return x

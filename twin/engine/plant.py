@@ -40,7 +40,7 @@ from twin.engine.codes import (
 from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
 from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
-from twin.physics.ball_screw import nut_axial_force, nut_elastic_force
+from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
 from twin.physics.coupling import elasto_backlash
 from twin.physics.friction import stribeck_friction
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
@@ -66,9 +66,10 @@ class W(IntEnum):
     NUT_RATE = 17           # 2 rows: its rate [m/s]
     BALANCE_DONE = 19       # 1.0 once the lane's quasi-static balance has converged in this evaluation
     BALANCE_FAILED = 20     # 1.0 if a balance of this run ever ran out of iterations (the guard reads it)
+    NUT_LEAD_SLOPE = 21     # 2 rows: the lead error's rate e'(theta_s - theta_ni) at nut i [m/rad]
 
 
-N_WORK = W.BALANCE_FAILED + 1  # the per-nut members name their first row only
+N_WORK = W.NUT_LEAD_SLOPE + 2  # the per-nut members name their first row only
 
 #: Newton iterations the quasi-static screw-axial balance may take in one evaluation; warm-started from the last
 #: solution it needs 1-3 (measured: docs/accuracy.md); a lane that runs out is flagged (``W.BALANCE_FAILED``).
@@ -83,16 +84,52 @@ def work_rows(lanes: int) -> np.ndarray:
     return np.zeros((N_WORK, lanes))
 
 
+@numba.njit(**SCALAR)
+def lead_deviation(c, lane, angle):
+    """The screw's travel deviation ``e`` [m] and its rate ``e'`` [m/rad] at the screw angle ``angle`` relative to a
+    nut, since the test's zero (:func:`twin.physics.ball_screw.travel_deviation`, ISO 3408-3)."""
+    return travel_deviation(angle, c[K.LEAD_ARM_NOMINAL, lane], c[K.LEAD_SLOPE, lane], c[K.LEAD_WAVE_AMPLITUDE, lane],
+                            c[K.LEAD_WAVE_NUMBER, lane], c[K.LEAD_WAVE_PHASE, lane], c[K.LEAD_WAVE_AT_ZERO, lane],
+                            c[K.LEAD_REVOLUTION_AMPLITUDE, lane], c[K.LEAD_REVOLUTION_PHASE, lane],
+                            c[K.LEAD_REVOLUTION_AT_ZERO, lane])
+
+
+@numba.njit(**KERNEL)
+def _has_lead_error(c, lanes):
+    """Whether any lane of the group has a lead error. A lane without one gets ``e = e' = 0`` exactly from
+    :func:`lead_deviation`, and adding those zeros changes no bit of its kinematics: skipping the computation for a
+    group without lead errors gives every lane the numbers it has in any group."""
+    amplitude = 0.0
+    for lane in range(lanes):
+        amplitude += (abs(c[K.LEAD_SLOPE, lane]) + abs(c[K.LEAD_WAVE_AMPLITUDE, lane])
+                      + abs(c[K.LEAD_REVOLUTION_AMPLITUDE, lane]))
+    return amplitude > 0.0
+
+
 @numba.njit(**KERNEL)
 def _nut_kinematics(x, c, w, lanes, rows):
-    """``dx_i`` and its rate without the screw's axial motion (Eq. 9.5): ``p (theta_s - theta_ni) / 2 pi - x_ni``,
-    into ``rows`` and ``rows + 2`` (:data:`W.NUT_KINEMATIC`, or directly :data:`W.NUT_DX` for the dynamic level)."""
+    """``dx_i`` and its rate without the screw's axial motion (Eq. 9.5 with the lead error,
+    :mod:`twin.physics.ball_screw`): ``p(T) phi_i / 2 pi + e(phi_i) - x_ni`` with ``phi_i = theta_s - theta_ni``,
+    into ``rows`` and ``rows + 2`` (:data:`W.NUT_KINEMATIC`, or directly :data:`W.NUT_DX` for the dynamic level),
+    and ``e'(phi_i)`` into :data:`W.NUT_LEAD_SLOPE` for the reaction torques."""
+    errors = _has_lead_error(c, lanes)
     for nut in range(2):
         position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
-        for lane in range(lanes):
-            arm = c[K.LEAD_ARM, lane]
-            w[rows + nut, lane] = arm * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane]) - x[position, lane]
-            w[rows + 2 + nut, lane] = arm * (x[S.SCREW_SPEED, lane] - x[position + 3, lane]) - x[position + 1, lane]
+        if errors:
+            for lane in range(lanes):
+                arm = c[K.LEAD_ARM, lane]
+                angle = x[S.SCREW_ANGLE, lane] - x[position + 2, lane]
+                rate = x[S.SCREW_SPEED, lane] - x[position + 3, lane]
+                deviation, slope = lead_deviation(c, lane, angle)
+                w[rows + nut, lane] = (arm * angle + deviation) - x[position, lane]
+                w[rows + 2 + nut, lane] = (arm * rate + slope * rate) - x[position + 1, lane]
+                w[W.NUT_LEAD_SLOPE + nut, lane] = slope
+        else:
+            for lane in range(lanes):
+                arm = c[K.LEAD_ARM, lane]
+                w[rows + nut, lane] = arm * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane]) - x[position, lane]
+                w[rows + 2 + nut, lane] = arm * (x[S.SCREW_SPEED, lane] - x[position + 3, lane]) - x[position + 1, lane]
+                w[W.NUT_LEAD_SLOPE + nut, lane] = 0.0
 
 
 @numba.njit(**KERNEL)
@@ -307,17 +344,26 @@ def measurands(t, x, c, w, lanes, levels, force_table):
     _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
 
 
+@numba.njit(**SCALAR)
+def current_loop_voltage(x, c, u, lane):
+    """The analog current PI's output (the demanded voltage) and the voltage the inverter applies to the equivalent
+    circuit, limited to ``K.VOLTAGE_LIMIT`` (:func:`twin.physics.motor.equivalent_voltage_limit`) [V]."""
+    demand_voltage = (c[K.CURRENT_KP, lane] * (u[U.CURRENT_DEMAND, lane] - x[S.HALL_CURRENT, lane])
+                      + x[S.CURRENT_PI, lane])
+    limit = c[K.VOLTAGE_LIMIT, lane]
+    return min(max(demand_voltage, -limit), limit), demand_voltage
+
+
 @numba.njit(**KERNEL)
 def _drive_electronics(x, c, u, dxdt, lanes):
-    """Full current loop: winding current (Eq. 9.1), Hall sensor and analog PI with back-calculation anti-windup."""
+    """Full current loop: winding current (Eq. 9.1, power-consistent: :mod:`twin.physics.motor`), Hall sensor and
+    analog PI with back-calculation anti-windup."""
     for lane in range(lanes):
         demand = u[U.CURRENT_DEMAND, lane]
-        demand_voltage = c[K.CURRENT_KP, lane] * (demand - x[S.HALL_CURRENT, lane]) + x[S.CURRENT_PI, lane]
-        bus = c[K.DC_BUS, lane]
-        voltage = min(max(demand_voltage, -bus), bus)
+        voltage, demand_voltage = current_loop_voltage(x, c, u, lane)
         resistance = winding_resistance(x[S.WINDING_TEMP, lane], c[K.R20, lane], c[K.R_TEMP_COEF, lane])
         dxdt[S.CURRENT, lane] = current_derivative(voltage, x[S.CURRENT, lane], x[S.REDUCER_SPEED, lane], resistance,
-                                                   c[K.INDUCTANCE, lane], c[K.SPEED_CONSTANT, lane], c[K.RATIO, lane])
+                                                   c[K.INDUCTANCE, lane], c[K.TORQUE_CONSTANT, lane], c[K.RATIO, lane])
         dxdt[S.CURRENT_PI, lane] = (c[K.CURRENT_KI, lane] * (demand - x[S.HALL_CURRENT, lane])
                                     + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME, lane])
         dxdt[S.HALL_CURRENT, lane] = (x[S.CURRENT, lane] - x[S.HALL_CURRENT, lane]) / c[K.HALL_TAU, lane]
@@ -340,6 +386,13 @@ def _motor(x, c, u, dxdt, lanes, current_loop, thermal):
                 temperature, c[K.AMBIENT, lane], resistance * x[S.CURRENT, lane] * x[S.CURRENT, lane],
                 c[K.THERMAL_RESISTANCE, lane], c[K.THERMAL_TAU, lane], c[K.HEAT_TRANSFER, lane],
                 c[K.MOTOR_AREA, lane], c[K.EMISSIVITY, lane])
+
+
+@numba.njit(**SCALAR)
+def _lead_error_torque(w, lane):
+    """The lead error's share of the nuts' reaction torque on the screw, ``e'_1 f_1 + e'_2 f_2`` [N m]: the contact
+    forces act through the local lead ``p/2pi + e'`` (:mod:`twin.physics.ball_screw`); 0 without a lead error."""
+    return w[W.NUT_LEAD_SLOPE, lane] * w[W.NUT_FORCE, lane] + w[W.NUT_LEAD_SLOPE + 1, lane] * w[W.NUT_FORCE + 1, lane]
 
 
 @numba.njit(**KERNEL)
@@ -367,7 +420,7 @@ def _rotation(x, c, w, dxdt, lanes):
         dxdt[S.SCREW_ANGLE, lane] = w_s
         dxdt[S.SCREW_SPEED, lane] = (torque - c[K.SCREW_DAMPING, lane] * w_s - friction_s
                                      - c[K.LEAD_ARM, lane] * (w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
-                                     + screw_1 + screw_2) / c[K.J_SCREW_SIDE, lane]
+                                     - _lead_error_torque(w, lane) + screw_1 + screw_2) / c[K.J_SCREW_SIDE, lane]
 
 
 @numba.njit(**KERNEL)
@@ -407,7 +460,8 @@ def _nuts(x, c, w, dxdt, lanes, rotation):
                                         ) / c[K.NUT1_MASS + NUT_CONSTANT_STRIDE * nut, lane]
             if rotation == NUT_ROTATION_ON:
                 dxdt[position + 2, lane] = x[position + 3, lane]
-                dxdt[position + 3, lane] = (c[K.LEAD_ARM, lane] * w[W.NUT_FORCE + nut, lane] + nut_torque
+                dxdt[position + 3, lane] = (c[K.LEAD_ARM, lane] * w[W.NUT_FORCE + nut, lane]
+                                            + w[W.NUT_LEAD_SLOPE + nut, lane] * w[W.NUT_FORCE + nut, lane] + nut_torque
                                             - c[K.GUIDE_ROLL_STIFFNESS, lane] * x[position + 2, lane]
                                             - c[K.GUIDE_ROLL_DAMPING, lane] * x[position + 3, lane]) / c[K.J_NUT, lane]
 
@@ -511,7 +565,8 @@ def ball_screw_outputs(x, c, w, lane):
                                                              c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
     f1, f2 = w[W.NUT_FORCE, lane], w[W.NUT_FORCE + 1, lane]
     friction_torque = -(screw_1 + screw_2)
-    power_in = (c[K.LEAD_ARM, lane] * (f1 + f2) + friction_torque) * x[S.SCREW_SPEED, lane]
+    power_in = ((c[K.LEAD_ARM, lane] * (f1 + f2) + _lead_error_torque(w, lane) + friction_torque)
+                * x[S.SCREW_SPEED, lane])
     power_out = (f1 + nut_axial_1) * x[S.NUT1_SPEED, lane] + (f2 + nut_axial_2) * x[S.NUT2_SPEED, lane]
     efficiency = 0.0
     if power_in > EFFICIENCY_POWER_FLOOR and power_out >= 0.0:

@@ -25,6 +25,7 @@ from twin.fidelity.requests import requested_levels
 from twin.layout import N_CONSTANTS, N_STATES, OUTPUT_NAMES
 from twin.levels import SUBSYSTEMS, level_code
 from twin.parameters import ParameterSet
+from twin.physics.motor import equivalent_resistance, equivalent_voltage_limit
 from twin.scenes import Scene
 from twin.scenes.profiles import profile_values
 
@@ -181,12 +182,16 @@ def _not_decided(needs: SceneNeeds, unwanted: Mapping[str, str], decided) -> tup
 
 
 def _voltage_fraction(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    """Peak voltage of the power-consistent equivalent circuit (:mod:`twin.physics.motor`: back-EMF ``k_t w`` and
+    ``R_eq`` hot at the maximum current) over the largest voltage the inverter applies to it."""
     p = needs.params
     rise = needs.settings["hot_winding_temperature_rise"]
-    hot = p.value("motor.winding_resistance_20C") * (1.0 + p.value("motor.resistance_temperature_coefficient") * rise)
-    voltage = p.value("motor.speed_constant") * needs.peak_motor_speed + hot * p.value("motor.max_current")
-    fraction = voltage / p.value("drive.dc_bus_voltage")
-    return fraction <= limit, f"peak voltage demand {fraction:.2f} of the DC bus (limit {limit:g})"
+    hot = equivalent_resistance(p.value("motor.winding_resistance_20C")) * (
+        1.0 + p.value("motor.resistance_temperature_coefficient") * rise)
+    voltage = p.value("motor.torque_constant") * needs.peak_motor_speed + hot * p.value("motor.max_current")
+    fraction = voltage / equivalent_voltage_limit(p.value("drive.dc_bus_voltage"),
+                                                  p.value("drive.phase_voltage_amplitude_limit"))
+    return fraction <= limit, f"peak voltage demand {fraction:.2f} of the inverter's limit (limit {limit:g})"
 
 
 def _duration_over_tau(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:

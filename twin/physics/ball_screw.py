@@ -36,12 +36,28 @@ component is ``P sin(alpha) cos(alpha_e)`` (Eq. 9.6) and ``Z_eff`` spheres carry
 it (Eq. 5.5). Because ``d(delta_n)/d(delta_a) = sin(alpha)`` exactly, the
 axial force is the derivative of the stored elastic energy: the undamped
 contact is conservative.
+
+Lead (travel) error and thermal expansion
+-----------------------------------------
+A real screw's groove is not at ``p phi / (2 pi)`` along it: ISO 3408-3 (ball screws, acceptance tests)
+bounds its travel deviation by a mean deviation over the useful travel (the slope of the "mean travel"
+line), a variation about that line over the travel, and a variation within one revolution
+(:func:`travel_deviation`). The nut follows the groove, so the kinematics of Eq. 9.5 become
+
+    dx_i = x_s + p(T) (theta_s - theta_ni) / (2 pi) + e(theta_s - theta_ni) - x_ni,
+
+and the reaction torques on screw and nut take the local lead ``p(T)/(2 pi) + e'`` (the contact force
+is the gradient of the same elastic energy). ``p(T) = p (1 + alpha (T - 20 degC))`` is the steel's
+thermal expansion (Sec. 7.7, Eq. 7.72 in its dimensionally consistent form). Both nuts ride the same
+groove a whole number of leads apart, so the per-revolution term is the same for both; their spacing's
+share of the long-wave term (a few um over the test, against a 1e6 N/m disc-spring set) is neglected.
 """
 
 import math
 
 import numba
 
+from numerics.elementary import cos, sin
 from numerics.jit import SCALAR
 from twin.physics.hertz import damping_coefficient, saturated_damping_force
 
@@ -255,3 +271,34 @@ def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix,
     damping = damping if damping_coefficient_h * abs(approach_rate) < elastic else 0.0
     tangent = scale * (normal_stiffness * sin_alpha * sin_alpha + elastic * geometric)
     return (tangent if closed else 0.0), (damping if closed else 0.0), (elastic if closed else 0.0)
+
+
+@numba.njit(**SCALAR)
+def travel_deviation(angle, lead_arm, slope, wave_amplitude, wave_number, wave_phase, wave_at_zero,
+                     revolution_amplitude, revolution_phase, revolution_at_zero):
+    """Travel deviation of the nut from its nominal travel and its rate per screw angle (ISO 3408-3:2006).
+
+    ``phi`` is the screw angle relative to the nut since the test's zero, ``X = p phi / (2 pi)`` the nominal
+    travel (module docstring)::
+
+        e(phi)  = s X + a_u [sin(k_u phi + phi_u) - sin(phi_u)] + a_2pi [sin(phi + phi_2pi) - sin(phi_2pi)]
+        e'(phi) = s p / (2 pi) + a_u k_u cos(k_u phi + phi_u) + a_2pi cos(phi + phi_2pi)
+
+    ``s`` is the mean travel deviation per unit travel (ISO 3408-3's ``e_p / l_u``), ``a_u`` the amplitude of
+    the variation over the useful travel, one sine of wavelength ``lambda_u`` (``v_up / 2``), with
+    ``k_u = p / lambda_u`` per rad of screw angle, and ``a_2pi`` the variation within one revolution
+    (``v_2pi p / 2``); ``e(0) = 0``: the test is zeroed where it starts. ``sin`` and ``cos`` are
+    :mod:`numerics.elementary`'s (the same bits in a vector loop); ``wave_at_zero`` and ``revolution_at_zero``
+    are ``sin(phi_u)`` and ``sin(phi_2pi)`` computed with the same function, so ``e(0)`` is exactly 0.
+
+    Returns
+    -------
+    (deviation, rate)
+        ``e`` [m] and ``de/dphi`` [m/rad]; both exactly zero when ``s``, ``a_u`` and ``a_2pi`` are.
+    """
+    wave = wave_number * angle + wave_phase
+    revolution = angle + revolution_phase
+    deviation = (slope * (lead_arm * angle) + wave_amplitude * (sin(wave) - wave_at_zero)
+                 + revolution_amplitude * (sin(revolution) - revolution_at_zero))
+    rate = slope * lead_arm + wave_amplitude * wave_number * cos(wave) + revolution_amplitude * cos(revolution)
+    return deviation, rate

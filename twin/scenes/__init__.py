@@ -4,7 +4,8 @@ A scene is what an engineer would write on a test sheet: how long the test
 lasts, the sled position demand, the external force demand, and the conditions
 (:data:`CONDITIONS`: preload and its configuration, ball-screw axial backlash,
 room temperature, supply pressure, how the bench is initialised and where the
-encoders are zeroed, whether the pneumatic cylinder is attached). The thesis's
+encoders are zeroed, whether the pneumatic cylinder is attached, where the load
+cell's electrical noise enters). The thesis's
 data sets of Table 9.4 are the scenes ``ds1`` ... ``ds5``; ``ds6``/``ds7``
 repeat ``ds2`` with 5 um / 40 um backlash; ``nominal`` is the Fig. 9.6/9.7 case.
 """
@@ -88,6 +89,18 @@ CYLINDER_STATES = {
                 "demand is then impossible)",
 }
 
+#: Where the external-force load cell's electrical noise (Table 9.5, +/-2.5 %FS) enters (docs/model.md, "Where the
+#: electrical noise enters"): a model-form condition, because the thesis does not settle it.
+NOISE_PATHS = {
+    "feedback": "one noisy DAQ conversion per acquisition instant serves the record and the force loop (Sec. 9.2: the "
+                "cRIO acquires every sensor and closes the force loop; Sec. 9.3.2: the loop acts on 'the force "
+                "feedback measured by the load cell'): the noise reaches the valve and, with the cylinder attached, "
+                "the master nut",
+    "recorded": "the noise is in the recorded signals only (Sec. 9.3.1: the signals are 'digitalised before being "
+                "saved ... to simulate the measurement noise'): the force loop reads the same conversion without the "
+                "noise sample",
+}
+
 #: Every condition a scene states: the one table of names, units and allowed values
 #: (campaigns.catalog derives the campaigns' condition units from it).
 CONDITIONS: dict[str, Condition] = {
@@ -102,6 +115,9 @@ CONDITIONS: dict[str, Condition] = {
                                 ", ".join(ZERO_PROCEDURES), choices=tuple(ZERO_PROCEDURES), default="preloaded"),
     "cylinder": Condition("", "state of the pneumatic cylinder", ", ".join(CYLINDER_STATES),
                           choices=tuple(CYLINDER_STATES), default="attached"),
+    "noise_path": Condition("", "where the load cell's electrical noise enters: the force loop's feedback and the "
+                                "record, or the record only", ", ".join(NOISE_PATHS), choices=tuple(NOISE_PATHS),
+                            default="feedback"),
 }
 #: Prefix that names a scene condition among parameter names (``scene.backlash`` beside ``motor.inertia``) in
 #: ``--set`` overrides and campaign uncertainty targets; :func:`split_targets` is the one parser of such names.
@@ -138,8 +154,9 @@ class Scene:
         out of the file): ``preload`` [N], ``preload_configuration`` ("O" separates
         the nuts, "X" draws them together), ``backlash`` [m] (total axial play of
         each nut), ``room_temperature`` [K], ``supply_pressure`` [Pa, absolute],
-        ``zero_procedure`` (:data:`ZERO_PROCEDURES`, default "preloaded") and
-        ``cylinder`` (:data:`CYLINDER_STATES`, default "attached").
+        ``zero_procedure`` (:data:`ZERO_PROCEDURES`, default "preloaded"),
+        ``cylinder`` (:data:`CYLINDER_STATES`, default "attached") and
+        ``noise_path`` (:data:`NOISE_PATHS`, default "feedback").
     outputs : tuple of str
         Signals and features the test must produce (:data:`twin.layout.OUTPUT_NAMES`);
         empty means all of them. The automatic fidelity (:mod:`twin.fidelity`) models
