@@ -43,8 +43,9 @@ State rows (float64, ``AS_SIZE``), set by :func:`analog_init`:
 ``AS_T``                    time of the last step [s]
 ``AS_INPUT``                transducer voltage at the last step [V]
 ``AS_FILTERED``             conditioner output at the last step [V]
-``AS_NEXT_REFRESH``         next refresh instant [s]
+``AS_NEXT_REFRESH``         index of the next refresh instant (``origin + index * period``) [-]
 ``AS_OUTPUT``               voltage presented to the DAQ [V]
+``AS_REFRESH_ORIGIN``       time the refresh instants are counted from [s]
 ==========================  ====================================================
 """
 
@@ -78,7 +79,8 @@ AS_INPUT = 1
 AS_FILTERED = 2
 AS_NEXT_REFRESH = 3
 AS_OUTPUT = 4
-AS_SIZE = 5
+AS_REFRESH_ORIGIN = 5
+AS_SIZE = 6
 
 
 def analog_parameters(
@@ -182,7 +184,8 @@ def analog_init(state, params, lane, x0, t0):
     state[AS_T, lane] = t0
     state[AS_INPUT, lane] = v
     state[AS_FILTERED, lane] = v
-    state[AS_NEXT_REFRESH, lane] = t0 + params[AN_REFRESH_PERIOD, lane]
+    state[AS_REFRESH_ORIGIN, lane] = t0
+    state[AS_NEXT_REFRESH, lane] = 1.0
     state[AS_OUTPUT, lane] = output_stage(params, lane, v)
 
 
@@ -223,7 +226,8 @@ def analog_step(state, params, lane, x, t):
     t_prev = state[AS_T, lane]
     u_prev = state[AS_INPUT, lane]
     y_prev = state[AS_FILTERED, lane]
-    t_next = state[AS_NEXT_REFRESH, lane]
+    origin = state[AS_REFRESH_ORIGIN, lane]
+    next_index = state[AS_NEXT_REFRESH, lane]
     output_before = state[AS_OUTPUT, lane]
     tau = params[AN_TAU, lane]
     period = params[AN_REFRESH_PERIOD, lane]
@@ -234,14 +238,18 @@ def analog_step(state, params, lane, x, t):
     y = lagged if tau > 0.0 else u
 
     held = period > 0.0
-    due = held & (t >= t_next)
-    n_refresh = np.floor((t - t_next) / period) + 1.0   # refreshes in this step, when due
-    t_refresh = t_next + (n_refresh - 1.0) * period     # the last of them
+    # The refresh instants are counted from the origin (origin + m * period, one rounding each), never accumulated:
+    # the last instant at or before t is then the same whether the channel was stepped every step or only when due.
+    last = np.floor((t - origin) / period)
+    last = last + 1.0 if origin + (last + 1.0) * period <= t else last
+    last = last - 1.0 if origin + last * period > t else last
+    due = held & (last >= next_index)
+    t_refresh = origin + last * period
     y_refresh = y_prev + (y - y_prev) * (t_refresh - t_prev) / dt
     y_refresh = y_refresh if dt > 0.0 else y
     presented = output_stage(params, lane, y_refresh if held else y)
     state[AS_OUTPUT, lane] = presented if (due | (not held)) else output_before
-    state[AS_NEXT_REFRESH, lane] = t_next + n_refresh * period if due else t_next
+    state[AS_NEXT_REFRESH, lane] = last + 1.0 if due else next_index
     state[AS_T, lane] = t
     state[AS_INPUT, lane] = u
     state[AS_FILTERED, lane] = y

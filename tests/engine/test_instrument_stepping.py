@@ -52,27 +52,11 @@ def _readings(parameters, channel, dt, signal):
     return np.array(readings), stepped
 
 
-#: The load cell's 19.2 kHz refresh instants fall exactly on an acquisition instant every 5 ms (96 periods); there
-#: ``t >= t_next`` decides by rounding, and the refresh clock ``t_next`` is accumulated differently when the channel
-#: is stepped at every step (a few periods at a time) and when it is stepped only when due (the skipped periods in
-#: one jump), so the two disagree on whether the refresh at the reading instant is taken.
-TIE_REASON = (
-    "engine: channel_due is not equivalent to stepping every step for the load cell (19.2 kHz refresh): at the "
-    "acquisition instants where a refresh instant coincides with the reading (every 5 ms = 96 periods) the refresh "
-    "clock AS_NEXT_REFRESH, advanced in one jump after the skipped steps instead of a few periods per step, rounds "
-    "to the other side of t, so sensors.analog.analog_step takes (or skips) that refresh the other way; the reading "
-    "differs by 1-9 DAQ counts (up to 6.7 N) at 2-3 of 40 samples, at 125, 62.5 and 31.25 us alike (measured). "
-    "A refresh clock counted in whole periods from the start (t0 + n * period), or ties decided with a margin, would "
-    "make the two agree.")
-
-
 @pytest.mark.parametrize("dt", [1.25e-4, 6.25e-5, 3.125e-5])
-@pytest.mark.parametrize("channel", [TORQUE_METER, PRELOAD_CELL,
-                                     pytest.param(LOAD_CELL, marks=pytest.mark.xfail(strict=True, reason=TIE_REASON)),
-                                     CURRENT_MONITOR])
+@pytest.mark.parametrize("channel", [TORQUE_METER, PRELOAD_CELL, LOAD_CELL, CURRENT_MONITOR])
 def test_channels_stepped_only_when_due_read_like_every_step(bench, channel, dt):
     """With the bench's own channels: the torque meter's 1 kHz refresh ties with the 1 kHz acquisition, the load
-    cell's 19.2 kHz is faster than any step, the preload conditioner is a filter (stepped every step), the current
+    cell's and the preload cell's conditioners are filters (stepped every step), the current
     monitor is continuous (stepped only at the reading). Exactly the readings of stepping every step, at the
     default step and at its halves."""
     parameters = _instruments(bench, dt)
@@ -81,7 +65,7 @@ def test_channels_stepped_only_when_due_read_like_every_step(bench, channel, dt)
     assert len(readings) == 40
     np.testing.assert_array_equal(readings[:, 0], readings[:, 1])
     if parameters[channel, AN_TAU, 0] > 0.0:
-        assert channel == PRELOAD_CELL and stepped == signal.size - 1  # a filter needs every step
+        assert channel in (PRELOAD_CELL, LOAD_CELL) and stepped == signal.size - 1  # a filter needs every step
     else:
         assert stepped <= 0.5 * signal.size  # the saving is real (at 125 us: 3 steps of 8 for the torque meter)
 

@@ -23,6 +23,7 @@ from sensors.analog import (
     AS_FILTERED,
     AS_INPUT,
     AS_NEXT_REFRESH,
+    AS_REFRESH_ORIGIN,
     AS_OUTPUT,
     AS_T,
 )
@@ -192,7 +193,8 @@ def analog_init(state, x0, t0, p):
     state[AS_T] = t0
     state[AS_INPUT] = v
     state[AS_FILTERED] = v
-    state[AS_NEXT_REFRESH] = t0 + p[AN_REFRESH_PERIOD]
+    state[AS_REFRESH_ORIGIN] = t0
+    state[AS_NEXT_REFRESH] = 1.0
     state[AS_OUTPUT] = _output(v, p)
 
 
@@ -207,13 +209,17 @@ def analog_step(state, x, t, p):
         y = u
     period = p[AN_REFRESH_PERIOD]
     if period > 0.0:
-        t_next = state[AS_NEXT_REFRESH]
-        if t >= t_next:
-            n_refresh = math.floor((t - t_next) / period) + 1.0
-            t_refresh = t_next + (n_refresh - 1.0) * period
+        origin = state[AS_REFRESH_ORIGIN]
+        last = math.floor((t - origin) / period)
+        if origin + (last + 1.0) * period <= t:
+            last += 1.0
+        if origin + last * period > t:
+            last -= 1.0
+        if last >= state[AS_NEXT_REFRESH]:
+            t_refresh = origin + last * period
             y_refresh = y_prev + (y - y_prev) * (t_refresh - t_prev) / dt if dt > 0.0 else y
             state[AS_OUTPUT] = _output(y_refresh, p)
-            state[AS_NEXT_REFRESH] = t_next + n_refresh * period
+            state[AS_NEXT_REFRESH] = last + 1.0
     else:
         state[AS_OUTPUT] = _output(y, p)
     state[AS_T] = t

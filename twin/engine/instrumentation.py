@@ -53,6 +53,7 @@ from sensors.analog import (
     AN_SIZE,
     AN_TAU,
     AS_NEXT_REFRESH,
+    AS_REFRESH_ORIGIN,
     AS_SIZE,
     analog_init,
     analog_parameters,
@@ -235,7 +236,7 @@ def channel_due(parameters, states, channel, t, dt, steps_to_sample):
     if steps_to_sample >= math.ceil(period / dt - 1e-9) + 1:
         return False
     # the next step ends at about t + dt: half a step of margin absorbs the rounding of both clocks
-    return t + 1.5 * dt >= states[channel, AS_NEXT_REFRESH, 0]
+    return t + 1.5 * dt >= states[channel, AS_REFRESH_ORIGIN, 0] + states[channel, AS_NEXT_REFRESH, 0] * period
 
 
 def group_timing(instruments: Instruments) -> tuple:
