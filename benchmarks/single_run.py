@@ -2,9 +2,9 @@
 
 All figures are measured in this one process, one configuration after the other, and repeated (min / median of
 ``--repeats``), so their ratios hold on a loaded machine while their absolute values do not (the load average is
-printed with them). CPU time (``time.process_time``) includes the Python side of every run (model build, instruments and noise,
-features); the scene and the parameter files are read once, as a campaign's worker does, and compilation is done
-before the clock starts.
+printed with them). CPU time (``time.process_time``) includes the Python side of every run (model build,
+instruments and noise, features); the scene and the parameter files are read once, as a campaign's worker does,
+and compilation is done before the clock starts.
 
 * the default: RK4 at the 125 us drive period with the quasi-static screw axial (the automatic fidelity of the
   thesis campaign), as one lane (a replay, ``twin.simulate_features``) and in groups of 8 and 16 lanes

@@ -23,8 +23,8 @@ from sensors.analog import (
     AS_FILTERED,
     AS_INPUT,
     AS_NEXT_REFRESH,
-    AS_REFRESH_ORIGIN,
     AS_OUTPUT,
+    AS_REFRESH_ORIGIN,
     AS_T,
 )
 from sensors.encoder import (

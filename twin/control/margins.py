@@ -44,7 +44,8 @@ loops (:func:`loop_systems`).
 The margins are stored per run (``results.nc``), so they must be the same bits on every machine: the matrix
 algebra goes through :mod:`numerics.linalg` (fixed operation order) instead of BLAS/LAPACK, and the complex
 arithmetic is compiled scalar code (numba without fastmath: no fused multiply-adds) with the C library's elementary
-functions, instead of numpy's CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs them under other kernels).
+functions, instead of numpy's CPU-dispatched array kernels (tests/campaigns/test_same_numbers_everywhere.py runs
+them under other kernels).
 """
 
 from __future__ import annotations
