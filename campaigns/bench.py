@@ -8,7 +8,6 @@ runner; this module is where it meets the bench twin. The synthetic test model
 from __future__ import annotations
 
 import math
-import time
 from functools import lru_cache
 
 import numpy as np
@@ -152,24 +151,6 @@ def margin_variables(spec, request_of, map_chunks=None) -> dict:
                                     "role": "margin", "loop": loop, "metric": metric, **attrs})
     out[MARGIN_NOTE] = (dims, notes, {"long_name": "why loop margins are NaN (empty: every present loop computed)"})
     return out
-
-
-def warm_up(spec) -> float:
-    """Compile the twin in this process (numba writes its on-disk cache, so workers load rather than compile).
-
-    Runs a short stretch of the first data set's scene, then the whole scene once; returns
-    the wall time of that compiled run [s], from which the driver estimates the campaign's duration.
-    """
-    dataset = spec.datasets[0]
-    scene = _scene(dataset.scene or spec.base.scene).with_conditions(dict(dataset.conditions))
-    params = _parameters(spec.base.parameters)
-    options = {k: v for k, v in spec.solver.model_dump().items() if v is not None}
-    options["outputs"] = list(spec.features) + (list(spec.traces.variables) if spec.traces.runs_per_dataset else [])
-    # compiles (or loads the cache)
-    twin.simulate(scene.with_duration(min(scene.duration, 0.1)), params, throw=False, **options)
-    start = time.perf_counter()
-    twin.simulate(scene, params, throw=False, **options)
-    return time.perf_counter() - start
 
 
 class BenchCatalog:
