@@ -58,7 +58,7 @@ def test_rules_react_to_parameters(bench):
     soft = resolve_fidelity(scene, bench.with_values({"sled.guide_roll_stiffness": 300.0}))
     assert soft.level("nut_rotation") == "on" and "limit 5 nm" in soft.reasons["nut_rotation"]
     weak_bus = resolve_fidelity(scene, bench.with_values({"drive.dc_bus_voltage": 100.0}))
-    assert weak_bus.level("current_loop") == "full" and "of the DC bus" in weak_bus.reasons["current_loop"]
+    assert weak_bus.level("current_loop") == "full" and "of the inverter's limit" in weak_bus.reasons["current_loop"]
 
 
 def test_thermal_rule_follows_duration_when_the_current_loop_is_full(bench):

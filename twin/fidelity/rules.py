@@ -228,8 +228,14 @@ def _twist_deflection(needs: SceneNeeds, limit: float, decided) -> tuple[bool, s
                                  f"(limit {limit * 1e9:g} nm)")
 
 
+def _min_preload(needs: SceneNeeds, limit: float, decided) -> tuple[bool, str]:
+    preload = needs.scene.condition("preload")
+    return preload >= limit, f"preload {preload:.0f} N (at least {limit:g} N)"
+
+
 CONDITIONS = {
     "force_demand": _force_demand,
+    "min_preload": _min_preload,
     "outputs_exclude": _outputs_exclude,
     "decided": _decided,
     "not_decided": _not_decided,
