@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
-from app.studies.work_precision import quantization_floor  # noqa: E402
+from app.studies.work_precision import DEFAULT_POINT, quantization_floor  # noqa: E402
 from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
@@ -26,7 +26,9 @@ SCALE = {"feature_error": 1e6, "nut_position_error": 1e6, "current_rms_error": 1
 def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                          metrics=("feature_error", "nut_position_error", "current_rms_error"),
                          sampling_error: float | None = None) -> plt.Figure:
-    """Log error against log wall time, one line per method, one column per panel.
+    """Log error against log wall time, one line per method, one column per panel; the default configuration (the
+    quasi-static screw axial at the step it chooses) as a star beside the previous default (RK4 at 62.5 us on the
+    full plant, ringed).
 
     ``sampling_error`` (optional, [m]) draws the Monte Carlo sampling error of the
     feature mean (1.96 sigma / sqrt(N)) on the feature rows: a configuration whose
@@ -46,16 +48,18 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                     continue
                 order = np.argsort(runs.wall_time.values)
                 error = np.maximum(runs[metric].values[order] * SCALE[metric], 1e-16)
-                if str(method).startswith("auto"):  # the opt-in automatic integrator: one point, over the ladders
+                if str(method).startswith(DEFAULT_POINT):  # the default configuration: one point, over the ladders
                     ax.loglog(runs.wall_time.values[order], error, "*", ms=13, color="k", zorder=5,
-                              label=f"{method}, opt-in")
+                              label=f"the default: {method.removeprefix(DEFAULT_POINT).strip(' ()')} at "
+                                    f"{float(runs.dt.values[0]) * 1e6:g} us")
                     continue
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
-                default = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
-                if method == DEFAULT_INTEGRATOR and default.any():  # ring the default configuration
-                    ax.loglog(runs.wall_time.values[order][default], error[default], "o", ms=12, mfc="none", color="k",
-                              mec="k", mew=1.5, label=f"{method} {DEFAULT_DT * 1e6:g} us, the default")
+                previous = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
+                if method == DEFAULT_INTEGRATOR and previous.any():  # ring the previous default, beside the new one
+                    ax.loglog(runs.wall_time.values[order][previous], error[previous], "o", ms=12, mfc="none",
+                              color="k", mec="k", mew=1.5,
+                              label=f"the previous default: {method} at {DEFAULT_DT * 1e6:g} us, dynamic screw axial")
             if panel == "quantizers_on":
                 floor = quantization_floor(study, metric) * SCALE[metric]
                 if np.isfinite(floor) and floor > 0:

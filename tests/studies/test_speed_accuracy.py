@@ -110,10 +110,10 @@ def test_work_precision_round_trip_and_replot(tmp_path):
                       baselines=("scipy_lsoda",), repeats=1, progress=lambda line: None)
     assert set(study.panel.values) == {"quantizers_off", "quantizers_on"}
     assert np.all(study.wall_time > 0)
-    # the opt-in automatic integrator is one point per panel, named by the method it chose (ds4: a free nut, so
-    # RK4), at 62.5 us: the full plant's analog current loop (real mode -2.28e4 1/s, RK4 limit 122 us) rules out
-    # the drive period from the start (twin.engine.solver_choice.rk4_limit_at_start)
-    default = study.where(study.method == "auto (rk4)", drop=True)
+    # the default configuration is one point per panel (RK4 with the quasi-static screw axial), at 62.5 us: the full
+    # plant's analog current loop (real mode -2.28e4 1/s, RK4 limit 122 us) rules out the drive period
+    # (twin.simulation.default_step)
+    default = study.where(study.method == "default (rk4, quasi-static screw axial)", drop=True)
     assert default.sizes["run"] == 2 and np.all(default.dt == 6.25e-5)
     study.to_netcdf(tmp_path / "work_precision.nc", engine="netcdf4")
     with xr.open_dataset(tmp_path / "work_precision.nc") as back:

@@ -54,9 +54,9 @@ def test_run_accuracy_writes_the_study_and_its_charts(tmp_path, monkeypatch):
     assert set(paths) == {"work_precision"} and paths["work_precision"].stat().st_size > 10_000
     with xr.open_dataset(tmp_path / "work_precision.nc") as study:
         study = study.load()
-    # per panel: the automatic integrator's one point, two RK4 steps, one scipy tolerance
+    # per panel: the default configuration's one point, two RK4 steps, one scipy tolerance
     assert study.sizes["run"] == 8 and set(study.panel.values) == {"quantizers_off", "quantizers_on"}
-    assert (study.method == "auto (rk4)").sum() == 2  # ds4's nuts are free: auto hands the run to RK4
+    assert (study.method == "default (rk4, quasi-static screw axial)").sum() == 2
     assert (study.status == "ok").all()
     rk4 = study.where((study.method == "rk4") & (study.panel == "quantizers_off"), drop=True).sortby("dt")
     fine, coarse = rk4.current_rms_error.values
