@@ -39,9 +39,10 @@ from campaigns.spec import CampaignSpec, FidelityAudit, Observability, Traces
 from campaigns.storage import write_netcdf
 from twin.scenes import list_scenes, load_scene
 
-#: Fewest paired runs for an audit verdict: from 5 pairs the sd ratio's jackknife interval comes close to its nominal
-#: coverage in simulations (docs/accuracy.md, "Why these numbers"); below 5 it was not checked. The rule's 200 pairs
-#: accept a default configuration, not a campaign's few audit runs.
+#: Fewest paired runs for an audit verdict: the fewest at which the sd ratio's jackknife interval was simulated.
+#: At 5-10 pairs its coverage is below the nominal 95 % when paired differences take two outcomes (docs/accuracy.md,
+#: "Why these numbers"): an audit's sd verdict is a screen, not the rule. The rule's 200 pairs accept a default
+#: configuration, not a campaign's few audit runs.
 AUDIT_MIN_PAIRS = 5
 #: Per built-in scene and feature, the spread of tight runs that differ only in their step or by picometres [m]
 #: (benchmarks/numerical_floor.py; docs/accuracy.md, "What the tight reference can and cannot tell").
