@@ -60,19 +60,21 @@ def cpu_seconds() -> float:
 
 def print_cost(judged, runs: int, workers: int, elapsed: float) -> None:
     """The cost of one paired run and the full study's at that rate: the sum over configurations of the mean wall
-    time of an ok run (each run holds one worker core, so this is core-seconds), times 7 x 200 pairs over
-    ``workers`` cores, plus the stages that do not grow with n (compile, cluster start, analysis) as measured here."""
+    time of an ok run (each run holds one worker; on a loaded machine a worker gets less than a core, so this is an
+    upper bound of the CPU), times 7 x 200 pairs over ``workers`` workers, plus the other stages as measured here
+    (compile, cluster start, margins, assembly, analysis; the margins and the assembly grow with n, so this part is
+    a lower bound)."""
     per_pair = float(judged.configuration_wall_time.sum())
     datasets = judged.sizes["dataset"]
     in_runs = per_pair * runs * datasets / workers
     full = per_pair * MIN_PAIRED_RUNS * FULL_DATASETS / workers
     fixed = max(elapsed - in_runs, 0.0)
-    print(f"cost of one paired run ({judged.sizes['configuration']} configurations): {per_pair:.2f} core-s "
+    print(f"cost of one paired run ({judged.sizes['configuration']} configurations): {per_pair:.2f} worker-s "
           f"(mean run wall times at n = {runs}); runs here {in_runs:.0f} s of {elapsed:.0f} s on {workers} workers, "
           f"other stages {fixed:.0f} s")
     print(f"estimated full study ({FULL_DATASETS} data sets x {MIN_PAIRED_RUNS} runs): "
           f"{(full + fixed) / 60:.0f} min on {workers} workers ({per_pair * MIN_PAIRED_RUNS * FULL_DATASETS / 60:.0f} "
-          f"core-min of runs + {fixed / 60:.1f} min of other stages), at this machine's load")
+          f"worker-min of runs + {fixed / 60:.1f} min of other stages), at this machine's load")
 
 
 def main() -> None:
