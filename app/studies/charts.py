@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
-from app.studies.work_precision import quantization_floor  # noqa: E402
+from app.studies.work_precision import DEFAULT_POINT, quantization_floor  # noqa: E402
 from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
@@ -26,7 +26,9 @@ SCALE = {"feature_error": 1e6, "nut_position_error": 1e6, "current_rms_error": 1
 def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                          metrics=("feature_error", "nut_position_error", "current_rms_error"),
                          sampling_error: float | None = None) -> plt.Figure:
-    """Log error against log wall time, one line per method, one column per panel.
+    """Log error against log wall time, one line per method, one column per panel; the default configuration (the
+    quasi-static screw axial at the step it chooses) as a star beside the previous default (RK4 at 62.5 us on the
+    full plant, ringed).
 
     ``sampling_error`` (optional, [m]) draws the Monte Carlo sampling error of the
     feature mean (1.96 sigma / sqrt(N)) on the feature rows: a configuration whose
@@ -46,16 +48,18 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                     continue
                 order = np.argsort(runs.wall_time.values)
                 error = np.maximum(runs[metric].values[order] * SCALE[metric], 1e-16)
-                if str(method).startswith("auto"):  # the opt-in automatic integrator: one point, over the ladders
+                if str(method).startswith(DEFAULT_POINT):  # the default configuration: one point, over the ladders
                     ax.loglog(runs.wall_time.values[order], error, "*", ms=13, color="k", zorder=5,
-                              label=f"{method}, opt-in")
+                              label=f"the default: {method.removeprefix(DEFAULT_POINT).strip(' ()')} at "
+                                    f"{float(runs.dt.values[0]) * 1e6:g} us")
                     continue
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
-                default = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
-                if method == DEFAULT_INTEGRATOR and default.any():  # ring the default configuration
-                    ax.loglog(runs.wall_time.values[order][default], error[default], "o", ms=12, mfc="none", color="k",
-                              mec="k", mew=1.5, label=f"{method} {DEFAULT_DT * 1e6:g} us, the default")
+                previous = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
+                if method == DEFAULT_INTEGRATOR and previous.any():  # ring the previous default, beside the new one
+                    ax.loglog(runs.wall_time.values[order][previous], error[previous], "o", ms=12, mfc="none",
+                              color="k", mec="k", mew=1.5,
+                              label=f"the previous default: {method} at {DEFAULT_DT * 1e6:g} us, dynamic screw axial")
             if panel == "quantizers_on":
                 floor = quantization_floor(study, metric) * SCALE[metric]
                 if np.isfinite(floor) and floor > 0:
@@ -97,34 +101,45 @@ def stability_chart(stability: xr.Dataset, path: str | Path | None = None) -> pl
     return fig
 
 
-def campaign_accuracy_chart(comparison: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
-    """Shift of the feature's mean and sigma per candidate solver and data set, against 1.96 sigma/sqrt(N).
+def campaign_accuracy_chart(judged: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
+    """The accuracy rule per candidate, data set and feature (:func:`campaigns.solver_accuracy.campaign_accuracy`):
+    the mean paired shift and the sd ratio, each with its 95 % interval, against the tolerance band (shaded).
 
-    A candidate is good enough for campaigns when its bars sit well below the dashed
-    Monte Carlo sampling-error line of its data set.
+    A candidate meets the rule on a cell when its interval lies inside the band; a cell without an interval
+    (insufficient data) is not drawn.
     """
-    datasets = list(comparison.dataset.values)
-    candidates = list(comparison.candidate.values)
-    fig, axes = plt.subplots(1, len(datasets), figsize=(5.5 * len(datasets), 4), squeeze=False,
+    features = [str(f) for f in judged.feature.values]
+    datasets = [str(d) for d in judged.dataset.values]
+    candidates = [str(c) for c in judged.candidate.values]
+    fig, axes = plt.subplots(2, len(features), figsize=(4.2 * len(features), 6.5), squeeze=False,
                              constrained_layout=True)
-    width = 0.8 / len(candidates)
-    for ax, name in zip(axes[0], datasets, strict=False):
-        data = comparison.sel(dataset=name)
-        for i, candidate in enumerate(candidates):
-            values = [abs(float(data[v].sel(candidate=candidate))) * 1e6
-                      for v in ("mean_shift", "sigma_shift", "max_paired_difference")]
-            ax.bar(np.arange(3) + i * width, np.maximum(values, 1e-7), width, label=candidate)
-        ax.axhline(float(data.sampling_error[0]) * 1e6, color="tab:red", ls="--", lw=1.2,
-                   label="1.96 sigma / sqrt(N)")
-        ax.set_yscale("log")
-        ax.set_xticks(np.arange(3) + 0.4 - width / 2)
-        ax.set_xticklabels(["|mean shift|", "|sigma shift|", "max paired diff."])
-        ax.set_ylabel("backlash feature [um]")
-        ks = ", ".join(f"{float(k):.2f}" for k in data.ks_distance.values)
-        ax.set_title(f"{name}: N = {int(data.n[0])}, KS distances {ks}", fontsize=9)
-        ax.grid(True, axis="y", which="both", alpha=0.3)
+    width = 0.7 / len(candidates)
+    x = np.arange(len(datasets))
+    rows = (("mean_shift", 1e6, "mean paired shift [um]", judged.attrs["mean_shift_tolerance"] * 1e6, 0.0),
+            ("sd_ratio", 1.0, "sd ratio candidate / reference", judged.attrs["sd_ratio_tolerance"], 1.0))
+    for row, (name, scale, label, tolerance, centre) in enumerate(rows):
+        for col, feature in enumerate(features):
+            ax = axes[row, col]
+            ax.axhspan(centre - tolerance, centre + tolerance, color="tab:green", alpha=0.15, lw=0,
+                       label="tolerance")
+            ax.axhline(centre, color="k", lw=0.6)
+            for i, candidate in enumerate(candidates):
+                cell = judged.sel(candidate=candidate, feature=feature)
+                value, lower, upper = (cell[f"{name}{s}"].values * scale for s in ("", "_lower", "_upper"))
+                shown = np.isfinite(lower)
+                offset = x + (i - (len(candidates) - 1) / 2) * width
+                ax.errorbar(offset[shown], value[shown], yerr=[(value - lower)[shown], (upper - value)[shown]],
+                            fmt="o", ms=4, capsize=3, label=candidate)
+            ax.set_xticks(x)
+            ax.set_xticklabels(datasets)
+            ax.set_ylabel(label)
+            ax.grid(True, axis="y", alpha=0.3)
+            if row == 0:
+                ax.set_title(feature, fontsize=9)
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle(f"campaign-level accuracy against {comparison.attrs.get('reference')}", fontsize=10)
+    n = int(judged.n.min())
+    fig.suptitle(f"accuracy rule against {judged.attrs.get('reference', 'the reference')}: 95 % intervals "
+                 f"(fewest paired runs {n}; none drawn below {judged.attrs.get('min_paired_runs')})", fontsize=10)
     _save(fig, path)
     return fig
 

@@ -1,12 +1,14 @@
-"""The fidelity audit's verdict per data set and feature, on synthetic paired runs with known shifts: what
-compare_fidelity stores, and that results.nc's attributes carry the same statements verbatim."""
+"""The fidelity audit's verdict per data set and feature, on synthetic paired runs with known shifts and spreads: the
+accuracy rule's tolerances (mean shift ±0.05 um, sd within 10 %), what compare_fidelity stores, and that results.nc's
+attributes carry the same statements verbatim."""
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.comparison import paired_shift_verdict
+from campaigns.accuracy_rule import paired_verdict
 from campaigns.fidelity_audit import (
+    AUDIT_MIN_PAIRS,
     MEAN_SHIFT_TOLERANCE,
     compare_fidelity,
     full_fidelity_variant,
@@ -19,23 +21,28 @@ from campaigns.spec import load_spec
 
 UM = 1e-6
 RUNS = 12
-#: data set -> (paired shift mean, its standard deviation, failed runs): the verdict each must get
+#: data set -> (paired shift mean, its standard deviation, auto's stretch of the full runs' spread, failed runs):
+#: the verdict each must get
 CASES = {
-    "inside": (0.01 * UM, 0.02 * UM, 0, "met"),
-    "outside": (0.4 * UM, 0.05 * UM, 0, "not met"),
-    "straddling": (0.1 * UM, 0.2 * UM, 0, "undetermined"),
-    "within_floor": (0.25 * UM, 0.05 * UM, 0, "undetermined"),  # beyond 0.1 um, within 0.1 + its 0.3 um floor
-    "too_few": (0.0, 0.02 * UM, RUNS - 1, "insufficient data"),
+    "inside": (0.01 * UM, 0.02 * UM, 1.0, 0, "met"),
+    "outside": (0.4 * UM, 0.05 * UM, 1.0, 0, "not met"),
+    "straddling": (0.05 * UM, 0.2 * UM, 1.0, 0, "undetermined"),
+    # 0.07 um, resolved: met under the retired 0.1 um tolerance, beyond the rule's 0.05 um (and within the 0.3 um floor,
+    # which no longer excuses a resolved shift: the t interval already carries the floor as spread)
+    "beyond_0.05": (0.07 * UM, 0.005 * UM, 1.0, 0, "not met"),
+    "wider": (0.0, 0.005 * UM, 1.2, 0, "not met"),  # no shift, but the spread 20 % wider: the sd criterion
+    "too_few": (0.0, 0.02 * UM, 1.0, RUNS - AUDIT_MIN_PAIRS + 1, "insufficient data"),
 }
-FLOORS = {("within_floor", "backlash_feature"): 0.3 * UM}
+FLOORS = {("beyond_0.05", "backlash_feature"): 0.3 * UM}
 
 
 def _pair():
     rng = np.random.default_rng(7)
     full = rng.normal(30 * UM, 0.4 * UM, (len(CASES), RUNS))
-    shifts = np.array([mean + sd * rng.standard_normal(RUNS) for mean, sd, _, _ in CASES.values()])
+    shifts = np.array([mean + sd * rng.standard_normal(RUNS) + (stretch - 1) * (full[k] - 30 * UM)
+                       for k, (mean, sd, stretch, _, _) in enumerate(CASES.values())])
     status = np.full(full.shape, "ok", dtype=object)
-    for k, (_, _, failed, _) in enumerate(CASES.values()):
+    for k, (_, _, _, failed, _) in enumerate(CASES.values()):
         status[k, :failed] = "failed"
 
     def results(values, wall):
@@ -46,18 +53,23 @@ def _pair():
 
 
 def test_each_synthetic_case_gets_its_verdict_and_the_attributes_print_it_verbatim():
-    auto, full, shifts = _pair()
+    auto, full, _ = _pair()
     audit = compare_fidelity(auto, full, ["backlash_feature"], FLOORS)
-    for k, (name, (_, _, failed, verdict)) in enumerate(CASES.items()):
+    assert MEAN_SHIFT_TOLERANCE == 0.05 * UM and audit.attrs["mean_shift_tolerance"] == MEAN_SHIFT_TOLERANCE
+    for name, (_, _, _, failed, verdict) in CASES.items():
         row = audit.sel(dataset=name, feature="backlash_feature")
-        floor = FLOORS.get((name, "backlash_feature"), 0.0)
-        expected = paired_shift_verdict(shifts[k, failed:], MEAN_SHIFT_TOLERANCE, floor)
-        assert row.verdict.item() == verdict == expected.verdict, name
+        a = auto.backlash_feature.sel(dataset=name).values[failed:]
+        expected = paired_verdict(a, full.backlash_feature.sel(dataset=name).values[failed:],
+                                  min_pairs=AUDIT_MIN_PAIRS)
+        assert row.verdict.item() == verdict == expected.verdict, (name, row.statement.item())
         assert row.statement.item() == expected.statement
-        assert float(row.shift_lower) == pytest.approx(expected.lower, nan_ok=True)
+        assert float(row.shift_lower) == pytest.approx(expected.mean.lower, nan_ok=True)
+        assert float(row.sd_ratio_upper) == pytest.approx(expected.sd.upper, nan_ok=True)
+    # the floor is reported beside the verdict, no part of it
+    assert float(audit.numerical_floor.sel(dataset="beyond_0.05", feature="backlash_feature")) == 0.3 * UM
     attrs = summary_attrs(audit)
-    assert attrs["fidelity_audit"] == ("not met: auto differs from full fidelity (the fidelity rule to fix, or with "
-                                       "integrator 'auto' the integrator's choice): outside/backlash_feature")
+    assert attrs["fidelity_audit"] == ("not met: auto differs from full fidelity (the fidelity rule to fix): "
+                                       "outside/backlash_feature, beyond_0.05/backlash_feature, wider/backlash_feature")
     for name in CASES:
         statement = audit.statement.sel(dataset=name, feature="backlash_feature").item()
         assert attrs[f"fidelity_audit_{name}"].startswith(f"speedup x1.50; backlash_feature: {statement}; max paired")
@@ -67,7 +79,7 @@ def test_without_a_not_met_the_worst_remaining_verdict_is_named():
     auto, full, _ = _pair()
     keep = ["inside", "straddling", "too_few"]
     audit = compare_fidelity(auto.sel(dataset=keep), full.sel(dataset=keep), ["backlash_feature"])
-    assert audit.attrs["verdict"] == ("undetermined: the audit's runs cannot resolve the tolerance: "
+    assert audit.attrs["verdict"] == ("undetermined: the audit's runs cannot resolve the tolerances: "
                                       "straddling/backlash_feature")
     audit = compare_fidelity(auto.sel(dataset=["inside"]), full.sel(dataset=["inside"]), ["backlash_feature"])
     assert audit.attrs["verdict"].startswith("met: ")
@@ -85,20 +97,17 @@ def test_the_thesis_data_sets_have_a_measured_floor():
     assert numerical_floors(moved, list(spec.features)) == {}
 
 
-def test_an_auto_integrator_campaign_is_audited_against_the_default_integrator():
-    """The audit's reference run is full fidelity; with the opt-in automatic integrator also the default method (at
-    its own step), so the automatic choice of the method is judged by the same rule as that of the levels."""
+def test_the_audit_reruns_at_full_fidelity_with_the_campaigns_integrator():
+    """The audit's reference runs are the campaign's first runs at full fidelity (with the full model's default step
+    unless the spec names one); the method stays the campaign's. A campaign at full fidelity has nothing to audit."""
     spec = load_spec(THESIS_SPEC)
     assert spec.solver.integrator == "rk4"
     kept = full_fidelity_variant(spec, 3)
-    assert (kept.solver.fidelity, kept.solver.integrator, kept.runs_per_dataset) == ("full", "rk4", 3)
-    auto = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": "auto"})})
-    audited = full_fidelity_variant(auto, 3)
-    assert (audited.solver.fidelity, audited.solver.integrator, audited.solver.dt) == ("full", "rk4", None)
+    assert (kept.solver.fidelity, kept.solver.integrator, kept.solver.dt, kept.runs_per_dataset) == (
+        "full", "rk4", None, 3)
+    assert kept.fidelity_audit.runs == 0 and kept.traces.runs_per_dataset == 0
     explicit = spec.model_copy(update={"solver": spec.solver.model_copy(update={"integrator": "imex_euler"})})
     assert full_fidelity_variant(explicit, 3).solver.integrator == "imex_euler"  # a named method is the user's
-    # at full fidelity only the automatic integrator is left to audit
-    full = {"fidelity": "full"}
-    assert has_automatic_choice(spec) and has_automatic_choice(auto)
-    assert not has_automatic_choice(spec.model_copy(update={"solver": spec.solver.model_copy(update=full)}))
-    assert has_automatic_choice(auto.model_copy(update={"solver": auto.solver.model_copy(update=full)}))
+    assert has_automatic_choice(spec)
+    full = spec.model_copy(update={"solver": spec.solver.model_copy(update={"fidelity": "full"})})
+    assert not has_automatic_choice(full)

@@ -12,7 +12,7 @@ from scipy.stats import linregress
 
 from app import cli
 from campaigns import fidelity_audit
-from campaigns.comparison import paired_shift_verdict
+from campaigns.accuracy_rule import paired_verdict
 from campaigns.scene_audit import THESIS_SPEC
 
 
@@ -59,12 +59,13 @@ EQ_9_12_SPEC = f'extends = "{THESIS_SPEC}"\nfeatures = ["backlash_feature", "bac
 
 
 def _paired_verdict(out, feature, tolerance):
-    """The paired-shift verdict of ``feature``, recomputed from the two results files directly (a scene file: no
-    numerical floor is known)."""
+    """The audit's verdict of ``feature`` (the accuracy rule's paired part), recomputed from the two results files
+    directly over the runs ok in both."""
     with xr.open_dataset(out / "results.nc") as auto, xr.open_dataset(out / "fidelity_audit" / "results.nc") as full:
-        runs = full.sizes["run"]
-        differences = (auto[feature].isel(run=slice(0, runs)) - full[feature]).values.ravel()
-    return paired_shift_verdict(differences, tolerance)
+        auto = auto.isel(run=slice(0, full.sizes["run"]))
+        ok = ((auto.status == "ok") & (full.status == "ok")).values.ravel()
+        a, f = auto[feature].values.ravel()[ok], full[feature].values.ravel()[ok]
+    return paired_verdict(a, f, mean_tolerance=tolerance, min_pairs=fidelity_audit.AUDIT_MIN_PAIRS)
 
 
 def _audit(tmp_path, runner):
@@ -73,23 +74,26 @@ def _audit(tmp_path, runner):
     out = tmp_path / "audit"
     spec = tmp_path / "eq_9_12.toml"
     spec.write_text(EQ_9_12_SPEC)
-    return out, runner(["fidelity", "audit", str(scene), "--runs", "2", "--workers", "1", "--out", str(out),
-                        "--spec", str(spec)])
+    return out, runner(["fidelity", "audit", str(scene), "--runs", str(fidelity_audit.AUDIT_MIN_PAIRS),
+                        "--workers", "1", "--out", str(out), "--spec", str(spec)])
 
 
 def test_fidelity_audit_meets_the_tolerance_on_a_scene_file(tmp_path):
-    """Two sampled runs of a 1 s scene file, auto against full: each feature's printed statement is the paired
-    verdict of the stored results, verbatim, and the overall line is the one stored in results.nc."""
+    """The fewest sampled runs the audit judges, of a 1 s scene file, auto against full: each feature's printed
+    statement is the paired verdict of the stored results, verbatim, and the overall line is the one stored in
+    results.nc."""
     out, result = _audit(tmp_path, lambda args: run(*args))
     assert result.returncode == 0, result.stderr
     assert "encoders=" in result.stdout.splitlines()[0]  # the automatic configuration comes first
     for feature in ("backlash_feature", "backlash_feature_true"):
         verdict = _paired_verdict(out, feature, fidelity_audit.MEAN_SHIFT_TOLERANCE)
         assert f"{feature}: {verdict.statement}; max paired" in result.stdout
-        assert verdict.verdict == "met", f"{feature}: auto differs from full fidelity on the short ds4 ({verdict})"
+        # the mean shift is shown within ±0.05 um; the sd ratio of runs that spread by a few hundredths of a um is
+        # not always resolved within 10 % from so few pairs (docs/accuracy.md), but never shown outside it
+        assert verdict.mean.verdict == "met", f"{feature}: auto shifts the mean on the short ds4 ({verdict})"
+        assert verdict.verdict != "not met", f"{feature}: auto differs from full fidelity on the short ds4 ({verdict})"
     with xr.open_dataset(out / "results.nc") as results:
         assert f"fidelity_audit: {results.attrs['fidelity_audit']}" in result.stdout
-    assert "fidelity_audit: met: auto is within the tolerance" in result.stdout
 
 
 def test_fidelity_audit_names_what_it_cannot_show_within_the_tolerance(tmp_path, monkeypatch, capsys):

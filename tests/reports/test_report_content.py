@@ -13,7 +13,7 @@ from reports.inputs import load_inputs
 from reports.model import Callout, Figure, Paragraph, Table
 from reports.units import display_scale, quantity
 
-#: Audit statements as campaigns.comparison.paired_shift_verdict words them (the report shows them verbatim).
+#: Audit statements in the form the fidelity audit words them (synthetic figures; the report shows them verbatim).
 _MET = ("met: mean shift +0.0018 µm (95 % t interval -0.0100 to +0.0136 µm, n = 10); tolerance 0.1000 µm, "
         "numerical floor 0.3700 µm")
 _UNDETERMINED = ("undetermined: mean shift -0.1020 µm (95 % t interval -0.2000 to -0.0040 µm, n = 10); tolerance "
