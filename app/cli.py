@@ -63,12 +63,19 @@ def _scene_and_params(args) -> tuple[twin.Scene, twin.ParameterSet]:
     except InputError as exc:
         problems += exc.problems
     try:
-        params = twin.load_parameters(args.params).with_values(parameters)
+        nominal = twin.load_parameters(args.params)
+        params = nominal.with_values(parameters)
     except InputError as exc:
         problems += exc.problems
     if problems:
         raise InputError("input", problems)
+    _warn(nominal.implausible(parameters))  # before the run: a slip found now costs nothing
     return scene, params
+
+
+def _warn(lines) -> None:
+    for line in lines:
+        print(f"twin: warning: {line}", file=sys.stderr)
 
 
 def cmd_scenes(args) -> int:
@@ -189,6 +196,7 @@ def cmd_campaign_run(args) -> int:
 
     _check_bounds(workers=args.workers)
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
+    _warn(spec.warnings)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
     announce = Stages()
