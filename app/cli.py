@@ -322,6 +322,79 @@ def cmd_report(args) -> int:
     return 0
 
 
+def cmd_measure_import(args) -> int:
+    from campaigns.files import check_output, write_netcdf
+    from campaigns.measured import import_measured, load_mapping
+
+    out = args.out or args.file.with_name(f"{args.file.stem}_measured.nc")
+    check_output(out, [args.file, args.mapping], force=args.force)
+    test = import_measured(args.file, load_mapping(args.mapping))
+    channels = ", ".join(v for v in test.data_vars if "time" in test[v].dims)
+    print(f"measured test {test.attrs['measured_test']}: {test.attrs['samples']} acquisition instants "
+          f"({test.attrs['acquisition_period'] * 1e3:g} ms), channels {channels}")
+    for name in (v for v in test.data_vars if test[v].attrs.get("role") == "feature"):
+        value, unit = float(test[name]), test[name].attrs["units"]
+        print(f"  {name}: {value * 1e6:.4f} um" if unit == "m" else f"  {name}: {value:.4g} {unit}")
+    write_netcdf(test, out, title=test.attrs["title"], history=args.command_line)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_measure_diagnose(args) -> int:
+    from campaigns.diagnosis import describe, diagnose
+    from campaigns.measured import read_measured
+    from campaigns.storage import read_results
+
+    test = read_measured(args.test)
+    try:
+        found = diagnose(test, read_results(args.campaign))
+    except ValueError as exc:  # nothing in common between the test and the campaign
+        raise InputError("measured test", [f"{args.test}: {exc}"]) from None
+    print(f"measured test {found.test} against {args.campaign}:")
+    for feature in found.features:
+        unit = test[feature].attrs.get("units", "")
+        print(f"{feature} = {float(test[feature]) * 1e6:.4f} um" if unit == "m" else
+              f"{feature} = {float(test[feature]):.4g} {unit}")
+        for placement in found.placements[feature]:
+            print(f"  {placement.dataset}: {describe(placement, unit)}")
+        if found.fault.get(feature) is not None:
+            print(f"  fault size: {found.fault[feature].statement}")
+    for note in found.notes:
+        print(f"note: {note}")
+    print(f"verdict: {found.verdict}")
+    return 0
+
+
+def cmd_export(args) -> int:
+    import xarray as xr
+
+    from campaigns.export import export, file_names, tables
+    from campaigns.files import check_outputs
+    from campaigns.storage import read_results
+
+    results = read_results(args.results)
+    analysis_path = args.analysis or args.results.with_name("analysis.nc")
+    analysis = None
+    if analysis_path.is_file():
+        with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
+            analysis = handle.load()
+        if analysis.attrs.get("source_spec_hash") != results.attrs.get("spec_hash"):
+            raise InputError("export", [f"{analysis_path}: the analysis of another campaign (its source_spec_hash "
+                                        "differs from the results' spec_hash); re-run `twin campaign analyze`"])
+    elif args.analysis is not None:
+        raise FileNotFoundError(f"{args.analysis}: no such file")
+    frames = tables(results, analysis)
+    out = args.out or args.results.parent / "export"
+    check_outputs(out, file_names(args.format, frames), force=args.force)
+    for path in export(frames, args.format, out, campaign=str(results.attrs.get("campaign", ""))):
+        print(f"wrote {path}")
+    print(f"tables: {', '.join(f'{name} ({len(frame)} rows)' for name, frame in frames.items())}")
+    if analysis is None:
+        print(f"note: no analysis.nc beside {args.results}: only the runs table; `twin campaign analyze` first for "
+              "the analysis tables", file=sys.stderr)
+    return 0
+
+
 def cmd_chapter5(args) -> int:
     from app.studies.chapter5 import run_chapter5
     from campaigns.files import check_outputs
@@ -434,6 +507,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
     p.add_argument("--force", action="store_true", help="replace an existing report in --out")
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("export", help="a campaign's tables (one row per run; the analysis) as CSV, Excel or MATLAB")
+    p.add_argument("results", type=Path, help="results.nc of a campaign")
+    p.add_argument("--format", choices=("csv", "xlsx", "mat"), default="csv", help="file format (default csv)")
+    p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, when there)")
+    p.add_argument("--out", type=Path, help="directory to write into (default: export/ beside the results)")
+    p.add_argument("--force", action="store_true", help="replace files of an earlier export in --out")
+    p.set_defaults(func=cmd_export)
+
+    measure = sub.add_parser("measure", help="measured tests: import a bench file, diagnose it against a campaign")
+    measure_sub = measure.add_subparsers(dest="measure_command", required=True)
+    p = measure_sub.add_parser("import", help="map a measured file's channels onto the twin's signals and compute "
+                                              "its features with the twin's code")
+    p.add_argument("file", type=Path, help="the measured test: CSV or netCDF")
+    p.add_argument("--mapping", type=Path, required=True,
+                   help="TOML mapping of the file's columns to the twin's signals, units and calibration "
+                        "(docs/campaigns.md, Measured tests)")
+    p.add_argument("--out", type=Path, help="the measured test to write (default: FILE's stem + _measured.nc)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.set_defaults(func=cmd_measure_import)
+    p = measure_sub.add_parser("diagnose", help="place a measured test against a campaign: percentile and "
+                                                "consistency per data set, the fault size from the sweep")
+    p.add_argument("test", type=Path, help="a measured test written by `twin measure import`")
+    p.add_argument("--campaign", type=Path, required=True, help="results.nc of the campaign")
+    p.set_defaults(func=cmd_measure_diagnose)
 
     add_serve_parser(sub)
     return parser
