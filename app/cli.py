@@ -270,6 +270,44 @@ def cmd_campaign_analyze(args) -> int:
     return 0
 
 
+def _results_and_analysis(path: Path):
+    """A campaign's results and, when it is beside them, its analysis (None otherwise)."""
+    import xarray as xr
+
+    from campaigns.storage import read_results
+
+    results = read_results(path)
+    analysis_path = path.with_name("analysis.nc")
+    if not analysis_path.is_file():
+        return results, None
+    with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
+        analysis = handle.load()
+    return results, analysis if analysis.attrs.get("source_spec_hash") == results.attrs.get("spec_hash") else None
+
+
+def cmd_campaign_compare(args) -> int:
+    from campaigns.design_comparison import compare, describe_shift
+
+    candidate, candidate_analysis = _results_and_analysis(args.a)
+    baseline, baseline_analysis = _results_and_analysis(args.b)
+    found = compare(baseline, candidate, baseline_analysis, candidate_analysis)
+    print(f"{found.name_b} ({args.a}) against {found.name_a} ({args.b}): differences {found.name_b} - {found.name_a}")
+    print(f"pairing: {'paired' if found.paired else 'unpaired'}: {found.pairing}")
+    if found.design_changes:
+        print(f"design changes (resolved distributions that differ): {', '.join(found.design_changes)}")
+    for shift in found.shifts:
+        print(f"  {shift.dataset} {shift.feature}: mean shift {describe_shift(shift.mean, shift.unit)}; sd shift "
+              f"{describe_shift(shift.sd, shift.unit)}; n = {shift.n_b}/{shift.n_a}"
+              + (" (resolved)" if shift.mean.resolved else ""))
+    if not found.verdicts:
+        print("verdicts: not compared (an analysis.nc is missing beside the results; `twin campaign analyze` both)")
+    for change in found.verdicts:
+        print(f"  {change.what}: {change.verdict_b} ({found.name_b}) / {change.verdict_a} ({found.name_a})"
+              + (" CHANGED" if change.changed else ""))
+    print(found.sentence)
+    return 0
+
+
 def cmd_campaign_replay(args) -> int:
     from campaigns.replay import replay_run
 
@@ -316,8 +354,10 @@ def cmd_report(args) -> int:
     if args.out.exists() and not args.out.is_dir():
         raise CampaignError(f"{args.out} is not a directory; --out names the directory for report.html and report.pdf")
     for name in ("report.html", "report.pdf"):
-        check_output(args.out / name, [args.results, args.analysis, args.accuracy], force=args.force)
-    for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy).items():
+        check_output(args.out / name, [args.results, args.analysis, args.accuracy, args.against, *args.measured],
+                     force=args.force)
+    for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy,
+                                   measured_paths=args.measured, against_path=args.against).items():
         print(f"wrote {kind} report: {path}")
     return 0
 
@@ -479,6 +519,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
     p.add_argument("--force", action="store_true", help="replace an existing analysis file")
     p.set_defaults(func=cmd_campaign_analyze)
+    p = campaign_sub.add_parser("compare", help="design A against design B: paired where the seeds allow, the "
+                                                "shift of every feature's distribution and every verdict")
+    p.add_argument("a", type=Path, help="results.nc of design A (the candidate)")
+    p.add_argument("b", type=Path, help="results.nc of design B (the baseline)")
+    p.set_defaults(func=cmd_campaign_compare)
     p = campaign_sub.add_parser("replay", help="re-run one run of a campaign alone, with its full time series")
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--dataset", required=True, help="data-set name, e.g. ds6")
@@ -504,6 +549,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, else computed in memory)")
     p.add_argument("--accuracy", type=Path, help="work_precision.nc of `twin accuracy` (speed-and-accuracy section)")
+    p.add_argument("--measured", type=Path, nargs="+", default=[], metavar="TEST",
+                   help="measured tests (`twin measure import`) placed in each data set and diagnosed")
+    p.add_argument("--against", type=Path, metavar="OTHER_RESULTS",
+                   help="another design's results.nc: a comparison report (this campaign against it)")
     p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
     p.add_argument("--force", action="store_true", help="replace an existing report in --out")
     p.set_defaults(func=cmd_report)

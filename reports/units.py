@@ -73,3 +73,24 @@ def quantity(value: float, unit: str, digits: int = 3) -> str:
         return "–"
     factor, shown = display_scale(unit, [value])
     return f"{number(value * factor, digits)} {shown}" if shown != "–" else number(value, digits)
+
+
+def quantity_range(low: float, high: float, unit: str, digits: int = 2, separator: str = "–") -> str:
+    """Two values in one display unit chosen by the larger, e.g. ``0–3.1 µm`` (never ``0 m`` for a zero bound):
+    an interval reads in the unit that shows it."""
+    finite = [v for v in (low, high) if v is not None and math.isfinite(v)]
+    if not finite:
+        return "–"
+    factor, shown = display_scale(unit, finite)
+    text = f"{_significant(low * factor, digits)}{separator}{_significant(high * factor, digits)}"
+    return f"{text} {shown}" if shown != "–" else text
+
+
+def _significant(value: float, digits: int) -> str:
+    """``value`` rounded to ``digits`` significant digits without an exponent below 1e6 (``120``, not ``1.2e+02``)."""
+    if not math.isfinite(value):
+        return "–"
+    if value == 0:
+        return "0"
+    rounded = round(value, digits - 1 - math.floor(math.log10(abs(value))))
+    return f"{rounded:.6g}"

@@ -66,7 +66,8 @@ def test_import_refuses_mistakes_naming_the_field(tmp_path, measured_campaign):
     problems = "\n".join(info.value.problems)
     assert "channels.linear_encoder_positon: not a signal of the twin; did you mean 'linear_encoder_position'?" \
         in problems
-    assert "channels.screw_angle_measured.unit: unknown unit 'dgr'" in problems
+    # pint reads 'dgr' as a decigram: the message says what it is and why it does not fit
+    assert "channels.screw_angle_measured.unit: unit 'dgr' does not convert to 'rad'" in problems
     wrong.write_text(MAPPING.replace('column = "TM_Angle"', 'column = "TM_Angel"'))
     with pytest.raises(MeasuredError) as info:
         import_measured(csv, wrong)
