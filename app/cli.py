@@ -246,17 +246,30 @@ def _print_analysis(path: Path) -> None:
     from campaigns.margins_analysis import statements as margin_statements
 
     print(f"wrote {path}")
-    with xr.open_dataset(path, engine="netcdf4") as analysis:
-        statements, warnings = summary(analysis)
-        control = margin_statements(analysis)
+    with xr.open_dataset(path, engine="netcdf4") as handle:
+        analysis = handle.load()
+    statements, warnings = summary(analysis)
+    control = margin_statements(analysis)
     for line in statements:
         print(line)
+    for feature, verdict, reason in (_undecided(analysis) if statements else []):
+        print(f"  {feature} ({verdict}): {reason}")
     if control:
         print("control robustness (loop margins of every run against the design limits):")
     for line in control:
         print(f"  {line}")
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
+
+
+def _undecided(analysis) -> list[tuple[str, str, str]]:
+    """``(feature, verdict, how many runs would decide it)`` of each verdict the runs left open (analysis.nc's
+    ``runs_to_decide_reason``)."""
+    if "runs_to_decide_reason" not in analysis:
+        return []
+    return [(str(f), str(analysis["requirement_verdict"].sel(feature=f).item()),
+             str(analysis["runs_to_decide_reason"].sel(feature=f).item())) for f in analysis["feature"].values
+            if str(analysis["requirement_verdict"].sel(feature=f).item()) in ("undetermined", "insufficient data")]
 
 
 def cmd_campaign_analyze(args) -> int:

@@ -39,7 +39,6 @@ SECTION_TITLES = {
     "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
     "control_robustness": control_robustness.TITLE,
-    "measured": measured.TITLE,
 }
 
 
@@ -62,7 +61,8 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     # a comparison report opens with the comparison; measured tests follow the observability they are judged by
     optional_first = [("comparison", comparison.build)] if inputs.comparison is not None else []
     optional_measured = [("measured", measured.build)] if inputs.measured else []
-    titles = {**SECTION_TITLES, **({"comparison": comparison.title(b)} if inputs.comparison is not None else {})}
+    titles = {**SECTION_TITLES, "measured": measured.TITLE,
+              **({"comparison": comparison.title(b)} if inputs.comparison is not None else {})}
     sections = tuple(
         Section(key, titles[key], tuple(make(b)))
         for key, make in (

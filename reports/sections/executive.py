@@ -180,17 +180,22 @@ def limit_decisions(analysis) -> list[Callout]:
             continue
         verdicts = [str(analysis["margin_limit_verdict"].values[i]) for i in rows]
         worst = worst_verdict(verdicts)
-        counts = analysis["margin_limit_counts"].values if "margin_limit_counts" in analysis else None
-        fractions = analysis["margin_limit_fraction"].values
+        loops = ", ".join(c.removesuffix("_loop_" + limit) for c in (checks[i] for i in rows))
+        what = words.format(value=thresholds[limit]) + f" in every loop ({loops})"
+        if not all(v in analysis for v in ("margin_limit_counts", "margin_limit_fraction", "margin_limit_fraction_ci")):
+            pick = next(i for i, v in zip(rows, verdicts, strict=True) if v == worst)  # an older analysis: quote it
+            out.append(Callout(f"{DECISIONS.get(worst, worst.upper())} — {what}: "
+                               f"{analysis['margin_limit_statement'].values[pick]}.", VERDICT_TONES.get(worst, "info"),
+                               "control_robustness"))
+            continue
+        counts, fractions = analysis["margin_limit_counts"].values, analysis["margin_limit_fraction"].values
         pick = max((i for i, v in zip(rows, verdicts, strict=True) if v == worst),
                    key=lambda i: np.nan_to_num(fractions[i], nan=-1.0))
         loop = checks[pick].removesuffix("_loop_" + limit)
-        loops = ", ".join(c.removesuffix("_loop_" + limit) for c in (checks[i] for i in rows))
-        k, n = (int(counts[pick][0]), int(counts[pick][1])) if counts is not None else (0, 0)
+        k, n = int(counts[pick][0]), int(counts[pick][1])
         low, high = (float(v) for v in analysis["margin_limit_fraction_ci"].values[pick])
         runs = (float(analysis["margin_limit_runs_to_decide"].values[pick])
                 if "margin_limit_runs_to_decide" in analysis else math.nan)
-        what = words.format(value=thresholds[limit]) + f" in every loop ({loops})"
         share = f"{allowed * 100:g} % of runs allowed {side}"
         if worst == "met":
             worst_case = (f"no loop has a run {side} (of {n} runs each)" if k == 0
@@ -334,7 +339,10 @@ def build(b: Builder):
         yield Callout(b.inputs.comparison.sentence, "info", "comparison")
     for found in b.inputs.measured:
         healthy = any(f is not None and f.healthy for f in found.fault.values())
-        yield Callout(f"Measured test {found.test}: {found.verdict}.", "good" if healthy else "info", "measured")
+        verdict = found.verdict
+        for feature in found.features:  # the feature in words, as everywhere on page 1
+            verdict = verdict.replace(f"{feature} = ", f"{feature_words(b, feature)} = ")
+        yield Callout(f"Measured test {found.test}: {verdict}.", "good" if healthy else "info", "measured")
     rows, muted = [], []
     cells = _measured_cells(b)
     for name in b.datasets:

@@ -153,3 +153,23 @@ def test_placement_known_answers():
     assert edge.p_value == pytest.approx(0.05)
     assert not place(100.0, runs, "d").consistent and place(100.0, runs, "d").side() == "above"
     assert place(1.0, runs[: MIN_RUNS - 1], "d").consistent is None  # too few runs: not judged
+
+
+def test_the_report_shows_the_measured_test(measured_campaign, tmp_path, capsys):
+    """`twin report --measured`: page 1's data-set table fills its "Measured test" column and states the verdict;
+    a section gives every placement and the fault size."""
+    import re
+
+    out = tmp_path / "report"
+    assert main(["report", str(measured_campaign.results), "--out", str(out), "--measured",
+                 str(measured_campaign.test)]) == 0
+    html = out.joinpath("report.html").read_text(encoding="utf-8").replace("<wbr>", "")
+    summary = " ".join(re.sub(r"<[^>]+>", " ", re.search(r'<section id="executive".*?</section>', html,
+                                                          re.S).group(0)).split())
+    found = diagnose(read_measured(measured_campaign.test), xr.open_dataset(measured_campaign.results).load())
+    words = found.verdict.replace("backlash_feature = ", "the backlash feature f_b (Eq. 9.12) = ")
+    assert f"Measured test {found.test}: {words}." in summary
+    for placement in found.placements["backlash_feature"]:
+        assert re.search(rf"{placement.dataset} .*? {re.escape(found.test)}: "
+                         rf"(consistent|above its range|below its range|not judged) \(percentile", summary)
+    assert 'id="measured"' in html and "Measured tests" in html
