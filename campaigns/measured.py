@@ -376,7 +376,10 @@ def read_measured(path: str | Path) -> xr.Dataset:
         with xr.open_dataset(path, decode_times=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
-        raise MeasuredError(f"measured test {path}", [f"{path}: cannot be read as a netCDF file: {exc}"]) from None
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise MeasuredError(f"measured test {path}", [
+            f"{path}: cannot be read as a netCDF file ({first}); a measured test is the file `twin measure import` "
+            "writes from the bench's CSV or netCDF"]) from None
     if "measured_test" not in ds.attrs:
         raise MeasuredError(f"measured test {path}", [
             f"{path}: not a measured test (no measured_test attribute); make one with `twin measure import`"])

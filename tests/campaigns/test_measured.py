@@ -173,3 +173,18 @@ def test_the_report_shows_the_measured_test(measured_campaign, tmp_path, capsys)
         assert re.search(rf"{placement.dataset} .*? {re.escape(found.test)}: "
                          rf"(consistent|above its range|below its range|not judged) \(percentile", summary)
     assert 'id="measured"' in html and "Measured tests" in html
+
+
+def test_the_import_command_writes_the_measured_test_under_the_write_rule(measured_campaign, tmp_path, capsys):
+    out = tmp_path / "run.nc"
+    argv = ["measure", "import", str(measured_campaign.csv), "--mapping", str(measured_campaign.mapping),
+            "--out", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "10001 acquisition instants (1 ms)" in printed and f"wrote {out}" in printed
+    test = read_measured(out)
+    assert close(float(test["backlash_feature"]), float(measured_campaign.run["backlash_feature"]), rel=1e-9)
+    assert test.attrs["source_file"] == measured_campaign.csv.name and len(test.attrs["source_sha256"]) == 64
+    assert main(argv) == 2 and "already exists; pass --force" in capsys.readouterr().err
+    assert main(["measure", "diagnose", str(measured_campaign.csv), "--campaign", str(measured_campaign.results)]) == 2
+    assert "cannot be read as a netCDF file" in capsys.readouterr().err  # a CSV is imported first, and it says so
