@@ -23,8 +23,10 @@ measured value is *too small* for it, one whose interval lies wholly above it *t
 levels, never values between them (between two levels the campaign has no runs): the **lower bound** is the largest
 too-small level below every too-large one (the reference itself when the test is consistent with it: then the bench
 may be healthy), the **upper bound** the smallest too-large level above it (open, "beyond the sweep", when there is
-none). Each excluded level is excluded at 5 %, so the fault lies between the bounds with at least 90 % confidence
-(Bonferroni over the two ends) if the test's tolerances are drawn from the campaign's table. The **estimate** inverts
+none). Each excluded level is excluded at 5 %, so the fault lies between the bounds with about 90 % confidence or more
+(5 % at each end, Bonferroni; a level beyond the nearest one is far less likely to be excluded wrongly, and a monotone
+relation only lowers the chance for levels on the wrong side) if the test's tolerances are drawn from the campaign's
+table. The **estimate** inverts
 the piecewise-linear relation of the means (the sweep level where the measured value crosses the means, interpolated
 between adjacent levels), printed only rounded at the leading digit of the bounds' half-width (as the analysis prints
 its interpolated minima, :func:`campaigns.analysis.printed_estimate`) and only when both bounds are finite.
