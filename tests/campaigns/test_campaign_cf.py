@@ -77,18 +77,10 @@ def simulate_file(tmp_path_factory):
     return out
 
 
-#: analysis.nc is written by campaigns.analysis with its label coordinates (dataset, feature, parameter, bound) as
-#: string coordinate variables, on which the CF 1.8 checks of monotonicity fail; writing it with
-#: campaigns.files.write_netcdf (as results.nc is) makes them CF labels. Strict: the day it passes, drop the mark.
-_ANALYSIS_LABELS = pytest.mark.xfail(reason="analysis.nc's label coordinates are strings (campaigns.analysis "
-                                            "writes them without campaigns.files.write_netcdf)", strict=True)
-
-
 @pytest.mark.parametrize("name, version", [
     *[(name, version) for name in ("reference_results", "replay_file", "audit_file", "simulate_file")
       for version in VERSIONS],
-    ("analysis_file", "cf:1.11"),
-    pytest.param("analysis_file", "cf:1.8", marks=_ANALYSIS_LABELS),
+    *[("analysis_file", version) for version in VERSIONS],
 ])
 def test_no_high_priority_cf_finding(request, name, version, tmp_path):
     path = request.getfixturevalue(name)
