@@ -37,6 +37,8 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from campaigns.units import estimate_with_interval
+
 #: Confidence of every interval of the comparison.
 CONFIDENCE = 0.95
 #: Bootstrap resamples of the standard-deviation shift, and their seed.
@@ -44,6 +46,8 @@ N_BOOT = 2000
 SEED = 20261126
 #: Fewest runs (pairs) per data set for an interval.
 MIN_RUNS = 3
+#: Shifts smaller than this (in the feature's SI unit) are round-off, shown as 0 (describe_shift).
+ROUND_OFF = 1e-15
 
 
 @dataclass(frozen=True)
@@ -187,20 +191,14 @@ def _verdicts(analysis_a: xr.Dataset | None, analysis_b: xr.Dataset | None) -> l
     return out
 
 
-def _shown(value: float, unit: str) -> str:
-    if not math.isfinite(value):
-        return "–"
-    value = 0.0 if abs(value) < 1e-15 else value  # round-off of identical runs (attometres), not a difference
-    return f"{value * 1e6:.3g} µm" if unit == "m" else f"{value:.3g} {unit}".strip()
-
-
 def describe_shift(shift: Shift, unit: str) -> str:
-    """``+0.31 µm (95 % interval 0.2 … 0.42 µm)``, or ``–`` without an interval."""
+    """``+0.31 µm (95 % interval 0.20 … 0.42 µm)`` in the unit and to the precision the interval resolves
+    (:func:`campaigns.units.estimate_with_interval`), or ``–`` without an interval."""
     if not math.isfinite(shift.lower):
         return "–"
-    sign = "+" if shift.estimate > 0 else ""
-    return (f"{sign}{_shown(shift.estimate, unit)} ({CONFIDENCE * 100:g} % interval {_shown(shift.lower, unit)} … "
-            f"{_shown(shift.upper, unit)})")
+    # below ROUND_OFF: the round-off of runs identical in both designs (attometres of a position), not a difference
+    estimate, lower, upper = (0.0 if abs(v) < ROUND_OFF else v for v in (shift.estimate, shift.lower, shift.upper))
+    return estimate_with_interval(estimate, lower, upper, unit, CONFIDENCE)
 
 
 def compare(a: xr.Dataset, b: xr.Dataset, analysis_a: xr.Dataset | None = None,

@@ -43,12 +43,16 @@ import xarray as xr
 from scipy import stats
 
 from campaigns.analysis import SWEEP_QUANTITIES, printed_estimate
+from campaigns.units import quantity as shown_value  # fault_size's `quantity` is the fault's name
+from campaigns.units import quantity_range
 
 #: Confidence of the prediction intervals (the significance of a level's exclusion is 1 minus it).
 CONFIDENCE = 0.95
 #: Fewest ok runs a data set needs before a test is judged against it (a standard deviation with 2 degrees of
 #: freedom; the interval's t factor is then 4.3, so the judgement is conservative, not wrong).
 MIN_RUNS = 3
+#: The smallest p-value printed as a number (p_text).
+SMALLEST_P = 1e-3
 
 
 @dataclass(frozen=True)
@@ -134,13 +138,11 @@ def _used(results: xr.Dataset, feature: str, dataset: str) -> np.ndarray:
     return values[(row["status"].values == "ok") & np.isfinite(values)]
 
 
-def _display(value: float, unit: str) -> str:
-    """A feature value in the unit engineers read it in (µm for lengths)."""
-    if not math.isfinite(value):
-        return "–"
-    if unit == "m":
-        return f"{value * 1e6:.3g} µm"
-    return f"{value:.3g} {unit}"
+def p_text(p_value: float) -> str:
+    """``p = 0.12``; below :data:`SMALLEST_P` only ``p < 0.001``: smaller tail probabilities rest on the normal shape
+    of the data set's spread far beyond its runs (59 runs show the shape to about their 1/59 tail), so their digits
+    are not resolved by the campaign."""
+    return f"p < {SMALLEST_P:g}" if p_value < SMALLEST_P else f"p = {p_value:.2g}"
 
 
 def fault_size(feature: str, value: float, feature_unit: str, placements: dict[str, Placement],
@@ -158,7 +160,7 @@ def fault_size(feature: str, value: float, feature_unit: str, placements: dict[s
     means = np.array([placements[name].mean for name in judged])
     steps = np.diff(means)
     if not ((steps > 0).all() or (steps < 0).all()):
-        shown_means = ", ".join(f"{_display(placements[n].mean, feature_unit)} ({n})" for n in judged)
+        shown_means = ", ".join(f"{shown_value(placements[n].mean, feature_unit)} ({n})" for n in judged)
         return FaultSize(quantity, unit, math.nan, math.nan, "", "", math.nan, False,
                          f"no {quantity} is inferred from {feature}: its mean does not change monotonically along the "
                          f"sweep ({shown_means})")
@@ -179,7 +181,7 @@ def fault_size(feature: str, value: float, feature_unit: str, placements: dict[s
     estimate = float(np.interp(target, ys, xs)) if ys[0] <= target <= ys[-1] else (
         xs[0] if target < ys[0] else math.nan)
     printed = printed_estimate(estimate, (lower, upper)) if math.isfinite(upper) else math.nan
-    measured = f"{feature} = {_display(value, feature_unit)}"
+    measured = f"{feature} = {shown_value(value, feature_unit)}"
     if healthy:
         bound = (f"{quantity} below {level(upper_name)}, the smallest sweep level it is not consistent with"
                  if upper_name else f"the sweep bounds no {quantity} from above (consistent up to {level(order[-1])})")
@@ -257,5 +259,6 @@ def describe(placement: Placement, unit: str) -> str:
     if not placement.judged:
         return f"percentile {placement.percentile * 100:.0f} % ({placement.n} runs: too few to judge)"
     where = {"inside": "consistent", "above": "above its range", "below": "below its range"}[placement.side()]
-    return (f"{where}: percentile {placement.percentile * 100:.0f} %, p = {placement.p_value:.2g} "
-            f"(95 % interval {_display(placement.low, unit)} … {_display(placement.high, unit)}, {placement.n} runs)")
+    return (f"{where}: percentile {placement.percentile * 100:.0f} %, {p_text(placement.p_value)} "
+            f"({CONFIDENCE * 100:g} % interval {quantity_range(placement.low, placement.high, unit, 3, ' … ')}, "
+            f"{placement.n} runs)")

@@ -6,6 +6,7 @@ from __future__ import annotations
 from campaigns.diagnosis import CONFIDENCE, describe
 from reports.builder import Builder
 from reports.model import Callout, Paragraph
+from reports.units import quantity
 
 TITLE = "Measured tests"
 
@@ -28,7 +29,6 @@ def build(b: Builder):
             rows = [(p.dataset, describe(p, unit)) for p in found.placements[feature]]
             fault = found.fault.get(feature)
             yield b.table(f"Measured test {found.test}, {feature} = "
-                          f"{found.placements[feature][0].value * (1e6 if unit == 'm' else 1):.4g} "
-                          f"{'µm' if unit == 'm' else unit}, in each data set"
+                          f"{quantity(found.placements[feature][0].value, unit, 4)}, in each data set"
                           + (f"; fault size: {fault.statement}." if fault is not None else "."),
                           ("Data set", "Where the test lies"), rows)

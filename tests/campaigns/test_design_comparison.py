@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from app.cli import main
-from campaigns.design_comparison import compare, pairing
+from campaigns.design_comparison import Shift, compare, describe_shift, pairing
 
 RUNS = 40
 NAMES = ["d0", "d1"]
@@ -97,3 +97,19 @@ def test_the_first_runs_are_paired_when_one_campaign_has_more(runs_b):
     a, b = _results(), _results(shift=0.3e-6, name="B").isel(run=slice(0, runs_b))
     found = compare(a, b)
     assert found.paired and all(s.n_a == s.n_b == runs_b for s in found.shifts)
+
+
+@pytest.mark.parametrize(("shift", "text"), [
+    # a sub-nanometre shift of a micrometre feature: in nm, never "0.000557 µm"
+    (Shift(5.57e-10, -7.34e-10, 1.84e-9), "+0.6 nm (95 % interval -0.7 … 1.8 nm)"),
+    # rounded at the second digit of the half-width (0.25 µm): 1.23, not 1.234
+    (Shift(1.234e-6, 1.0e-6, 1.5e-6), "+1.23 µm (95 % interval 1.00 … 1.50 µm)"),
+    # a half-width of 300 nm: rounded to tens of nm
+    (Shift(-3.7e-8, -3.4e-7, 2.66e-7), "-40 nm (95 % interval -340 … 270 nm)"),
+    # an interval far narrower than the value: 3 significant digits, not the round-off's
+    (Shift(3.0e-10, 3.0e-10 - 1e-22, 3.0e-10 + 1e-22), "+300 pm (95 % interval 300 … 300 pm)"),
+    # identical runs in both designs (round-off below 1e-15 m)
+    (Shift(1e-21, -1e-21, 2e-21), "0 (95 % interval 0 … 0: identical in every run)"),
+])
+def test_a_shift_reads_in_the_unit_and_to_the_precision_its_interval_resolves(shift, text):
+    assert describe_shift(shift, "m") == text

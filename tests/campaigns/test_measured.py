@@ -17,7 +17,7 @@ import xarray as xr
 from measured_helpers import HIDDEN_BACKLASH, LEVELS, MAPPING, close
 
 from app.cli import main
-from campaigns.diagnosis import MIN_RUNS, diagnose, place
+from campaigns.diagnosis import MIN_RUNS, describe, diagnose, place
 from campaigns.measured import MeasuredError, acquisition_grid, import_measured, load_mapping, read_measured
 
 
@@ -153,6 +153,9 @@ def test_placement_known_answers():
     assert edge.p_value == pytest.approx(0.05)
     assert not place(100.0, runs, "d").consistent and place(100.0, runs, "d").side() == "above"
     assert place(1.0, runs[: MIN_RUNS - 1], "d").consistent is None  # too few runs: not judged
+    # far out, the normal-theory tail (p ~ 1e-14 here) is not resolved by 10 runs: only its bound is printed
+    far = place(100.0, runs, "d")
+    assert far.p_value < 1e-3 and "p < 0.001 " in describe(far, "m") and "p = 0.05 " in describe(edge, "m")
 
 
 def test_the_report_shows_the_measured_test(measured_campaign, tmp_path, capsys):
