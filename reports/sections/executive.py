@@ -22,6 +22,7 @@ import numpy as np
 
 from campaigns.analysis import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
 from campaigns.comparison import worst_verdict
+from campaigns.diagnosis import p_text
 from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder, statement_tone
 from reports.model import Callout, Paragraph
 from reports.sections.correlations import rank_order
@@ -308,7 +309,7 @@ def _measured_cells(b: Builder) -> dict[str, str]:
             where = {"inside": "consistent", "above": "above its range", "below": "below its range",
                      "not judged": "not judged"}[placement.side()]
             cells[placement.dataset].append(f"{found.test}: {where} (percentile {placement.percentile * 100:.0f} %"
-                                            + (f", p = {placement.p_value:.2g})" if placement.judged else ")"))
+                                            + (f", {p_text(placement.p_value)})" if placement.judged else ")"))
     return {name: "; ".join(items) or "–" for name, items in cells.items()}
 
 
@@ -336,7 +337,13 @@ def build(b: Builder):
             yield observability_decision(b, feature)
     yield from limit_decisions(a)
     if b.inputs.comparison is not None:
-        yield Callout(b.inputs.comparison.sentence, "info", "comparison")
+        c = b.inputs.comparison
+        sentence = c.sentence
+        for feature in sorted(b.results.data_vars, key=len, reverse=True):  # the longest first: f_true before f
+            if b.results[feature].attrs.get("role") == "feature":
+                sentence = sentence.replace(f" is {feature} in ", f" is {feature_words(b, feature)} in ")
+        changes = ", ".join(plain_name(p) for p in c.design_changes)
+        yield Callout(sentence + (f" The designs differ in: {changes}." if changes else ""), "info", "comparison")
     for found in b.inputs.measured:
         healthy = any(f is not None and f.healthy for f in found.fault.values())
         verdict = found.verdict

@@ -1,5 +1,6 @@
-"""Page 1 of the report states what analysis.nc holds: every verdict, bound and n, verbatim; and an older
-analysis without a verdict says "not available" rather than a verdict the report composed."""
+"""Page 1 of the report decides: one GO / NO-GO / UNDETERMINED / NO DATA line per requirement from analysis.nc's
+verdicts, bounds and n, with the runs that would decide an undetermined one; the comparison with another design in one
+sentence; and an older analysis without a verdict says "not available" rather than a verdict the report composed."""
 
 from __future__ import annotations
 
@@ -153,3 +154,26 @@ def test_page_one_decides_each_design_limit_over_the_loops(campaign, generated_a
 def test_page_one_says_when_a_campaign_has_no_loop_margins(report):
     """The synthetic campaign runs no bench loops: page 1 says no design limit is checked, not a verdict."""
     assert "carry no loop margins" in _executive_html(report["html"]).replace("<wbr>", "")
+
+
+def test_a_comparison_report_has_its_sentence_on_page_one_and_its_section(campaign, generated_at, tmp_path):
+    """`report A --against B`: B is A's runs with the backlash feature 0.5 µm larger (paired run by run, the same
+    draws): page 1 gives the comparison's one sentence, the largest resolved change in the feature's words and in the
+    prefix that shows it, and the section "A against B" tabulates every shift alike (the unshifted feature as identical
+    in every run)."""
+    (tmp_path / "b").mkdir()
+    with xr.open_dataset(campaign) as stored:
+        other = stored.load()
+    other["backlash_feature"] = other["backlash_feature"] + 0.5e-6
+    other.to_netcdf(tmp_path / "b" / "results.nc")
+    paths = reports.build_report(campaign, out_dir=tmp_path / "report", generated_at=generated_at,
+                                 against_path=tmp_path / "b" / "results.nc")
+    text = _executive_html(paths["html"])
+    assert ("report_test against report_test (paired run by run): no analyses to compare verdicts; the largest "
+            "resolved change is the backlash feature f_b (Eq. 9.12) in ") in text
+    assert re.search(r"f_b \(Eq. 9.12\) in ds\d, -500 nm \(95 % interval -500 … -500 nm\) in its mean", text)
+    html = paths["html"].read_text(encoding="utf-8").replace("<wbr>", "")
+    section = re.search(r'<section id="comparison".*?</section>', html, re.S).group(0)
+    assert "report_test against report_test" in section and "-500 nm (95 % interval -500 … -500 nm)" in section
+    assert "0 (95 % interval 0 … 0: identical in every run)" in section  # backlash_feature_true: not shifted
+    assert not re.search(r"\de-\d|0\.000\d", section)  # no exponent, no 0.000x: the prefix that shows the value
