@@ -378,6 +378,7 @@ def cmd_report(args) -> int:
 def cmd_measure_import(args) -> int:
     from campaigns.files import check_output, write_netcdf
     from campaigns.measured import import_measured, load_mapping
+    from campaigns.units import quantity
 
     out = args.out or args.file.with_name(f"{args.file.stem}_measured.nc")
     check_output(out, [args.file, args.mapping], force=args.force)
@@ -387,7 +388,7 @@ def cmd_measure_import(args) -> int:
           f"({test.attrs['acquisition_period'] * 1e3:g} ms), channels {channels}")
     for name in (v for v in test.data_vars if test[v].attrs.get("role") == "feature"):
         value, unit = float(test[name]), test[name].attrs["units"]
-        print(f"  {name}: {value * 1e6:.4f} um" if unit == "m" else f"  {name}: {value:.4g} {unit}")
+        print(f"  {name}: {quantity(value, unit, 4)}")
     write_netcdf(test, out, title=test.attrs["title"], history=args.command_line)
     print(f"wrote {out}")
     return 0
@@ -397,6 +398,7 @@ def cmd_measure_diagnose(args) -> int:
     from campaigns.diagnosis import describe, diagnose
     from campaigns.measured import read_measured
     from campaigns.storage import read_results
+    from campaigns.units import quantity
 
     test = read_measured(args.test)
     try:
@@ -406,8 +408,7 @@ def cmd_measure_diagnose(args) -> int:
     print(f"measured test {found.test} against {args.campaign}:")
     for feature in found.features:
         unit = test[feature].attrs.get("units", "")
-        print(f"{feature} = {float(test[feature]) * 1e6:.4f} um" if unit == "m" else
-              f"{feature} = {float(test[feature]):.4g} {unit}")
+        print(f"{feature} = {quantity(float(test[feature]), unit, 4)}")
         for placement in found.placements[feature]:
             print(f"  {placement.dataset}: {describe(placement, unit)}")
         if found.fault.get(feature) is not None:

@@ -9,6 +9,7 @@ message naming the field.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -161,8 +162,6 @@ def test_placement_known_answers():
 def test_the_report_shows_the_measured_test(measured_campaign, tmp_path, capsys):
     """`twin report --measured`: page 1's data-set table fills its "Measured test" column and states the verdict;
     a section gives every placement and the fault size."""
-    import re
-
     out = tmp_path / "report"
     assert main(["report", str(measured_campaign.results), "--out", str(out), "--measured",
                  str(measured_campaign.test)]) == 0
@@ -185,6 +184,7 @@ def test_the_import_command_writes_the_measured_test_under_the_write_rule(measur
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "10001 acquisition instants (1 ms)" in printed and f"wrote {out}" in printed
+    assert re.search(r"backlash_feature: \d+(\.\d+)? [nµ]m\n", printed)  # in the prefix that shows it, as the report
     test = read_measured(out)
     assert close(float(test["backlash_feature"]), float(measured_campaign.run["backlash_feature"]), rel=1e-9)
     assert test.attrs["source_file"] == measured_campaign.csv.name and len(test.attrs["source_sha256"]) == 64
