@@ -6,6 +6,15 @@ from __future__ import annotations
 from campaigns.design_comparison import CONFIDENCE, describe_shift
 from reports.builder import VERDICT_TONES, Builder
 from reports.model import Callout, Paragraph
+from reports.sections.executive import feature_words, plain_name
+
+
+def _feature(b: Builder, feature: str) -> str:
+    """A feature in the words of page 1; its true-signal twin as the same feature with ideal sensors (glossary)."""
+    measured = feature.removesuffix("_true")
+    if measured != feature and measured in b.results:
+        return f"{feature_words(b, measured)}, ideal sensors"
+    return feature_words(b, feature)
 
 
 def title(b: Builder) -> str:
@@ -18,12 +27,12 @@ def build(b: Builder):
     yield Callout(c.sentence, "info")
     yield Paragraph(
         f"Pairing: {'paired run by run (common random numbers)' if c.paired else 'unpaired'}: {c.pairing}. "
-        + (f"The designs differ in: {', '.join(c.design_changes)}. " if c.design_changes
+        + (f"The designs differ in: {', '.join(plain_name(p) for p in c.design_changes)}. " if c.design_changes
            else "The two specs resolve every tolerance alike. ")
         + f"Every difference is {c.name_b} − {c.name_a}, with its {CONFIDENCE * 100:g} % interval: the mean shift "
           "by Student's t (of the paired differences, or Welch's when unpaired), the shift of the standard deviation "
           "by a percentile bootstrap; a shift is resolved when its interval excludes 0 (campaigns.design_comparison).")
-    rows = [(s.dataset, s.feature, describe_shift(s.mean, s.unit), describe_shift(s.sd, s.unit),
+    rows = [(s.dataset, _feature(b, s.feature), describe_shift(s.mean, s.unit), describe_shift(s.sd, s.unit),
              f"{s.n_b} / {s.n_a}", "yes" if s.mean.resolved else "no") for s in c.shifts]
     yield b.table(f"Each feature's distribution, {c.name_b} against {c.name_a}, per data set.",
                   ("Data set", "Feature", "Mean shift", "Standard-deviation shift", f"Runs {c.name_b} / {c.name_a}",

@@ -176,4 +176,5 @@ def test_a_comparison_report_has_its_sentence_on_page_one_and_its_section(campai
     section = re.search(r'<section id="comparison".*?</section>', html, re.S).group(0)
     assert "report_test against report_test" in section and "-500 nm (95 % interval -500 … -500 nm)" in section
     assert "0 (95 % interval 0 … 0: identical in every run)" in section  # backlash_feature_true: not shifted
+    assert "the backlash feature f_b (Eq. 9.12), ideal sensors" in section  # the features in page 1's words
     assert not re.search(r"\de-\d|0\.000\d", section)  # no exponent, no 0.000x: the prefix that shows the value
