@@ -62,12 +62,19 @@ def _scene_and_params(args) -> tuple[twin.Scene, twin.ParameterSet]:
     except InputError as exc:
         problems += exc.problems
     try:
-        params = twin.load_parameters(args.params).with_values(parameters)
+        nominal = twin.load_parameters(args.params)
+        params = nominal.with_values(parameters)
     except InputError as exc:
         problems += exc.problems
     if problems:
         raise InputError("input", problems)
+    _warn(nominal.implausible(parameters))  # before the run: a slip found now costs nothing
     return scene, params
+
+
+def _warn(lines) -> None:
+    for line in lines:
+        print(f"twin: warning: {line}", file=sys.stderr)
 
 
 def cmd_scenes(args) -> int:
@@ -188,6 +195,7 @@ def cmd_campaign_run(args) -> int:
 
     _check_bounds(workers=args.workers)
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
+    _warn(spec.warnings)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
     announce = Stages()
@@ -237,17 +245,30 @@ def _print_analysis(path: Path) -> None:
     from campaigns.margins_analysis import statements as margin_statements
 
     print(f"wrote {path}")
-    with xr.open_dataset(path, engine="netcdf4") as analysis:
-        statements, warnings = summary(analysis)
-        control = margin_statements(analysis)
+    with xr.open_dataset(path, engine="netcdf4") as handle:
+        analysis = handle.load()
+    statements, warnings = summary(analysis)
+    control = margin_statements(analysis)
     for line in statements:
         print(line)
+    for feature, verdict, reason in (_undecided(analysis) if statements else []):
+        print(f"  {feature} ({verdict}): {reason}")
     if control:
         print("control robustness (loop margins of every run against the design limits):")
     for line in control:
         print(f"  {line}")
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
+
+
+def _undecided(analysis) -> list[tuple[str, str, str]]:
+    """``(feature, verdict, how many runs would decide it)`` of each verdict the runs left open (analysis.nc's
+    ``runs_to_decide_reason``)."""
+    if "runs_to_decide_reason" not in analysis:
+        return []
+    return [(str(f), str(analysis["requirement_verdict"].sel(feature=f).item()),
+             str(analysis["runs_to_decide_reason"].sel(feature=f).item())) for f in analysis["feature"].values
+            if str(analysis["requirement_verdict"].sel(feature=f).item()) in ("undetermined", "insufficient data")]
 
 
 def cmd_campaign_analyze(args) -> int:
@@ -258,6 +279,44 @@ def cmd_campaign_analyze(args) -> int:
                        product="analysis.nc")
     read_results(args.results)  # a truncated or foreign file: one message naming it, before any work
     _print_analysis(campaigns.analyze(args.results, out))
+    return 0
+
+
+def _results_and_analysis(path: Path):
+    """A campaign's results and, when it is beside them, its analysis (None otherwise)."""
+    import xarray as xr
+
+    from campaigns.storage import read_results
+
+    results = read_results(path)
+    analysis_path = path.with_name("analysis.nc")
+    if not analysis_path.is_file():
+        return results, None
+    with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
+        analysis = handle.load()
+    return results, analysis if analysis.attrs.get("source_spec_hash") == results.attrs.get("spec_hash") else None
+
+
+def cmd_campaign_compare(args) -> int:
+    from campaigns.design_comparison import compare, describe_shift
+
+    candidate, candidate_analysis = _results_and_analysis(args.a)
+    baseline, baseline_analysis = _results_and_analysis(args.b)
+    found = compare(baseline, candidate, baseline_analysis, candidate_analysis)
+    print(f"{found.name_b} ({args.a}) against {found.name_a} ({args.b}): differences {found.name_b} - {found.name_a}")
+    print(f"pairing: {'paired' if found.paired else 'unpaired'}: {found.pairing}")
+    if found.design_changes:
+        print(f"design changes (resolved distributions that differ): {', '.join(found.design_changes)}")
+    for shift in found.shifts:
+        print(f"  {shift.dataset} {shift.feature}: mean shift {describe_shift(shift.mean, shift.unit)}; sd shift "
+              f"{describe_shift(shift.sd, shift.unit)}; n = {shift.n_b}/{shift.n_a}"
+              + (" (resolved)" if shift.mean.resolved else ""))
+    if not found.verdicts:
+        print("verdicts: not compared (an analysis.nc is missing beside the results; `twin campaign analyze` both)")
+    for change in found.verdicts:
+        print(f"  {change.what}: {change.verdict_b} ({found.name_b}) / {change.verdict_a} ({found.name_a})"
+              + (" CHANGED" if change.changed else ""))
+    print(found.sentence)
     return 0
 
 
@@ -307,9 +366,85 @@ def cmd_report(args) -> int:
     if args.out.exists() and not args.out.is_dir():
         raise CampaignError(f"{args.out} is not a directory; --out names the directory for report.html and report.pdf")
     for name in ("report.html", "report.pdf"):
-        check_output(args.out / name, [args.results, args.analysis, args.accuracy], force=args.force)
-    for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy).items():
+        check_output(args.out / name, [args.results, args.analysis, args.accuracy, args.against, *args.measured],
+                     force=args.force)
+    for kind, path in build_report(args.results, args.analysis, args.out, accuracy_path=args.accuracy,
+                                   measured_paths=args.measured, against_path=args.against).items():
         print(f"wrote {kind} report: {path}")
+    return 0
+
+
+def cmd_measure_import(args) -> int:
+    from campaigns.files import check_output, write_netcdf
+    from campaigns.measured import import_measured, load_mapping
+    from campaigns.units import quantity
+
+    out = args.out or args.file.with_name(f"{args.file.stem}_measured.nc")
+    check_output(out, [args.file, args.mapping], force=args.force)
+    test = import_measured(args.file, load_mapping(args.mapping))
+    channels = ", ".join(v for v in test.data_vars if "time" in test[v].dims)
+    print(f"measured test {test.attrs['measured_test']}: {test.attrs['samples']} acquisition instants "
+          f"({test.attrs['acquisition_period'] * 1e3:g} ms), channels {channels}")
+    for name in (v for v in test.data_vars if test[v].attrs.get("role") == "feature"):
+        value, unit = float(test[name]), test[name].attrs["units"]
+        print(f"  {name}: {quantity(value, unit, 4)}")
+    write_netcdf(test, out, title=test.attrs["title"], history=args.command_line)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_measure_diagnose(args) -> int:
+    from campaigns.diagnosis import describe, diagnose
+    from campaigns.measured import read_measured
+    from campaigns.storage import read_results
+    from campaigns.units import quantity
+
+    test = read_measured(args.test)
+    try:
+        found = diagnose(test, read_results(args.campaign))
+    except ValueError as exc:  # nothing in common between the test and the campaign
+        raise InputError("measured test", [f"{args.test}: {exc}"]) from None
+    print(f"measured test {found.test} against {args.campaign}:")
+    for feature in found.features:
+        unit = test[feature].attrs.get("units", "")
+        print(f"{feature} = {quantity(float(test[feature]), unit, 4)}")
+        for placement in found.placements[feature]:
+            print(f"  {placement.dataset}: {describe(placement, unit)}")
+        if found.fault.get(feature) is not None:
+            print(f"  fault size: {found.fault[feature].statement}")
+    for note in found.notes:
+        print(f"note: {note}")
+    print(f"verdict: {found.verdict}")
+    return 0
+
+
+def cmd_export(args) -> int:
+    import xarray as xr
+
+    from campaigns.export import export, file_names, tables
+    from campaigns.files import check_outputs
+    from campaigns.storage import read_results
+
+    results = read_results(args.results)
+    analysis_path = args.analysis or args.results.with_name("analysis.nc")
+    analysis = None
+    if analysis_path.is_file():
+        with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
+            analysis = handle.load()
+        if analysis.attrs.get("source_spec_hash") != results.attrs.get("spec_hash"):
+            raise InputError("export", [f"{analysis_path}: the analysis of another campaign (its source_spec_hash "
+                                        "differs from the results' spec_hash); re-run `twin campaign analyze`"])
+    elif args.analysis is not None:
+        raise FileNotFoundError(f"{args.analysis}: no such file")
+    frames = tables(results, analysis)
+    out = args.out or args.results.parent / "export"
+    check_outputs(out, file_names(args.format, frames), force=args.force)
+    for path in export(frames, args.format, out, campaign=str(results.attrs.get("campaign", ""))):
+        print(f"wrote {path}")
+    print(f"tables: {', '.join(f'{name} ({len(frame)} rows)' for name, frame in frames.items())}")
+    if analysis is None:
+        print(f"note: no analysis.nc beside {args.results}: only the runs table; `twin campaign analyze` first for "
+              "the analysis tables", file=sys.stderr)
     return 0
 
 
@@ -397,6 +532,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="analysis file (default: analysis.nc beside the results)")
     p.add_argument("--force", action="store_true", help="replace an existing analysis file")
     p.set_defaults(func=cmd_campaign_analyze)
+    p = campaign_sub.add_parser("compare", help="design A against design B: paired where the seeds allow, the "
+                                                "shift of every feature's distribution and every verdict")
+    p.add_argument("a", type=Path, help="results.nc of design A (the candidate)")
+    p.add_argument("b", type=Path, help="results.nc of design B (the baseline)")
+    p.set_defaults(func=cmd_campaign_compare)
     p = campaign_sub.add_parser("replay", help="re-run one run of a campaign alone, with its full time series")
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--dataset", required=True, help="data-set name, e.g. ds6")
@@ -422,9 +562,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, else computed in memory)")
     p.add_argument("--accuracy", type=Path, help="work_precision.nc of `twin accuracy` (speed-and-accuracy section)")
+    p.add_argument("--measured", type=Path, nargs="+", default=[], metavar="TEST",
+                   help="measured tests (`twin measure import`) placed in each data set and diagnosed")
+    p.add_argument("--against", type=Path, metavar="OTHER_RESULTS",
+                   help="another design's results.nc: a comparison report (this campaign against it)")
     p.add_argument("--out", type=Path, required=True, help="directory for report.html and report.pdf")
     p.add_argument("--force", action="store_true", help="replace an existing report in --out")
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("export", help="a campaign's tables (one row per run; the analysis) as CSV, Excel or MATLAB")
+    p.add_argument("results", type=Path, help="results.nc of a campaign")
+    p.add_argument("--format", choices=("csv", "xlsx", "mat"), default="csv", help="file format (default csv)")
+    p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, when there)")
+    p.add_argument("--out", type=Path, help="directory to write into (default: export/ beside the results)")
+    p.add_argument("--force", action="store_true", help="replace files of an earlier export in --out")
+    p.set_defaults(func=cmd_export)
+
+    measure = sub.add_parser("measure", help="measured tests: import a bench file, diagnose it against a campaign")
+    measure_sub = measure.add_subparsers(dest="measure_command", required=True)
+    p = measure_sub.add_parser("import", help="map a measured file's channels onto the twin's signals and compute "
+                                              "its features with the twin's code")
+    p.add_argument("file", type=Path, help="the measured test: CSV or netCDF")
+    p.add_argument("--mapping", type=Path, required=True,
+                   help="TOML mapping of the file's columns to the twin's signals, units and calibration "
+                        "(docs/campaigns.md, Measured tests)")
+    p.add_argument("--out", type=Path, help="the measured test to write (default: FILE's stem + _measured.nc)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.set_defaults(func=cmd_measure_import)
+    p = measure_sub.add_parser("diagnose", help="place a measured test against a campaign: percentile and "
+                                                "consistency per data set, the fault size from the sweep")
+    p.add_argument("test", type=Path, help="a measured test written by `twin measure import`")
+    p.add_argument("--campaign", type=Path, required=True, help="results.nc of the campaign")
+    p.set_defaults(func=cmd_measure_diagnose)
 
     add_serve_parser(sub)
     return parser

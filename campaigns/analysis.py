@@ -386,6 +386,7 @@ def bootstrap_minimum_detectable(
     resolution = sweep_resolution(levels, estimate, bounds)
     return {
         "probability": probability,
+        "probability_se": boot.std(axis=0, ddof=1),
         "estimate": estimate,
         "bracket": (lower, upper),
         "bounds": bounds,
@@ -423,6 +424,65 @@ def printed_estimate(estimate: float, bounds: tuple[float, float]) -> float:
         return estimate
     step = 10.0 ** math.floor(math.log10(half_width))
     return round(estimate / step) * step
+
+
+#: The largest number of runs :func:`runs_to_decide` reports; beyond it the answer is "more than" this.
+MAX_RUNS_TO_DECIDE = 1_000_000
+
+
+def runs_to_decide(levels, probability, probability_se, n: int, requirement: float, *, power: float = POWER,
+                   confidence: float = CONFIDENCE, labels=None) -> tuple[float, str]:
+    """Runs per sweep data set at which an undetermined verdict would be decided if the estimate holds.
+
+    The verdict is ``met`` once the upper bound is within the requirement: a sweep level ``l <= requirement`` is
+    detected with probability ``power`` in all but ``(1 - confidence) / 2`` of the bootstrap replicates; ``not met``
+    once the lower bound reaches it: the smallest level ``l >= requirement`` is not detected in as many. With the
+    detection probability ``p`` of that level as estimated and its bootstrap standard error ``se`` at ``n`` runs
+    falling as ``1/sqrt(runs)`` (every sweep data set growing alike: the threshold's quantile and the level's
+    fraction are both sample statistics), a normal replicate distribution clears ``power`` once
+    ``|p - power| >= z se sqrt(n / runs)`` with ``z`` the ``(1 + confidence) / 2`` normal quantile, so::
+
+        runs = ceil(n (z se / (p - power))^2)
+
+    for the level that decides (the largest level at or below the requirement with ``p >= power``, else the
+    smallest at or above it with ``p < power``). No number of runs decides when the sweep has no level on the side
+    the estimate points to (the crossing lies strictly between two levels around the requirement, or ``p`` equals
+    ``power``): then a sweep level at the requirement is needed, and the reason says so.
+
+    ``labels`` name the levels in the reason (default: the number).
+
+    Returns
+    -------
+    tuple of (float, str)
+        ``(runs, reason)``: runs per sweep data set (NaN when no number decides, or when the numbers do not allow
+        the estimate) and one sentence saying how it was derived or why there is none.
+    """
+    levels = np.asarray(levels, dtype=float)
+    probability, probability_se = np.asarray(probability, dtype=float), np.asarray(probability_se, dtype=float)
+    z = float(stats.norm.ppf(0.5 + 0.5 * confidence))
+    below = [i for i in np.argsort(levels) if levels[i] <= requirement and probability[i] >= power]
+    above = [i for i in np.argsort(levels) if levels[i] >= requirement and probability[i] < power]
+    if below:
+        i, decides = below[-1], "met"
+    elif above:
+        i, decides = above[0], "not met"
+    else:
+        return math.nan, ("no number of runs decides it: the detection probability crosses "
+                          f"{power * 100:g} % between two sweep levels on either side of the requirement; a sweep "
+                          "level at the requirement is needed")
+    gap = abs(probability[i] - power)
+    if gap == 0.0 or not math.isfinite(probability_se[i]):
+        return math.nan, (f"no number of runs decides it: the detection probability at the deciding level is "
+                          f"{probability[i] * 100:.3g} %, on the {power * 100:g} % line")
+    needed = max(n + 1, math.ceil(n * (z * probability_se[i] / gap) ** 2))
+    if needed > MAX_RUNS_TO_DECIDE:
+        return math.inf, f"more than {MAX_RUNS_TO_DECIDE} runs per sweep data set"
+    return float(needed), (
+        f"{decides} would be decided at about {needed} ok runs per sweep data set if the estimate holds: the "
+        f"detection probability of the {labels[i] if labels is not None else f'{levels[i]:.3g}'} level, "
+        f"{probability[i] * 100:.3g} % (bootstrap standard "
+        f"error {probability_se[i] * 100:.2g} points at {n} runs, falling as 1/sqrt(runs)), would then lie "
+        f"{z:.2f} standard errors from {power * 100:g} %")
 
 
 def requirement_verdict(lower: float, upper: float, requirement: float = BACKLASH_REQUIREMENT) -> str:
@@ -601,7 +661,11 @@ def observability_sweep(
     if min_runs is None:
         min_runs = detection_run_floor(false_alarm_rate, power, confidence)
     nan2 = (math.nan, math.nan)
+    needed, needed_reason = math.nan, "the verdict is decided"
     if min(n_used.values()) < min_runs:
+        needed = float(min_runs)
+        needed_reason = (f"{min_runs} ok runs per sweep data set are needed before any verdict "
+                         f"({_floor_reason(false_alarm_rate, power, confidence)})")
         enough = [len(s) >= min_runs and n_used[datasets[reference]] >= min_runs for s in samples]
         probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
                                 for s, ok in zip(samples, enough, strict=False)])
@@ -615,6 +679,12 @@ def observability_sweep(
         )
         probability = found["probability"]
         verdict = requirement_verdict(*found["bounds"], requirement)
+        if verdict == "undetermined":
+            _, _, scale, shown = SWEEP_QUANTITIES[condition]
+            needed, needed_reason = runs_to_decide(
+                backlash, probability, found["probability_se"], min(n_used.values()), requirement, power=power,
+                confidence=confidence, labels=[f"{b * scale:.3g} {shown} ({n})" for b, n in zip(backlash, datasets,
+                                                                                                  strict=True)])
     statement = requirement_statement(
         verdict, found["printed"], found["bounds"], n_used, resolution=found["resolution"], bracket=found["bracket"],
         levels=dict(zip(datasets, backlash, strict=True)), confidence=confidence, power=power,
@@ -667,6 +737,13 @@ def observability_sweep(
             ),
             "requirement_verdict": ((), verdict, _VERDICT_ATTRS),
             "requirement_statement": ((), statement, _STATEMENT_ATTRS),
+            "runs_to_decide": ((), needed, {
+                "units": "1",
+                "long_name": "ok runs per sweep data set at which an undetermined (or insufficient-data) verdict "
+                             "would be decided if the estimate holds (campaigns.analysis.runs_to_decide); NaN: "
+                             "decided, or no number of runs decides it (runs_to_decide_reason says which)"}),
+            "runs_to_decide_reason": ((), needed_reason, {"long_name": "how runs_to_decide was derived, or why "
+                                                                       "there is none"}),
         },
         coords={
             "sweep_point": ("sweep_point", np.array(datasets, dtype=object), {"long_name": "data set of the sweep"}),
@@ -874,6 +951,9 @@ def analysis_dataset(
                                            _VERDICT_ATTRS)
         analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object),
                                              _STATEMENT_ATTRS)
+        analysis["runs_to_decide"] = ("feature", np.full(len(features), math.nan), {"units": "1"})
+        analysis["runs_to_decide_reason"] = ("feature", np.full(len(features), "no observability sweep",
+                                                                dtype=object))
     analysis.attrs = {
         "Conventions": "CF-1.8",
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 from functools import cache
 from typing import Protocol
 
+from twin.errors import did_you_mean
+
 
 def _scenes():
     """The twin's scene module, the one table of scene conditions (``twin.scenes.CONDITIONS``) and the one
@@ -119,8 +121,9 @@ def lookup_nominal(
     if condition:
         (key,) = condition
         if key not in conditions:
-            known = ", ".join(scenes.SCENE_PREFIX + c for c in conditions)
-            raise KeyError(f"unknown scene condition {target!r}; known: {known}")
+            names = [scenes.SCENE_PREFIX + c for c in conditions]
+            raise KeyError(f"unknown scene condition {target!r}; {spelling_hint(target, names)}"
+                           f"known: {', '.join(names)}")
         value, unit = conditions[key]
         return float(value), unit
     if target not in parameters:
@@ -128,5 +131,11 @@ def lookup_nominal(
         siblings = [n for n in parameters if n.startswith(group + ".")]
         hint = (f"known in '{group}': {', '.join(siblings)}" if siblings
                 else f"known groups: {', '.join(sorted({n.split('.')[0] for n in parameters}))}")
-        raise KeyError(f"unknown parameter {target!r}; {hint}")
+        raise KeyError(f"unknown parameter {target!r}; {spelling_hint(target, parameters)}{hint}")
     return parameters[target]
+
+
+def spelling_hint(name: str, known) -> str:
+    """``"did you mean 'x'? "`` for a likely misspelling (:func:`twin.errors.did_you_mean`), else ``""``."""
+    suggestion = did_you_mean(name, known)
+    return f"{suggestion} " if suggestion else ""

@@ -108,6 +108,46 @@ def _shown(value: float, limit: str) -> str:
     return _value(float(decibels(value)) if limit == "gain_margin" else value, LIMITS[limit][3])
 
 
+#: The largest number of runs :func:`fraction_runs_to_decide` reports.
+MAX_RUNS_TO_DECIDE = 1_000_000
+
+
+def _fraction_bounds(k: float, n: float, confidence: float) -> tuple[float, float]:
+    """The Clopper-Pearson bounds through the beta quantiles (``k`` may be fractional: a fraction held at ``k/n``);
+    equal to :func:`_fraction_interval` for whole ``k``."""
+    alpha = 1.0 - confidence
+    lower = 0.0 if k <= 0 else float(stats.beta.ppf(0.5 * alpha, k, n - k + 1))
+    upper = 1.0 if k >= n else float(stats.beta.ppf(1.0 - 0.5 * alpha, k + 1, n - k))
+    return lower, upper
+
+
+def fraction_runs_to_decide(k: int, n: int, allowed: float, confidence: float = 0.95) -> float:
+    """The fewest runs at which an undetermined limit verdict would be decided if the observed fraction ``k/n`` held:
+    the smallest ``N > n`` whose exact (Clopper-Pearson) interval around ``k N / n`` runs beyond the limit lies wholly
+    within the allowed fraction (met) or wholly beyond it (not met). ``0 of 350`` runs beyond a 1 % limit: the upper
+    bound is ``1 - 0.025^(1/N)``, within 1 % from ``N = 368``. NaN when the fraction equals the allowed one (no number
+    of runs decides it), ``inf`` beyond :data:`MAX_RUNS_TO_DECIDE`."""
+    fraction = k / n
+    if fraction == allowed or n <= 0:
+        return math.nan
+    met = fraction < allowed
+
+    def decided(runs: int) -> bool:
+        lower, upper = _fraction_bounds(fraction * runs, runs, confidence)
+        return upper <= allowed if met else lower >= allowed
+
+    high = n + 1
+    while not decided(high):
+        if high > MAX_RUNS_TO_DECIDE:
+            return math.inf
+        high *= 2
+    low = max(n, high // 2)
+    while high - low > 1:  # the bounds narrow as runs grow: bisect between a size that does not and one that does
+        middle = (low + high) // 2
+        low, high = (low, middle) if decided(middle) else (middle, high)
+    return float(high)
+
+
 def limit_statement(verdict: str, loop: str, limit: str, threshold: float, k: int, n: int, bounds, allowed: float,
                     worst: float, worst_where: str, *, confidence: float, min_ok_runs: int) -> str:
     """The one sentence stating a limit's verdict with the numbers it rests on (``threshold`` in the limit's unit,
@@ -183,7 +223,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
     # runs beyond a limit, and the verdict per loop and limit over the campaign
     beyond_count = np.zeros((n_d, len(runs)), dtype=np.int32)
     beyond_text = np.full((n_d, len(runs)), "", dtype=object)
-    verdicts, sentences, fraction, fraction_ci, counts = [], [], [], [], []
+    verdicts, sentences, fraction, fraction_ci, counts, to_decide = [], [], [], [], [], []
     for loop in loops:
         for limit, (metric, field, comparison, unit, symbol) in LIMITS.items():
             name = f"{loop}_loop_{metric}"
@@ -211,6 +251,9 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             verdicts.append(verdict)
             sentences.append(limit_statement(verdict, loop, limit, threshold, k, n, bounds, limits.max_fraction_beyond,
                                              worst_value, worst_where, confidence=confidence, min_ok_runs=min_ok_runs))
+            to_decide.append(fraction_runs_to_decide(k, n, limits.max_fraction_beyond, confidence)
+                             if verdict == "undetermined" else float(min_ok_runs) if verdict == "insufficient data"
+                             else math.nan)
             fraction.append(k / n if n else math.nan)
             fraction_ci.append(bounds)
             counts.append((k, n))
@@ -255,6 +298,11 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
             "margin_limit_verdict": (("limit_check",), np.array(verdicts, dtype=object),
                                      {"long_name": "verdict on the design limit: met / not met / undetermined / "
                                                    "insufficient data", "control_limits": limits.model_dump_json()}),
+            "margin_limit_runs_to_decide": (("limit_check",), np.array(to_decide, dtype=float), {
+                "units": "1",
+                "long_name": "runs (with the margin) at which an undetermined verdict would be decided if the "
+                             "observed fraction beyond the limit held (campaigns.margins_analysis."
+                             "fraction_runs_to_decide; NaN: decided, or the fraction equals the allowed one)"}),
             "margin_limit_statement": (("limit_check",), np.array(sentences, dtype=object),
                                        {"long_name": "the verdict on the design limit with its numbers, in one "
                                                      "sentence"}),

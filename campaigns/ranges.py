@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from campaigns.distributions import Distribution
-from campaigns.units import HALF_RANGE_SIGMAS, UNITS
+from campaigns.units import EXAMPLES, HALF_RANGE_SIGMAS, conversion, known_unit
 
 
 def shape_problems(row) -> list[str]:
@@ -26,8 +26,8 @@ def shape_problems(row) -> list[str]:
         problems.append("give either half_range or low/high, not both")
     if row.relative and row.unit not in (None, "%"):
         problems.append(f"relative rows are in percent of nominal; unit must be '%' or omitted, got {row.unit!r}")
-    if not row.relative and row.unit is not None and row.unit not in UNITS:
-        problems.append(f"unknown unit {row.unit!r}; known: {', '.join(UNITS)}")
+    if not row.relative and row.unit is not None and (not isinstance(row.unit, str) or not known_unit(row.unit)):
+        problems.append(f"unknown unit {row.unit!r}; any unit of the pint library, e.g. {EXAMPLES}")
     has_range = bool({"half_range", "low"} & given)
     if kind == "constant":
         if given - {"value"}:
@@ -71,9 +71,10 @@ def resolve(row, nominal: float, unit: str) -> Distribution:
         if spec_unit == unit:
             scale, offset = 1.0, 0.0
         else:
-            si_unit, scale, offset = UNITS[spec_unit]
-            if si_unit != unit:
-                raise ValueError(f"unit {spec_unit!r} converts to {si_unit!r} but {row.target} is in {unit!r}")
+            try:
+                scale, offset = conversion(spec_unit, unit)
+            except ValueError as exc:
+                raise ValueError(f"{row.target}: {exc}") from None
 
         def absolute(p: float) -> float:
             return p * scale + offset

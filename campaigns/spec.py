@@ -35,12 +35,13 @@ from pydantic import (
 )
 
 from campaigns.bench import BenchCatalog
-from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog
+from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog, spelling_hint
 from campaigns.control_limits import ControlLimits
 from campaigns.distributions import Distribution, DistributionKind
 from campaigns.ranges import resolve, shape_problems
 from twin.errors import InputError
 from twin.fidelity import requested_levels
+from twin.scenes import CONDITIONS as SCENE_CONDITIONS
 from twin.scenes import split_targets
 from twin.tomlfiles import read_inheriting
 
@@ -119,7 +120,8 @@ class Base(_Strict):
     def _known_scene(cls, scene: str, info: ValidationInfo) -> str:
         catalog = _catalog(info)
         if catalog is not None and scene not in catalog.scene_names:
-            raise ValueError(f"unknown scene {scene!r}; known: {', '.join(catalog.scene_names)}")
+            raise ValueError(f"unknown scene {scene!r}; {spelling_hint(scene, catalog.scene_names)}"
+                             f"known: {', '.join(catalog.scene_names)}")
         return scene
 
 
@@ -188,7 +190,8 @@ def _known_condition(name: str, info: ValidationInfo) -> str:
         return name
     known = list(catalog.condition_names)
     if name not in known:
-        raise ValueError(f"unknown condition {name}; the model's scenes accept: {', '.join(known)}")
+        raise ValueError(f"unknown condition {name}; {spelling_hint(name, known)}"
+                         f"the model's scenes accept: {', '.join(known)}")
     return name
 
 
@@ -235,9 +238,35 @@ class Dataset(_Strict):
                 problems.append(f"{name}: {value!r} is not one of {', '.join(choices)}")
             elif choices is None and isinstance(value, str):
                 problems.append(f"{name}: must be a number [{CONDITION_UNITS.get(name, '')}], got {value!r}")
+
         if problems:
             raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
         return conditions
+
+
+#: Unit slips a spec value in SI units may hide: SI unit -> (unit meant, its SI value): ``backlash = 80`` meant
+#: ``80 µm`` (8e-05 m). Offered in the message of a value out of range when the value in that unit is in range.
+UNIT_SLIPS = {"m": (("µm", 1e-6), ("mm", 1e-3)), "N": (("kN", 1e3),), "Pa": (("bar", 1e5), ("kPa", 1e3), ("MPa", 1e6)),
+              "K": (("degC", None),)}
+
+
+def condition_range_problem(name: str, value) -> str | None:
+    """A bench scene condition's value outside its range (``twin.scenes.CONDITIONS``), said with its SI unit, the
+    range and, when the number read in a handier unit would be in range, the SI value meant:
+    ``backlash: 80 m is outside the allowed range 0 ... 1e-3 m (total axial play of each nut); spec values are in SI
+    units: for 80 µm write 8e-05``."""
+    condition = SCENE_CONDITIONS.get(name)
+    if condition is None or not condition.numeric or isinstance(value, (str, bool)) or not math.isfinite(value):
+        return None
+    if condition.check(value):
+        return None
+    text = (f"{name}: {value:g} {condition.unit} is outside the allowed range {condition.allowed} "
+            f"({condition.description})")
+    for unit, size in UNIT_SLIPS.get(condition.unit, ()):
+        meant = value + 273.15 if size is None else value * size
+        if condition.check(meant):
+            return text + f"; spec values are in SI units: for {value:g} {unit} write {meant:g}"
+    return text
 
 
 class Observability(_Strict):
@@ -345,6 +374,7 @@ class CampaignSpec(_Strict):
     control_limits: ControlLimits = ControlLimits()
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
+    _warnings: list[str] = PrivateAttr(default_factory=list)
     _condition_units: dict[str, str] = PrivateAttr(default_factory=dict)
 
     @field_validator("features")
@@ -354,7 +384,8 @@ class CampaignSpec(_Strict):
         known = catalog.feature_units if catalog is not None else None
         unknown = [f for f in features if known is not None and f not in known]
         if unknown:
-            raise ValueError(f"unknown feature(s) {', '.join(unknown)}; known: {', '.join(known)}")
+            hints = "".join(spelling_hint(f, known) for f in unknown)
+            raise ValueError(f"unknown feature(s) {', '.join(unknown)}; {hints}known: {', '.join(known)}")
         if len(set(features)) != len(features):
             raise ValueError("duplicate features")
         return features
@@ -370,6 +401,12 @@ class CampaignSpec(_Strict):
         if problems:
             raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
         return self
+
+    @property
+    def warnings(self) -> list[str]:
+        """What validation found suspicious but not wrong (a sampled range far from its nominal, a Gaussian whose
+        tail crosses a bound): said before any run, the campaign still runs (:func:`support_checks`)."""
+        return list(self._warnings)
 
     def feature_meta(self, feature: str) -> tuple[str, str]:
         """Unit and long name of a feature, as the catalog declared them (``("1", name)`` if it did not)."""
@@ -447,6 +484,9 @@ def cross_field_problems(data: dict) -> list[str]:
         clash = sorted(sampled & set(conditions)) if isinstance(conditions, dict) else []
         if clash:
             problems.append(f"datasets[{k}].conditions: {', '.join(clash)} also sampled in uncertainties")
+        for name, value in (conditions.items() if isinstance(conditions, dict) else ()):
+            if isinstance(value, (int, float)) and (problem := condition_range_problem(name, value)) is not None:
+                problems.append(f"datasets[{k}].conditions: {problem}")
     observability = data.get("observability")
     sweep = observability.get("sweep") if isinstance(observability, dict) else None
     if isinstance(sweep, list):
@@ -515,6 +555,16 @@ def _row_problems(data: dict, rows: set[int], catalog: Catalog | None) -> list[s
     return problems
 
 
+def _field_names(loc: tuple) -> list[str]:
+    """The fields a spec table at ``loc`` (an error's location, the unknown key last) accepts."""
+    tables = [part for part in loc[:-1] if not isinstance(part, int)]
+    if not tables:
+        return list(CampaignSpec.model_fields)
+    annotation = CampaignSpec.model_fields[tables[0]].annotation if tables[0] in CampaignSpec.model_fields else None
+    model = getattr(annotation, "__args__", (annotation,))[0] if annotation is not None else None
+    return list(model.model_fields) if len(tables) == 1 and hasattr(model, "model_fields") else []
+
+
 def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
     """Validate spec data (a parsed TOML document) against ``catalog``.
 
@@ -539,6 +589,11 @@ def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
             if len(err["loc"]) > 2 and err["loc"][0] == "uncertainties" and isinstance(err["loc"][1], int):
                 failed_rows.add(err["loc"][1])
             path = _path(err["loc"])
+            if err["type"] == "extra_forbidden":
+                known = _field_names(err["loc"])
+                problems.append(f"{path}: unknown field; {spelling_hint(str(err['loc'][-1]), known)}"
+                                f"allowed: {', '.join(known)}" if known else f"{path}: unknown field")
+                continue
             if err["type"] != "value_error":
                 problems.append(f"{path}: {err['msg']} (got {err['input']!r})")
                 continue
@@ -548,7 +603,66 @@ def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
     problems += [p for p in _row_problems(data, failed_rows, catalog) + cross_field_problems(data) if p not in problems]
     if problems:
         raise SpecError(problems)
+    found, spec._warnings = support_checks(spec, catalog)
+    if found:
+        raise SpecError(found)
     return spec
+
+
+#: Relative round-off a sampled range may have beyond a bound it was written at (unit conversion of the bound).
+ROUND_OFF = 1e-9
+
+
+def support_checks(spec: CampaignSpec, catalog: Catalog | None) -> tuple[list[str], list[str]]:
+    """Every sampled range against what its target allows, before anything runs: ``(problems, warnings)``.
+
+    A problem: a range (uniform, truncated Gaussian: its bounds; a constant: its value; a Gaussian or lognormal:
+    its centre) outside the bounds of the parameter file or of the scene condition, which every run would fail on.
+    A warning: a Gaussian whose tail crosses a bound (the share of runs that would fail is given) or a centre more
+    than ``twin.parameters.PLAUSIBLE_FACTOR`` times away from the nominal (a unit or exponent slip, usually).
+    The bounds are the bench's (its parameter set and ``twin.scenes.CONDITIONS``); other models' catalogs are not
+    checked here.
+    """
+    if not isinstance(catalog, BenchCatalog):
+        return [], []
+    from twin import load_parameters  # lazy: only bench specs are checked against a parameter set
+
+    parameters = load_parameters(spec.base.parameters)
+    problems, warnings = [], []
+    for k, row in enumerate(spec.uncertainties):
+        d = row.distribution_resolved
+        conditions, _ = split_targets({d.target: None})
+        name = next(iter(conditions), None)
+        exact = ((lambda v, c=SCENE_CONDITIONS[name]: c.check(v)) if name in SCENE_CONDITIONS
+                 else (lambda v, p=parameters[d.target]: p.check(v) is None) if name is None else None)
+        # a range given as the bound itself (a sensor's Table 9.5 range) may land a last bit beyond it in SI units
+        check = exact and (lambda v, exact=exact: any(exact(v * (1.0 + e)) for e in (0.0, -ROUND_OFF, ROUND_OFF)))
+        if check is None or not SCENE_CONDITIONS.get(name, SCENE_CONDITIONS["backlash"]).numeric:
+            continue
+        allowed = (f"{SCENE_CONDITIONS[name].allowed}" if name is not None
+                   else f"{parameters[d.target].allowed()} {d.unit}")
+        if d.kind in ("uniform", "truncated_gaussian"):
+            edges = [("low", d.low), ("high", d.high)]
+        elif d.kind == "constant":
+            edges = [("value", d.value)]
+        else:
+            edges = [("centre", d.mean)]
+        for what, value in edges:
+            if not check(value):
+                problems.append(f"uncertainties[{k}]: {d.target}: the range's {what} {value:g} {d.unit} is outside "
+                                f"the allowed range {allowed}; every run drawing it would fail")
+        if d.kind == "gaussian" and check(d.mean) and d.sigma > 0:
+            for side in (-1.0, 1.0):
+                edge = d.mean + side * 3.0 * d.sigma
+                if not check(edge):
+                    warnings.append(f"uncertainties[{k}]: {d.target}: the Gaussian (mean {d.mean:g}, sigma {d.sigma:g} "
+                                    f"{d.unit}) reaches beyond the allowed range {allowed} within 3 sigma: its draws "
+                                    "beyond it fail (use truncated_gaussian to keep them inside)")
+                    break
+        centre = d.value if d.kind == "constant" else d.mean if math.isfinite(d.mean) else 0.5 * (d.low + d.high)
+        if name is None and (warning := parameters[d.target].implausible(centre)) is not None:
+            warnings.append(f"uncertainties[{k}]: {warning}")
+    return problems, warnings
 
 
 def _read_spec_file(path: Path) -> dict:

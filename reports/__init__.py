@@ -26,6 +26,8 @@ def build_report(
     *,
     accuracy_path: str | Path | None = None,
     generated_at: datetime | None = None,
+    measured_paths=(),
+    against_path: str | Path | None = None,
 ) -> dict[str, Path]:
     """Write ``report.html`` and ``report.pdf`` of a campaign; no simulation is run.
 
@@ -42,6 +44,11 @@ def build_report(
     accuracy_path : str or Path, optional
         The speed-versus-accuracy study, ``work_precision.nc`` of ``twin accuracy``;
         without it the report says the section is not available.
+    measured_paths : iterable of paths, optional
+        Measured tests (``twin measure import``): placed in each data set on page 1 and in a section of their own.
+    against_path : str or Path, optional
+        Another design's ``results.nc``: the report compares this campaign against it (a section and a sentence on
+        page 1).
     generated_at : datetime, optional
         Timestamp recorded in the report; default now (UTC). The same inputs and
         timestamp give byte-identical HTML.
@@ -64,7 +71,8 @@ def build_report(
     from reports.pdf import render_pdf
 
     generated_at = (generated_at or datetime.now(UTC)).astimezone(UTC)
-    inputs = load_inputs(results_path, analysis_path, accuracy_path)
+    inputs = load_inputs(results_path, analysis_path, accuracy_path, measured_paths=measured_paths,
+                         against_path=against_path)
     out_dir, html = Path(out_dir), Path(out_dir) / "report.html"
     try:  # before the figures are drawn, so an unwritable destination fails at once
         out_dir.mkdir(parents=True, exist_ok=True)

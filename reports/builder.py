@@ -69,7 +69,7 @@ class Builder:
         self.conditions = dataset_conditions(self.results, self.spec)
         stated = self.analysis.attrs.get("min_ok_runs")
         self.min_ok_runs = int(stated) if stated is not None else FALLBACK_MIN_OK_RUNS
-        self.min_ok_source = ("analysis.nc, min_ok_runs" if stated is not None
+        self.min_ok_source = ("the analysis's minimum" if stated is not None
                               else "the report's default; this analysis.nc states no minimum")
         self._figures = 0
         self._tables = 0

@@ -13,12 +13,14 @@ from reports.builder import Builder
 from reports.inputs import Inputs
 from reports.model import Report, Section
 from reports.sections import (
+    comparison,
     control_robustness,
     correlations,
     distributions,
     executive,
     failures,
     fidelity,
+    measured,
     observability,
     scatter,
     speed,
@@ -56,15 +58,22 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     """
     b = Builder(inputs)
     page_one = tuple(executive.build(b))  # first, so its data-set table is Table 1
+    # a comparison report opens with the comparison; measured tests follow the observability they are judged by
+    optional_first = [("comparison", comparison.build)] if inputs.comparison is not None else []
+    optional_measured = [("measured", measured.build)] if inputs.measured else []
+    titles = {**SECTION_TITLES, "measured": measured.TITLE,
+              **({"comparison": comparison.title(b)} if inputs.comparison is not None else {})}
     sections = tuple(
-        Section(key, SECTION_TITLES[key], tuple(make(b)))
+        Section(key, titles[key], tuple(make(b)))
         for key, make in (
+            *optional_first,
             ("summary", summary.build),
             ("distributions", distributions.build),
             ("correlations", correlations.build),
             ("scatter", scatter.build),
             ("traces", traces.build),
             ("observability", observability.build),
+            *optional_measured,
             ("failures", failures.build),
             ("speed", speed.build),
             ("fidelity", fidelity.build),

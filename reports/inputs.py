@@ -49,6 +49,10 @@ class Inputs:
     files : tuple of InputFile
     analysis_computed : bool
         True when the analysis was computed in memory (no ``analysis.nc`` found).
+    measured : tuple of campaigns.diagnosis.Diagnosis
+        Measured tests placed against this campaign (``twin report --measured``).
+    comparison : campaigns.design_comparison.Comparison or None
+        This campaign against another design (``twin report --against``).
     """
 
     results: xr.Dataset
@@ -57,9 +61,12 @@ class Inputs:
     spec: dict
     files: tuple[InputFile, ...]
     analysis_computed: bool
+    measured: tuple = ()
+    comparison: object | None = None
 
 
-def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
+def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measured_paths=(),
+                against_path=None) -> Inputs:
     """Open and check the report's input files.
 
     Parameters
@@ -71,6 +78,11 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
         exists, else the analysis is computed in memory (nothing is written).
     accuracy_path : str or Path, optional
         A speed-versus-accuracy study (``work_precision.nc`` of ``twin accuracy``).
+    measured_paths : iterable of paths
+        Measured tests (``twin measure import``) to place against the campaign (:mod:`campaigns.diagnosis`).
+    against_path : str or Path, optional
+        Another design's ``results.nc`` (its ``analysis.nc`` beside it, when there): the report compares this
+        campaign against it (:mod:`campaigns.design_comparison`).
 
     Raises
     ------
@@ -100,7 +112,34 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None) -> Inputs:
         accuracy = _open(accuracy_path, "speed-versus-accuracy")
         _check_accuracy(accuracy, accuracy_path)
         files.append(_describe("accuracy", accuracy_path))
-    return Inputs(results, analysis, accuracy, spec, tuple(files), analysis_path is None)
+    measured = []
+    for path in (Path(p) for p in measured_paths):
+        test = _open(path, "measured test")
+        if "measured_test" not in test.attrs:
+            raise ReportError(path, "not a measured test (no measured_test attribute); make one with "
+                                    "`twin measure import`")
+        from campaigns.diagnosis import diagnose  # lazy: only reports with measured tests need it
+
+        try:
+            measured.append(diagnose(test, results))
+        except ValueError as exc:
+            raise ReportError(path, str(exc)) from None
+        files.append(_describe("measured test", path))
+    comparison = None
+    if against_path is not None:
+        against_path = Path(against_path)
+        other = _open(against_path, "campaign results")
+        _check_results(other, against_path)
+        other_analysis = None
+        if (against_path.parent / ANALYSIS_NAME).is_file():
+            other_analysis = _open(against_path.parent / ANALYSIS_NAME, "campaign analysis")
+            if other_analysis.attrs.get("source_spec_hash") != other.attrs.get("spec_hash"):
+                other_analysis = None
+        from campaigns.design_comparison import compare  # lazy: only comparison reports need it
+
+        comparison = compare(other, results, other_analysis, analysis)
+        files.append(_describe("compared against", against_path))
+    return Inputs(results, analysis, accuracy, spec, tuple(files), analysis_path is None, tuple(measured), comparison)
 
 
 def _open(path: Path, what: str) -> xr.Dataset:

@@ -2,74 +2,18 @@
 
 Values are stored in SI units; a report shows them with the SI prefix that
 suits their magnitude (backlash in µm, positions in mm, forces in N or kN) and
-pressures in bar, the unit of the bench's pneumatic components.
+pressures in bar, the unit of the bench's pneumatic components. The rules live in
+:mod:`campaigns.units` (the comparison's and the diagnosis's sentences, written below
+the report, read the same way); this module adds the figures' axis labels.
 """
 
 from __future__ import annotations
 
-import math
+from campaigns.units import display_scale, number, quantity, quantity_range
 
-import numpy as np
-
-#: Units that take an SI prefix.
-_PREFIXABLE = {"m", "N", "A", "s", "V", "W", "N m", "N/m", "rad"}
-_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"),
-             (1e-15, "f"))
-#: Units shown in another unit: SI unit -> (display unit, SI value of one display unit).
-_CONVERTED = {"Pa": ("bar", 1e5)}
-_DIMENSIONLESS = {"", "1"}
-
-
-def display_scale(unit: str, values) -> tuple[float, str]:
-    """Factor to multiply SI values by, and the unit of the result.
-
-    Parameters
-    ----------
-    unit : str
-        SI unit of ``values`` (the ``units`` attribute).
-    values : array_like
-        The values to show; their largest finite magnitude picks the prefix.
-
-    Returns
-    -------
-    tuple of (float, str)
-    """
-    if unit in _CONVERTED:
-        shown, size = _CONVERTED[unit]
-        return 1.0 / size, shown
-    if unit in _DIMENSIONLESS:
-        return 1.0, "–"
-    magnitude = np.abs(np.asarray(values, dtype=float))
-    magnitude = magnitude[np.isfinite(magnitude)]
-    if unit not in _PREFIXABLE or magnitude.size == 0 or magnitude.max() == 0:
-        return 1.0, unit
-    reference = magnitude.max()
-    size, prefix = next(((size, prefix) for size, prefix in _PREFIXES if reference >= size), _PREFIXES[-1])
-    return 1.0 / size, prefix + unit
+__all__ = ["axis_label", "display_scale", "number", "quantity", "quantity_range"]
 
 
 def axis_label(name: str, unit: str) -> str:
     """``name [unit]``; dimensionless quantities get ``[–]``."""
     return f"{name} [{unit or '–'}]"
-
-
-def number(value, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits; NaN and None as an en dash."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "–"
-    if isinstance(value, (bool, np.bool_)):
-        return "yes" if value else "no"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    value = float(value)
-    if math.isnan(value):
-        return "–"
-    return f"{value:.{digits}g}"
-
-
-def quantity(value: float, unit: str, digits: int = 3) -> str:
-    """A value in SI units shown with its display unit, e.g. ``2.5e-6, "m"`` -> ``"2.5 µm"``."""
-    if value is None or not math.isfinite(value):
-        return "–"
-    factor, shown = display_scale(unit, [value])
-    return f"{number(value * factor, digits)} {shown}" if shown != "–" else number(value, digits)

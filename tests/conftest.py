@@ -29,3 +29,28 @@ def make_scene(duration, position=(), force=(), *, preload=0.0, backlash=0.0, co
 def scene_factory():
     return make_scene
 
+
+
+@pytest.fixture(scope="session")
+def measured_campaign(tmp_path_factory):
+    """A small bench sweep campaign (analysed), the twin's hidden-backlash run written as a bench's CSV log, its
+    mapping, and the imported measured test (``tests/measured_helpers.py``); built once for the measured-test, CLI
+    and report tests."""
+    from types import SimpleNamespace
+
+    from measured_helpers import hidden_run, sweep_spec, write_bench_csv, write_mapping
+
+    import campaigns
+    from campaigns.files import write_netcdf
+    from campaigns.measured import import_measured
+
+    root = tmp_path_factory.mktemp("measured")
+    spec = sweep_spec(root)
+    results = campaigns.run_campaign(campaigns.load_spec(spec), root / "campaign", workers=2, progress=False)
+    campaigns.analyze(results)
+    run = hidden_run(spec)
+    csv = write_bench_csv(run, root / "bench_run.csv")
+    mapping = write_mapping(root / "mapping.toml")
+    test = write_netcdf(import_measured(csv, mapping), root / "bench_run_measured.nc", title="measured test",
+                        history="tests/conftest.py")
+    return SimpleNamespace(root=root, spec=spec, results=results, run=run, csv=csv, mapping=mapping, test=test)

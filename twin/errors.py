@@ -6,6 +6,26 @@ and what is allowed, so a user fixes a spec in one pass.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
+
+
+def did_you_mean(name: str, known: Iterable[str], *, cutoff: float = 0.75) -> str:
+    """``"did you mean 'motor.inertia'?"`` when ``name`` is a likely misspelling of a known name, else ``""``.
+
+    The closest names by :func:`difflib.get_close_matches` (ratio of matching characters, at least ``cutoff``), the
+    part after the last dot compared too so that ``motor.inertai`` finds ``motor.inertia`` among many long names.
+    """
+    known = list(dict.fromkeys(known))
+    matches = difflib.get_close_matches(name, known, n=3, cutoff=cutoff)
+    if not matches and "." in name:  # the group spelt right, the key wrong: compare the keys of that group
+        group, key = name.rsplit(".", 1)
+        keys = {k.rsplit(".", 1)[1]: k for k in known if k.startswith(group + ".")}
+        matches = [keys[k] for k in difflib.get_close_matches(key, list(keys), n=3, cutoff=cutoff)]
+    if not matches:
+        return ""
+    return "did you mean " + " or ".join(repr(m) for m in matches) + "?"
+
 
 class InputError(ValueError):
     """Invalid user input; ``problems`` holds one message per offending field."""

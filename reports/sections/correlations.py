@@ -10,7 +10,7 @@ import numpy as np
 from reports import figures
 from reports.builder import HEATMAP_PARAMETERS, TORNADO_PARAMETERS, Z95, Builder
 from reports.model import Callout, Paragraph
-from reports.units import number, quantity
+from reports.units import number, quantity, quantity_range
 
 
 def rank_order(values: np.ndarray) -> np.ndarray:
@@ -168,7 +168,7 @@ def _sensitivity_table(b: Builder, parameters: list[str]):
                          else f"{index[j]:.2f} [{lo:.2f}, {hi:.2f}]")
                 resolved = "yes" if lo > 0 else "no (interval includes 0)"
                 effect_lo, effect_hi = (float(v) for v in sel["effect_size_ci"].values[j])
-                effect = (f"[{quantity(effect_lo, unit)}, {quantity(effect_hi, unit)}]" if withheld
+                effect = (f"[{quantity_range(effect_lo, effect_hi, unit, separator=', ')}]" if withheld
                           else quantity(float(sel["effect_size"].values[j]), unit))
                 rows.append((feature, name, parameters[j], shown, effect,
                              f"{sel['spearman'].values[j]:+.2f}", resolved,

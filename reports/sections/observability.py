@@ -61,11 +61,11 @@ def build(b: Builder):
     factor, unit = display_scale("m", [requirement])
     yield Paragraph(
         f"Along the sweep {', '.join(sweep)} (data sets differing only in backlash: "
-        f"{', '.join(quantity(x, 'm') for x in backlash)}), the minimum detectable backlash is where the detection "
-        f"probability against the zero-backlash data set reaches {power:.0%}. Between two sweep levels the runs say "
-        "nothing, so the finding is the pair of adjacent levels around that crossing; a value between them is given "
-        "only where the sweep resolves it (its bootstrap bounds hold a sweep level inside), rounded to the precision "
-        "of those bounds. Each sentence above is the analysis's, verbatim."
+        f"{', '.join(number(x * factor) for x in backlash)} {unit}), the minimum detectable backlash is where the "
+        f"detection probability against the zero-backlash data set reaches {power:.0%}. Between two sweep levels "
+        "the runs say nothing, so the finding is the pair of adjacent levels around that crossing; a value between "
+        "them is given only where the sweep resolves it (its bootstrap bounds hold a sweep level inside), rounded to "
+        "the precision of those bounds. Each sentence above is the analysis's, verbatim."
     )
     minimum = {f: float(a["minimum_detectable_backlash"].sel(feature=f)) for f in b.features}
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}

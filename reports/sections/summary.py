@@ -8,7 +8,7 @@ import numpy as np
 
 from reports.builder import Builder, solver_description
 from reports.model import Callout, Paragraph
-from reports.units import number, quantity
+from reports.units import display_scale, number
 
 
 def build(b: Builder):
@@ -76,11 +76,15 @@ def build(b: Builder):
     for name in b.parameters:
         dist = json.loads(results[name].attrs.get("distribution", "{}") or "{}")
         unit = results[name].attrs.get("units", "")
-        shape = ", ".join(f"{key} {quantity(dist[key], unit)}" for key in ("nominal", "mean", "low", "high", "value")
-                          if key in dist)
-        if "sigma" in dist:  # a lognormal's sigma is that of the logarithm, without unit
-            shape += (f", sigma {number(dist['sigma'])} (log)" if dist.get("kind") == "lognormal"
-                      else f", sigma {quantity(dist['sigma'], unit)}")
+        values = {key: dist[key] for key in ("nominal", "mean", "low", "high", "value", "sigma") if key in dist}
+        # a lognormal's sigma is that of the logarithm, without unit
+        log_sigma = values.pop("sigma") if dist.get("kind") == "lognormal" and "sigma" in values else None
+        # one prefix for the row, chosen by its largest value: "nominal 0 µm, low -5 µm", never "nominal 0 m"
+        factor, shown = display_scale(unit, list(values.values()))
+        shown = "" if shown == "–" else f" {shown}"
+        shape = ", ".join(f"{key} {number(value * factor)}{shown}" for key, value in values.items())
+        if log_sigma is not None:
+            shape += f", sigma {number(log_sigma)} (log)"
         rows.append((name, dist.get("kind", "–"), shape, dist.get("source") or "–"))
     yield b.table("Uncertain parameters (sampled per run) with their resolved distributions; the Source column "
                   "quotes the spec.",

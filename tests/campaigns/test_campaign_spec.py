@@ -67,7 +67,7 @@ EXPECTED = [
     "uncertainties[0].sigma:",
     "uncertainties[1]: low (2) > high (1)",
     "uncertainties[2]: unknown parameter 'synthetic.no_such_parameter'",
-    "uncertainties[3]: unit 'um' converts to 'm' but synthetic.stiffness is in 'N/m'",
+    "uncertainties[3]: synthetic.stiffness: unit 'um' does not convert to 'N/m'",
     "uncertainties[4].mean:",
 ]
 

@@ -136,12 +136,12 @@ def test_page_one_names_the_integrator_when_the_audit_checks_it_too(inputs):
     """With the opt-in automatic integrator the audit's reference is full fidelity with RK4: page 1 says so."""
     def audit_callout(report):
         callouts = [c.text for c in report.executive if isinstance(c, Callout)]
-        return next(text for text in callouts if text.startswith("Fidelity audit ("))
+        return next(text for text in callouts if text.startswith("Model check, fidelity audit ("))
     assert audit_callout(build(inputs, "T")).startswith(
-        "Fidelity audit (automatic model simplification against full fidelity):")
+        "Model check, fidelity audit (automatic model simplification against full fidelity):")
     spec = {**inputs.spec, "spec": {**inputs.spec["spec"], "solver": {"integrator": "auto", "fidelity": "auto"}}}
     assert audit_callout(build(dataclasses.replace(inputs, spec=spec), "T")).startswith(
-        "Fidelity audit (automatic model simplification and integrator against full fidelity with RK4):")
+        "Model check, fidelity audit (automatic model simplification and integrator against full fidelity with RK4):")
 
 
 def test_bench_traces_get_the_thesis_panels(extended):

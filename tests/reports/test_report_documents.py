@@ -63,10 +63,16 @@ def test_pdf_title_page_contents_sections_and_figures(report):
     assert len(reader.pages) >= 8
     assert "Monte Carlo campaign report: report_test" in pages[0]
     assert "2026-01-02T03:04:05+00:00" in pages[0]
-    assert pages[1].startswith("Contents")
-    body = " ".join(pages[2:])
+    # every page numbered as a viewer counts it (page 1 included), the last one "N / N"
+    for number, text in enumerate(pages, start=1):
+        assert f"{number} / {len(pages)}" in text, f"page {number} is not numbered {number} / {len(pages)}"
+    # the contents follow page 1's summary, and the first section follows them on the same page
+    at = next(k for k, text in enumerate(pages) if "Contents" in text)
+    contents = pages[at][pages[at].index("Contents"):]
+    assert f"1. {next(iter(SECTION_TITLES.values()))}" in contents.split("Contents", 1)[1]
+    body = " ".join(pages[at:])
     for number, title in enumerate(SECTION_TITLES.values(), start=1):
-        assert f"{number}. {title}" in pages[1]  # the table of contents
+        assert f"{number}. {title}" in contents  # the table of contents
         assert f"{number}. {title}" in body
     # same numbered figures as the HTML, each with its caption
     numbers = {int(n) for n in re.findall(r"Figure (\d+):", body)}

@@ -72,19 +72,22 @@ def callouts(items, start: str = "") -> list[Callout]:
 
 
 @pytest.mark.parametrize(
-    ("verdict", "tone"), [("met", "good"), ("not met", "bad"), ("undetermined", "info"), ("insufficient data", "muted")]
+    ("verdict", "tone", "decision"),
+    [("met", "good", "GO"), ("not met", "bad", "NO-GO"), ("undetermined", "info", "UNDETERMINED"),
+     ("insufficient data", "muted", "NO DATA")],
 )
-def test_each_verdict_is_printed_verbatim_with_its_own_tone(verdict, tone):
-    """The replay of the old bug (a report that said "meets" whatever the analysis found): the callout carries the
-    analysis's sentence and the tone of the analysis's verdict, for each of the four verdicts."""
+def test_each_verdict_is_one_decision_line_with_its_own_tone(verdict, tone, decision):
+    """The replay of the old bug (a report that said "meets" whatever the analysis found): page 1's line on the
+    requirement carries the analysis's verdict as a decision word, with the tone of that verdict; the ideal-sensor
+    reading (the true-signal feature) is said on the same line, not as a raw identifier."""
     results = results_of()
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
-    statements = {"f": f"{verdict}: the sentence of f", "f_true": "met: the sentence of f_true"}
     analysis["requirement_verdict"] = ("feature", np.array([verdict, "met"], dtype=object))
-    analysis["requirement_statement"] = ("feature", np.array(list(statements.values()), dtype=object))
-    found = {c.text: (c.tone, c.link) for c in callouts(executive(results, analysis))}
-    assert found["f: " + statements["f"]] == (tone, "observability")
-    assert found["f_true: " + statements["f_true"]] == ("good", "observability")
+    [line] = callouts(executive(results, analysis), f"{decision} — Detect a 1 µm backlash (Table 9.3) with")
+    assert (line.tone, line.link) == (tone, "observability")
+    assert line.text.endswith(" With ideal sensors: GO.")
+    assert "_true" not in line.text and "f_true" not in " ".join(c.text for c in callouts(executive(results, analysis),
+                                                                                          "GO"))
 
 
 def test_the_computed_verdicts_reach_page_one():
@@ -92,17 +95,26 @@ def test_the_computed_verdicts_reach_page_one():
     results = results_of(sigma=(0.1e-6, 3e-6))
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
     assert list(analysis["requirement_verdict"].values) == ["met", "not met"]
-    page = executive(results, analysis)
-    for feature, tone in (("f", "good"), ("f_true", "bad")):
-        statement = str(analysis["requirement_statement"].sel(feature=feature).item())
-        assert [c.tone for c in callouts(page, f"{feature}: {statement}")] == [tone]
+    [line] = callouts(executive(results, analysis), "GO — Detect a 1 µm backlash")
+    upper = float(analysis["minimum_detectable_backlash_ci"].sel(feature="f", bound="upper"))
+    assert f"is at most {number(upper * 1e6)} µm (95 % bound), within the requirement" in line.text
+    assert line.text.endswith("With ideal sensors: NO-GO.") and line.tone == "good"
 
 
-def test_the_question_counts_the_sampled_values_and_the_constant_ones_without_naming_them():
+def test_an_undetermined_line_gives_the_runs_that_would_decide_it():
+    """The analysis's runs_to_decide, and its reason when no number of runs decides, are on the decision line."""
     results = results_of()
-    results["p.fixed"] = (("dataset", "run"), np.ones((len(LEVELS), RUNS)), {"role": "sampled", "units": "1"})
-    question = next(p.text for p in executive(results) if isinstance(p, Paragraph))
-    assert "with f, f_true when 3 sampled value(s), of which 2 vary from run to run (1 constant) are drawn" in question
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    analysis["requirement_verdict"] = ("feature", np.array(["undetermined", "met"], dtype=object))
+    analysis["runs_to_decide"] = ("feature", np.array([412.0, np.nan]))
+    [line] = callouts(executive(results, analysis), "UNDETERMINED")
+    assert "60 runs per sweep level cannot tell yet. About 412 ok runs per sweep data set (now 60) would decide it " \
+           "if the estimate holds." in line.text
+    analysis["runs_to_decide"] = ("feature", np.array([np.nan, np.nan]))
+    analysis["runs_to_decide_reason"] = ("feature", np.array(["no number of runs decides it: a sweep level at the "
+                                                             "requirement is needed", ""], dtype=object))
+    [line] = callouts(executive(results, analysis), "UNDETERMINED")
+    assert "No number of runs decides it: a sweep level at the requirement is needed." in line.text
 
 
 def test_an_analysis_without_verdict_variables_gives_no_verdict():
@@ -119,26 +131,35 @@ def test_the_question_states_the_requirement_the_analysis_states():
     results = results_of()
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
     question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
-    assert question.startswith(
-        "Question. verdict test. Can the bench tell the data sets' conditions apart with f, f_true"
-    )
-    assert (
-        "within the 1 µm requirement (Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm)?" in question
-    )
+    assert question.startswith("What this campaign answers (verdict test): can the bench detect a backlash of 1 µm "
+                               "(Table 9.3) with its sensors, when 2 of 2 sampled tolerances and conditions vary")
     analysis.attrs.update(requirement=2e-6, requirement_source="a tighter rig")
     question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
-    assert "within the 2 µm requirement (a tighter rig)?" in question
+    assert "detect a backlash of 2 µm (a tighter rig)" in question
     # an older analysis: the requirement stated on the minimum detectable backlash, else Table 9.3's
     del analysis.attrs["requirement"]
     analysis["minimum_detectable_backlash"].attrs.update(requirement=3e-6, requirement_source="the variable's own")
     question = next(p.text for p in executive(results, analysis) if isinstance(p, Paragraph))
-    assert "within the 3 µm requirement (the variable's own)?" in question
+    assert "detect a backlash of 3 µm (the variable's own)" in question
     older = analysis.drop_vars(["minimum_detectable_backlash"])
     question = next(p.text for p in executive(results, older) if isinstance(p, Paragraph))
-    assert "within the 1 µm requirement (Table 9.3)?" in question
+    assert "detect a backlash of 1 µm (Table 9.3)" in question
     for unswept in (older.drop_dims("sweep_point"), older.isel(sweep_point=slice(0, 0))):  # no sweep, or an empty one
         question = next(p.text for p in executive(results, unswept) if isinstance(p, Paragraph))
-        assert question.endswith("? (No observability sweep in the spec: no requirement verdict is sought.)")
+        assert "the spec has no observability sweep, so no detection requirement is judged" in question
+
+
+def test_page_one_names_no_raw_identifier():
+    """Plain words on page 1: no true-signal suffix, no analysis attribute names, every term in the glossary."""
+    results = results_of()
+    page = executive(results)
+    text = " ".join(getattr(block, "text", "") or getattr(block, "caption", "") for block in page)
+    for raw in ("_true", "min_ok_runs", "first_order_index", "requirement_verdict", "data_sufficient"):
+        assert raw not in text, raw
+    [glossary] = [t for t in page if isinstance(t, Table) and t.caption == "Terms used on this page."]
+    terms = " ".join(row[0] for row in glossary.rows)
+    for term in ("GO / NO-GO / UNDETERMINED", "95 % bounds", "ideal sensors", "first-order index", "runs used"):
+        assert term in terms
 
 
 def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
@@ -147,11 +168,12 @@ def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
     status[2, :3] = "timeout"  # b2: 57 ok runs
     results = results_of(status=status)
     page = executive(results)
-    [table] = [t for t in page if isinstance(t, Table)]
-    assert [row[2] for row in table.rows] == ["60 of 60", "12 of 60", "57 of 60"]
-    assert [row[3] for row in table.rows] == ["–", "insufficient data: 12 ok run(s) < 20", "–"]
+    [table] = [t for t in page if isinstance(t, Table) and t.caption.startswith("Data sets")]
+    assert [row[2] for row in table.rows] == ["60 of 60", "12 of 60 (insufficient data: 12 ok run(s) < 20)", "57 of 60"]
+    assert [row[3] for row in table.rows] == ["–", "–", "–"]  # no measured test given
     assert table.muted == (False, True, False)
-    assert "at least 20 needed, analysis.nc, min_ok_runs" in table.caption
+    assert "at least 20 needed, the analysis's minimum" in table.caption
+    assert "Measured test: none given" in table.caption
     # no condition shared by every data set: none stated as common; the conditions come from the spec's overrides
     assert "all share" not in table.caption and "read from the spec's overrides" in table.caption
 
@@ -167,11 +189,11 @@ def test_the_data_set_table_states_the_shared_conditions_and_their_source():
         entry["conditions"]["external_force"] = 0.0
     results.attrs["spec_json"] = json.dumps(spec)
     analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
-    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table) and t.caption.startswith("Data sets")]
     assert "'nominal' (all share external force 0); read from the spec's overrides" in table.caption
     stored = {n: {"backlash": {"value": b, "unit": "m"}} for n, b in zip(NAMES, LEVELS, strict=True)}
     results.attrs["dataset_conditions"] = json.dumps(stored)
-    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table) and t.caption.startswith("Data sets")]
     assert "read from the spec's overrides" not in table.caption and [r[1] for r in table.rows] == [
         "backlash 0 µm",
         "backlash 0.5 µm",
@@ -187,11 +209,11 @@ def test_an_older_analysis_is_judged_against_its_stated_or_the_default_minimum()
     results = results_of(status=status)
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20, min_ok_runs=3).drop_vars("data_sufficient")
     del analysis.attrs["min_ok_runs"]
-    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
-    assert table.muted == (False, False, True) and table.rows[2][3] == "insufficient data: 9 ok run(s) < 10"
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table) and t.caption.startswith("Data sets")]
+    assert table.muted == (False, False, True) and table.rows[2][2] == "9 of 60 (insufficient data: 9 ok run(s) < 10)"
     assert "at least 10 needed, the report's default; this analysis.nc states no minimum" in table.caption
     analysis.attrs["min_ok_runs"] = 11
-    [table] = [t for t in executive(results, analysis) if isinstance(t, Table)]
+    [table] = [t for t in executive(results, analysis) if isinstance(t, Table) and t.caption.startswith("Data sets")]
     assert table.muted == (False, True, True)
 
 
@@ -210,10 +232,12 @@ def test_every_run_ok_is_a_good_failures_callout_and_the_audit_sets_its_tone():
         ("not run (fidelity_audit.runs = 0)", "info"),
     ):
         results.attrs["fidelity_audit"] = audit
-        [found] = callouts(executive(results, analysis), "Fidelity audit")
-        assert found.text.endswith(f": {audit}.") and found.tone == tone and found.link == "fidelity"
+        [found] = callouts(executive(results, analysis), "Model check, fidelity audit")
+        # a list of data-set/feature pairs is counted on page 1 (the Fidelity section lists them)
+        shown = audit.replace(": short/f", ": 1 data-set/feature pair(s) in short (listed in the Fidelity section)")
+        assert found.text.endswith(f": {shown}.") and found.tone == tone and found.link == "fidelity"
     del results.attrs["fidelity_audit"]
-    [found] = callouts(executive(results, analysis), "Fidelity audit")
+    [found] = callouts(executive(results, analysis), "Model check, fidelity audit")
     assert found.text.endswith("not recorded in results.nc.") and found.tone == "info"
 
 
@@ -225,6 +249,7 @@ def _influences(results, analysis) -> str:
 def test_influences_rank_the_resolved_effect_sizes_with_their_data_set_and_n():
     results = results_of(gain_effect=0.5e-6)
     analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    analysis["first_order_index_flag"][:] = 0  # resolved indices first (60 runs are below the 200-run floor)
     cells = dict(feature="f", parameter="p.gain")
     analysis["effect_size"].loc[cells] = [1e-6, 3e-6, 2e-6]  # largest in b1
     analysis["effect_size"].loc[dict(feature="f", parameter="p.inert")] = [0.5e-6, 0.1e-6, 0.2e-6]
@@ -235,19 +260,29 @@ def test_influences_rank_the_resolved_effect_sizes_with_their_data_set_and_n():
         [-0.1, 0.2],
         [-0.1, 0.2],
     ]
+    inert = float(analysis["first_order_index"].sel(dataset="b0", feature="f", parameter="p.inert"))
     assert _influences(results, analysis) == (
-        "f: p.gain moves it by 3 µm in b1 (first-order index 0.63 [0.41, 0.86]), n = 60; "
-        "p.inert moves it by 500 nm in b0 (first-order index "
-        + number(float(analysis["first_order_index"].sel(dataset="b0", feature="f", parameter="p.inert")), 2)
-        + " [0.01, 0.3]), n = 60."
+        "What moves f most: gain (p) moves it by 3 µm in b1 (explains 63 % of its variance, 95 % interval 41–86 %), "
+        f"n = 60; inert (p) moves it by 500 nm in b0 (explains {inert * 100:.0f} % of its variance, 95 % interval "
+        "1–30 %), n = 60."
     )
+    # where the analysis withholds the index (first_order_index_flag), only the intervals are printed
+    analysis["first_order_index_flag"].loc[dict(feature="f", parameter="p.gain", dataset="b1")] = 1
+    analysis["effect_size_ci"].loc[dict(feature="f", parameter="p.gain", dataset="b1")] = [2.5e-6, 3.1e-6]
+    text = _influences(results, analysis)
+    assert ("gain (p) moves it by 2.5–3.1 µm in b1 (explains 41–86 % of its variance; interval only: the index itself "
+            "is not resolved at this sample size)") in text
+    assert "63 %" not in text  # the withheld index itself is not printed
+    # ranked by what every row has, the lower bound of the effect size: a withheld 0–3.1 µm ranks below 2 µm
+    analysis["effect_size_ci"].loc[dict(feature="f", parameter="p.gain", dataset="b1")] = [0.0, 3.1e-6]
+    assert "gain (p) moves it by 2 µm in b2" in _influences(results, analysis)
     # an index whose interval reaches 0 is not an influence; none resolved: said so, nothing ranked
     analysis["first_order_index_ci"].loc[dict(feature="f", parameter="p.inert", dataset="b0", bound="lower")] = 0.0
-    assert " p.inert " not in _influences(results, analysis) + " "
+    assert " inert (p) " not in _influences(results, analysis) + " "
     analysis["first_order_index_ci"].loc[dict(feature="f", bound="lower")] = -0.01
     assert _influences(results, analysis) == (
-        "f: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) in any data set: the "
-        "spread is not explained by a sampled tolerance at this sample size."
+        "What moves f: no tolerance's first-order index is resolved above zero (95 % bootstrap interval) in any data "
+        "set: the spread is not explained by a sampled tolerance at this sample size."
     )
 
 
@@ -265,12 +300,13 @@ def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
             dataset = str(rho["dataset"].values[int(np.nanargmax(np.abs(rho.values)))])
             lower, upper = older["spearman_ci"].sel(feature="f", parameter=parameter, dataset=dataset).values
             value = float(rho.sel(dataset=dataset))
+            name = parameter.removeprefix("p.") + " (p)"
             items.append(
-                (abs(value), f"{parameter} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 60)")
+                (abs(value), f"{name} (ρ = {value:+.2f} [{lower:+.2f}, {upper:+.2f}] in {dataset}, n = 60)")
             )
         return (
-            "f, strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc has no "
-            "effect_size): " + "; ".join(text for _, text in sorted(items, reverse=True)) + "."
+            "What moves f, by the strongest |Spearman ρ| (a rank correlation, not an effect size: this analysis.nc "
+            "has no effect_size): " + "; ".join(text for _, text in sorted(items, reverse=True)) + "."
         )
 
     older["spearman"].loc[dict(dataset="b2", feature="f", parameter="p.gain")] = 0.97  # the gain's strongest: b2
@@ -283,7 +319,7 @@ def test_influences_fall_back_to_labelled_spearman_and_skip_short_data_sets():
     short = analysis.copy()
     short["data_sufficient"] = xr.zeros_like(short["data_sufficient"])
     assert _influences(results, short) == (
-        "f: insufficient data in every data set (fewer than 20 ok runs); no influence is ranked."
+        "What moves f: insufficient data in every data set (fewer than 20 ok runs); no influence is ranked."
     )
 
 
@@ -446,3 +482,13 @@ def test_the_first_order_table_gives_the_interval_only_where_the_index_is_withhe
     row = next(r for r in _first_order_table(results, analysis).rows if r[:3] == ("f", "b1", "p.gain"))
     assert row[3] == "interval only: [0.41, 0.86]"
     assert row[7] == "index withheld: the estimate fell outside its own bootstrap interval"
+
+
+def test_an_interval_reads_in_the_unit_that_shows_it():
+    """Effect sizes and their intervals: one prefix for both bounds, chosen by the larger (never "0 m")."""
+    from reports.units import quantity_range
+
+    assert quantity_range(0.0, 3.1e-6, "m") == "0–3.1 µm"
+    assert quantity_range(1.04e-7, 4.44e-7, "m") == "100–440 nm"
+    assert quantity_range(0.0, 0.0, "m") == "0–0 m"
+    assert quantity_range(0.2, 0.5, "1") == "0.2–0.5"

@@ -17,9 +17,15 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from types import MappingProxyType
 
-from twin.errors import ParameterError
+from twin.errors import ParameterError, did_you_mean
 
 BUILTIN_DIR = Path(__file__).parent
+#: A value more than this many times its nominal, or less than its inverse, is flagged as implausible (a warning
+#: before any run, never an error). Table 9.5's widest tolerance is ±50 % of a nominal and the bench's conditions
+#: stay within a factor of a few of the thesis values, so a factor of 100 is beyond any deliberate variation; it is
+#: the size of the slips that do happen: a unit prefix (mm as m: 1000), an exponent typed wrong (1.65 for 1.65e-4:
+#: 1e4), a percentage typed as a fraction (100).
+PLAUSIBLE_FACTOR = 100.0
 _ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5", "table_9_5_extension"}
 
 
@@ -66,6 +72,21 @@ class Parameter:
         ):
             return f"{self.name}: value {value:g} {self.unit} is out of range; allowed: {self.allowed()}"
         return None
+
+
+    def implausible(self, value: float) -> str | None:
+        """A warning when ``value`` lies more than :data:`PLAUSIBLE_FACTOR` times away from the nominal (in either
+        direction), else None; values with another sign or a zero nominal are judged by the bounds alone."""
+        if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+                or self.value == 0.0 or value == 0.0 or (value > 0) != (self.value > 0)):
+            return None
+        ratio = value / self.value
+        if 1.0 / PLAUSIBLE_FACTOR <= ratio <= PLAUSIBLE_FACTOR:
+            return None
+        provenance = self.source if self.source is not None else f"assumption: {self.assumption}"
+        return (f"{self.name} = {value:g} {self.unit} is {ratio:.3g} times its nominal {self.value:g} {self.unit} "
+                f"({provenance[:80]}); more than {PLAUSIBLE_FACTOR:g} times off the nominal is usually a unit or "
+                f"exponent slip (allowed: {self.allowed()})")
 
 
 class ParameterSet(Mapping[str, Parameter]):
@@ -124,6 +145,12 @@ class ParameterSet(Mapping[str, Parameter]):
             raise ParameterError(problems)
         return ParameterSet(self.name, updated)
 
+    def implausible(self, overrides: Mapping[str, float]) -> list[str]:
+        """Warnings for override values far from their nominal (:meth:`Parameter.implausible`): said before any run,
+        the run still goes ahead (an extreme value may be meant). Unknown names are :meth:`with_values`' business."""
+        return [w for name, value in overrides.items() if name in self._parameters
+                and (w := self._parameters[name].implausible(value)) is not None]
+
     def table(self) -> list[dict]:
         """Rows (name, value, unit, source/assumption) for documentation and reports."""
         return [
@@ -142,7 +169,8 @@ def _unknown(name: str, known: Mapping[str, Parameter]) -> str:
     siblings = sorted(n for n in known if n.startswith(group + "."))
     hint = (f"; known in '{group}': {', '.join(siblings)}" if siblings
             else f"; known groups: {', '.join(sorted({n.split('.')[0] for n in known}))}")
-    return f"{name}: unknown parameter{hint}"
+    suggestion = did_you_mean(name, known)
+    return f"{name}: unknown parameter; {suggestion} ({hint[2:]})" if suggestion else f"{name}: unknown parameter{hint}"
 
 
 def available_parameter_sets() -> list[str]:

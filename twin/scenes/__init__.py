@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from twin.errors import SceneError
+from twin.errors import SceneError, did_you_mean
 from twin.layout import OUTPUT_NAMES
 from twin.scenes.profiles import compile_profile
 from twin.tomlfiles import read_inheriting
@@ -219,7 +219,9 @@ def validate_scene(scene: Scene) -> list[str]:
         problems.append(f"duration: must be a positive number of seconds, got {scene.duration!r}")
     for name, value in scene.conditions.items():
         if name not in CONDITIONS:
-            problems.append(f"conditions.{name}: unknown condition; allowed: {', '.join(CONDITIONS)}")
+            suggestion = did_you_mean(name, CONDITIONS)
+            problems.append(f"conditions.{name}: unknown condition; {suggestion + ' ' if suggestion else ''}"
+                            f"allowed: {', '.join(CONDITIONS)}")
         elif (problem := CONDITIONS[name].problem(name, value)) is not None:
             problems.append(problem)
     problems += [f"conditions.{c}: missing" for c in CONDITIONS if c not in scene.conditions]
