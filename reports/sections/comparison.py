@@ -17,6 +17,12 @@ def _feature(b: Builder, feature: str) -> str:
     return feature_words(b, feature)
 
 
+def _requirement(b: Builder, what: str) -> str:
+    """A compared verdict's subject with its feature in words (``backlash_feature: minimum detectable ...``)."""
+    feature, sep, rest = what.partition(": ")
+    return f"{_feature(b, feature)}: {rest}" if sep and feature in b.results else what
+
+
 def title(b: Builder) -> str:
     c = b.inputs.comparison
     return f"{c.name_b} against {c.name_a}"
@@ -42,8 +48,9 @@ def build(b: Builder):
         return
     yield b.table(f"Each verdict in {c.name_b} and in {c.name_a}, with the statements they rest on.",
                   ("Requirement", c.name_b, c.name_a, "Changed"),
-                  [(v.what, v.statement_b, v.statement_a, "yes" if v.changed else "no") for v in c.verdicts],
+                  [(_requirement(b, v.what), v.statement_b, v.statement_a, "yes" if v.changed else "no")
+                   for v in c.verdicts],
                   [not v.changed for v in c.verdicts])
     for v in (v for v in c.verdicts if v.changed):
-        yield Callout(f"{v.what}: {v.verdict_a} in {c.name_a}, {v.verdict_b} in {c.name_b}.",
+        yield Callout(f"{_requirement(b, v.what)}: {v.verdict_a} in {c.name_a}, {v.verdict_b} in {c.name_b}.",
                       VERDICT_TONES.get(v.verdict_b, "info"))

@@ -166,10 +166,11 @@ def test_a_comparison_report_has_its_sentence_on_page_one_and_its_section(campai
         other = stored.load()
     other["backlash_feature"] = other["backlash_feature"] + 0.5e-6
     other.to_netcdf(tmp_path / "b" / "results.nc")
+    shutil.copyfile(campaign.with_name("analysis.nc"), tmp_path / "b" / "analysis.nc")  # the same verdicts
     paths = reports.build_report(campaign, out_dir=tmp_path / "report", generated_at=generated_at,
                                  against_path=tmp_path / "b" / "results.nc")
     text = _executive_html(paths["html"])
-    assert ("report_test against report_test (paired run by run): no analyses to compare verdicts; the largest "
+    assert ("report_test against report_test (paired run by run): every verdict the same (2 compared); the largest "
             "resolved change is the backlash feature f_b (Eq. 9.12) in ") in text
     assert re.search(r"f_b \(Eq. 9.12\) in ds\d, -500 nm \(95 % interval -500 … -500 nm\) in its mean", text)
     html = paths["html"].read_text(encoding="utf-8").replace("<wbr>", "")
@@ -177,4 +178,5 @@ def test_a_comparison_report_has_its_sentence_on_page_one_and_its_section(campai
     assert "report_test against report_test" in section and "-500 nm (95 % interval -500 … -500 nm)" in section
     assert "0 (95 % interval 0 … 0: identical in every run)" in section  # backlash_feature_true: not shifted
     assert "the backlash feature f_b (Eq. 9.12), ideal sensors" in section  # the features in page 1's words
+    assert "the backlash feature f_b (Eq. 9.12): minimum detectable fault size against the requirement" in section
     assert not re.search(r"\de-\d|0\.000\d", section)  # no exponent, no 0.000x: the prefix that shows the value
