@@ -256,8 +256,15 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     return table
 
 
-def _quantity(value: float, unit: str) -> str:
-    return f"{value * 1e6:.3g} µm" if unit == "m" else f"{value:.3g} {unit}"
+def shown_quantities(values, half_width: float, unit: str) -> list[str]:
+    """Values in the feature's display unit (µm for m) to one digit below the leading digit of the interval's
+    half-width, so the bounds of a narrow interval read apart (3 significant digits for an interval of zero
+    width)."""
+    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
+    if not half_width > 0:
+        return [f"{v * scale:.3g} {shown}" for v in values]
+    decimals = max(0, 1 - math.floor(math.log10(half_width * scale)))
+    return [f"{v * scale:.{decimals}f} {shown}" for v in values]
 
 
 def headline(table: xr.Dataset) -> str:
@@ -293,12 +300,13 @@ def headline(table: xr.Dataset) -> str:
     lower, upper = ci[i, d, f]
     unit = str(table["feature_units"].values[f])
     value = printed_estimate(float(table["mean_shift"].values[i, d, f]), (lower, upper))
+    size, low, high = shown_quantities((abs(value), lower, upper), 0.5 * (upper - lower), unit)
     confidence = float(table.attrs["confidence"])
     return (f"{opening}; {table['assumption'].values[i]} moves the features most: with "
             f"{table['assumption'].values[i]} = {table['variant_value'].values[i]} instead of "
             f"{table['baseline_value'].values[i]}, the mean of {table['feature'].values[f]} in "
-            f"{table['dataset'].values[d]} shifts by {'+' if value >= 0 else '-'}{_quantity(abs(value), unit)} "
-            f"({confidence * 100:g} % interval {_quantity(lower, unit)} to {_quantity(upper, unit)}, "
+            f"{table['dataset'].values[d]} shifts by {'+' if value >= 0 else '-'}{size} "
+            f"({confidence * 100:g} % interval {low} to {high}, "
             f"n = {int(table['n_variant'].values[i, d, f])} and {int(table['n_baseline'].values[i, d, f])} runs).")
 
 
