@@ -8,7 +8,7 @@ sentence are quoted from it, never composed here; a shift is shown only where it
 
 from __future__ import annotations
 
-from functools import lru_cache
+from weakref import WeakKeyDictionary
 
 from campaigns import model_form
 from campaigns.analysis import printed_estimate
@@ -20,11 +20,16 @@ TITLE = "Model-form study"
 _CHANGED_TONE = VERDICT_TONES["not met"]
 
 
-@lru_cache(maxsize=1)
+#: The table of each report being built, computed once: page 1 and the section both read it.
+_TABLES: WeakKeyDictionary = WeakKeyDictionary()
+
+
 def _table(b: Builder):
-    """The model-form table of the campaign, or None when the campaign is not a model-form study (computed once per
-    report: both page 1 and the section read it)."""
-    return model_form.model_form_dataset(b.results, b.analysis) if model_form.is_model_form(b.results) else None
+    """The model-form table of the campaign, or None when the campaign is not a model-form study."""
+    if b not in _TABLES:
+        _TABLES[b] = model_form.model_form_dataset(b.results, b.analysis) if model_form.is_model_form(b.results) \
+            else None
+    return _TABLES[b]
 
 
 def _changed(table) -> bool:
