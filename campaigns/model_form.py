@@ -172,12 +172,12 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     shift, bounds = np.full(shape, math.nan), np.full(shape + (2,), math.nan)
     status = np.full(shape, SHIFT_STATUS.index("not_run"), dtype=np.int8)
     n_variant, n_baseline = np.zeros(shape, dtype=np.int32), np.zeros(shape, dtype=np.int32)
+    used = {feature: _used(results, feature) for feature in features}
     for v in found:
         i, d = labels.index(v.label), baselines.index(v.baseline)
         for f, feature in enumerate(features):
-            used = _used(results, feature)
-            a = results[feature].sel(dataset=v.dataset).values[used.sel(dataset=v.dataset).values]
-            b = results[feature].sel(dataset=v.baseline).values[used.sel(dataset=v.baseline).values]
+            a = results[feature].sel(dataset=v.dataset).values[used[feature].sel(dataset=v.dataset).values]
+            b = results[feature].sel(dataset=v.baseline).values[used[feature].sel(dataset=v.baseline).values]
             n_variant[i, d, f], n_baseline[i, d, f] = a.size, b.size
             shift[i, d, f], bounds[i, d, f, 0], bounds[i, d, f, 1] = mean_shift(a, b, confidence=confidence,
                                                                                 min_runs=min_runs)
