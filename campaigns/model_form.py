@@ -274,8 +274,8 @@ def headline(table: xr.Dataset) -> str:
     assumptions = list(dict.fromkeys(str(a) for a in table["assumption"].values))
     varied = ", ".join(assumptions)
     change = table["verdict_change"].values
-    changed = {a: int((change[table["assumption"].values == a] == VERDICT_CHANGE.index("changed")).sum())
-               for a in assumptions}
+    of = {a: change[table["assumption"].values == a] for a in assumptions}
+    changed = {a: int((of[a] == VERDICT_CHANGE.index("changed")).sum()) for a in assumptions}
     compared = int((change != VERDICT_CHANGE.index("not_compared")).sum())
     most = max(changed.values())
     if most > 0:
@@ -285,9 +285,11 @@ def headline(table: xr.Dataset) -> str:
             if str(table["assumption"].values[i]) in leaders:
                 cases.append(f"{table['variant'].values[i]}, {table['feature'].values[f]}: "
                              f"{table['baseline_verdict'].values[f]} → {table['variant_verdict'].values[i, f]}")
-        who = " and ".join(leaders) + (" move" if len(leaders) > 1 else " moves")
-        return (f"Of the assumptions varied ({varied}), {who} the requirement verdicts most: {most} of the "
-                f"{compared} compared verdicts change ({'; '.join(cases)}).")
+        n = [str(int((of[a] != VERDICT_CHANGE.index("not_compared")).sum())) for a in leaders]
+        who = (f"{leaders[0]} moves the requirement verdicts most, changing {most} of its {n[0]} compared verdicts"
+               if len(leaders) == 1 else f"{' and '.join(leaders)} move the requirement verdicts most, each changing "
+               f"{most} (of {' and '.join(n)} compared)")
+        return f"Of the assumptions varied ({varied}), {who}: {'; '.join(cases)}."
     opening = (f"No assumption varied ({varied}) changes a requirement verdict ({compared} compared"
                + (f", {change.size - compared} not compared: insufficient data" if compared < change.size else "")
                + ")")
