@@ -101,4 +101,5 @@ def build(b: Builder):
         rows = [(d, *(_cell(table, variant, d, f) for f in features)) for d in datasets]
         yield b.table(f"Shift of each feature's mean with {variant} against the baseline, per data set, with its "
                       f"{confidence * 100:g} % interval.", ("Data set", *features), rows,
-                      muted=[(part["shift_status"].sel(dataset=d).values == insufficient).all() for d in datasets])
+                      muted=[bool((part["shift_status"].sel(dataset=d).values == insufficient).all())
+                             for d in datasets])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import re
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import pytest
 import xarray as xr
 
 import campaigns
+import reports
 from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
 from reports.content import build
 from reports.inputs import load_inputs
@@ -32,6 +34,14 @@ def model_form_report(tmp_path_factory, generated_at):
     results = campaigns.run_campaign(spec, out / "campaign", workers=1, progress=False, run_function=SyntheticModel())
     campaigns.analyze(results)
     return build(load_inputs(results), generated_at.isoformat()), results
+
+
+def test_the_report_renders_the_section_and_the_sentence(model_form_report, tmp_path, generated_at):
+    report, results = model_form_report
+    written = reports.build_report(results, out_dir=tmp_path, generated_at=generated_at)
+    page = written["html"].read_text()
+    assert "Model-form study" in page and html.escape(report.executive[-1].text, quote=False) in page
+    assert written["pdf"].stat().st_size > 0
 
 
 def _section(report, key):
