@@ -256,14 +256,14 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     return table
 
 
-def shown_quantities(values, half_width: float, unit: str) -> list[str]:
-    """Values in the feature's display unit (µm for m) to one digit below the leading digit of the interval's
-    half-width, so the bounds of a narrow interval read apart (3 significant digits for an interval of zero
-    width)."""
+def shown_quantities(values, half_width: float, unit: str, extra: int = 1) -> list[str]:
+    """Values in the feature's display unit (µm for m) to the leading digit of the interval's half-width plus
+    ``extra`` digits: 0 for an estimate (rounded there, :func:`campaigns.analysis.printed_estimate`), 1 for the
+    bounds, so those of a narrow interval read apart. 3 significant digits for an interval of zero width."""
     scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
     if not half_width > 0:
         return [f"{v * scale:.3g} {shown}" for v in values]
-    decimals = max(0, 1 - math.floor(math.log10(half_width * scale)))
+    decimals = max(0, extra - math.floor(math.log10(half_width * scale)))
     return [f"{v * scale:.{decimals}f} {shown}" for v in values]
 
 
@@ -302,7 +302,8 @@ def headline(table: xr.Dataset) -> str:
     lower, upper = ci[i, d, f]
     unit = str(table["feature_units"].values[f])
     value = printed_estimate(float(table["mean_shift"].values[i, d, f]), (lower, upper))
-    size, low, high = shown_quantities((abs(value), lower, upper), 0.5 * (upper - lower), unit)
+    (size,) = shown_quantities((abs(value),), 0.5 * (upper - lower), unit, extra=0)
+    low, high = shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
     confidence = float(table.attrs["confidence"])
     return (f"{opening}; {table['assumption'].values[i]} moves the features most: with "
             f"{table['assumption'].values[i]} = {table['variant_value'].values[i]} instead of "

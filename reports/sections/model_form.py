@@ -58,7 +58,8 @@ def _cell(table, variant: str, dataset: str, feature: str) -> str:
         low, high = model_form.shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
         return f"not resolved: within {low} to {high}"
     value = printed_estimate(float(cell["mean_shift"]), (lower, upper))
-    shown, low, high = model_form.shown_quantities((value, lower, upper), 0.5 * (upper - lower), unit)
+    (shown,) = model_form.shown_quantities((value,), 0.5 * (upper - lower), unit, extra=0)
+    low, high = model_form.shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
     return f"{'+' if value >= 0 else ''}{shown} ({low} to {high})"
 
 
