@@ -297,18 +297,18 @@ def headline(table: xr.Dataset) -> str:
     if not resolved.any():
         return opening + "; no shift of a feature's mean is resolved by its interval."
     ci = table["mean_shift_ci"].values
-    size = np.where(resolved, np.minimum(np.abs(ci[..., 0]), np.abs(ci[..., 1])), -1.0)
-    i, d, f = np.unravel_index(int(np.argmax(size)), size.shape)
+    guaranteed = np.where(resolved, np.minimum(np.abs(ci[..., 0]), np.abs(ci[..., 1])), -1.0)
+    i, d, f = np.unravel_index(int(np.argmax(guaranteed)), guaranteed.shape)
     lower, upper = ci[i, d, f]
     unit = str(table["feature_units"].values[f])
     value = printed_estimate(float(table["mean_shift"].values[i, d, f]), (lower, upper))
-    (size,) = shown_quantities((abs(value),), 0.5 * (upper - lower), unit, extra=0)
+    (shown,) = shown_quantities((abs(value),), 0.5 * (upper - lower), unit, extra=0)
     low, high = shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
     confidence = float(table.attrs["confidence"])
     return (f"{opening}; {table['assumption'].values[i]} moves the features most: with "
             f"{table['assumption'].values[i]} = {table['variant_value'].values[i]} instead of "
             f"{table['baseline_value'].values[i]}, the mean of {table['feature'].values[f]} in "
-            f"{table['dataset'].values[d]} shifts by {'+' if value >= 0 else '-'}{size} "
+            f"{table['dataset'].values[d]} shifts by {'+' if value >= 0 else '-'}{shown} "
             f"({confidence * 100:g} % interval {low} to {high}, "
             f"n = {int(table['n_variant'].values[i, d, f])} and {int(table['n_baseline'].values[i, d, f])} runs).")
 
