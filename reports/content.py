@@ -57,7 +57,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     Report
     """
     b = Builder(inputs)
-    page_one = tuple(executive.build(b)) + tuple(model_form.page_one(b))  # first: its data-set table is Table 1
+    page_one = model_form.page_one(b, executive.build(b))  # first, so its data-set table is Table 1
     sections = tuple(
         Section(key, SECTION_TITLES[key], tuple(make(b)))
         for key, make in (

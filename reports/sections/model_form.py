@@ -13,7 +13,7 @@ from weakref import WeakKeyDictionary
 from campaigns import model_form
 from campaigns.analysis import printed_estimate
 from reports.builder import VERDICT_TONES, Builder
-from reports.model import Callout, Paragraph
+from reports.model import Callout, Paragraph, Table
 
 TITLE = "Model-form study"
 #: Tone of the page-1 sentence: a changed verdict is a finding against the conclusions' robustness.
@@ -36,12 +36,18 @@ def _changed(table) -> bool:
     return bool((table["verdict_change"].values == model_form.VERDICT_CHANGE.index("changed")).any())
 
 
-def page_one(b: Builder):
-    """The sentence of page 1: the assumption that moves the verdicts (or, if none does, the features) most."""
+def page_one(b: Builder, executive) -> tuple:
+    """The executive summary's blocks with the sentence of page 1 (the assumption that moves the verdicts or, if none
+    does, the features most) after its verdicts, before its first table: a long data-set table would push it to
+    page 2."""
+    blocks = tuple(executive)
     table = _table(b)
-    if table is not None:
-        yield Callout(f"Model-form study: {table.attrs['headline']}", _CHANGED_TONE if _changed(table) else "info",
-                      "model_form")
+    if table is None:
+        return blocks
+    first_table = next((k for k, block in enumerate(blocks) if isinstance(block, Table)), len(blocks))
+    sentence = Callout(f"Model-form study: {table.attrs['headline']}", _CHANGED_TONE if _changed(table) else "info",
+                       "model_form")
+    return blocks[:first_table] + (sentence,) + blocks[first_table:]
 
 
 def _cell(table, variant: str, dataset: str, feature: str) -> str:
