@@ -19,6 +19,7 @@ from reports.sections import (
     executive,
     failures,
     fidelity,
+    model_form,
     observability,
     scatter,
     speed,
@@ -37,6 +38,7 @@ SECTION_TITLES = {
     "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
     "control_robustness": control_robustness.TITLE,
+    "model_form": model_form.TITLE,
 }
 
 
@@ -55,7 +57,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     Report
     """
     b = Builder(inputs)
-    page_one = tuple(executive.build(b))  # first, so its data-set table is Table 1
+    page_one = model_form.page_one(b, executive.build(b))  # first, so its data-set table is Table 1
     sections = tuple(
         Section(key, SECTION_TITLES[key], tuple(make(b)))
         for key, make in (
@@ -69,6 +71,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
             ("speed", speed.build),
             ("fidelity", fidelity.build),
             ("control_robustness", control_robustness.build),
+            ("model_form", model_form.build),
         )
     )
     status = b.results["status"].values
