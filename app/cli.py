@@ -273,11 +273,15 @@ def _undecided(analysis) -> list[tuple[str, str, str]]:
 
 def cmd_campaign_analyze(args) -> int:
     import campaigns
+    from campaigns.model_form import FILE_NAME as MODEL_FORM_FILE
+    from campaigns.model_form import is_model_form
     from campaigns.storage import check_output, read_results
 
     out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force,
                        product="analysis.nc")
-    read_results(args.results)  # a truncated or foreign file: one message naming it, before any work
+    results = read_results(args.results)  # a truncated or foreign file: one message naming it, before any work
+    if is_model_form(results):  # its table is written beside the analysis: the same rule for it
+        check_output(out.with_name(MODEL_FORM_FILE), [args.results], force=args.force)
     _print_analysis(campaigns.analyze(args.results, out))
     return 0
 

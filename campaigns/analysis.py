@@ -1015,7 +1015,8 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
 
 
 def analyze(results_path: str | Path, out_path: str | Path | None = None, **options) -> Path:
-    """Analyse a campaign's ``results.nc`` and write ``analysis.nc``.
+    """Analyse a campaign's ``results.nc`` and write ``analysis.nc`` (and, for a model-form study, its table
+    ``model_form.nc`` beside it: :mod:`campaigns.model_form`).
 
     Parameters
     ----------
@@ -1040,6 +1041,10 @@ def analyze(results_path: str | Path, out_path: str | Path | None = None, **opti
     analysis.attrs["history"] = "\n".join(
         [line for line in (history, f"{stamp}: campaigns.analysis.analyze({results_path.name})") if line])
     atomic_write(out_path, lambda tmp: analysis.to_netcdf(tmp, engine="netcdf4", encoding=cf_encoding(analysis)))
+    from campaigns import model_form  # here, not at the top: model_form builds on this module
+
+    if model_form.is_model_form(results):  # a model-form study: its table beside the analysis (issue 33)
+        model_form.write_model_form(results, analysis, out_path.with_name(model_form.FILE_NAME))
     return out_path
 
 

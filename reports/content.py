@@ -21,6 +21,7 @@ from reports.sections import (
     failures,
     fidelity,
     measured,
+    model_form,
     observability,
     scatter,
     speed,
@@ -39,6 +40,7 @@ SECTION_TITLES = {
     "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
     "control_robustness": control_robustness.TITLE,
+    "model_form": model_form.TITLE,
 }
 
 
@@ -57,7 +59,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     Report
     """
     b = Builder(inputs)
-    page_one = tuple(executive.build(b))  # first, so its data-set table is Table 1
+    page_one = model_form.page_one(b, executive.build(b))  # first, so its data-set table is Table 1
     # a comparison report opens with the comparison; measured tests follow the observability they are judged by
     optional_first = [("comparison", comparison.build)] if inputs.comparison is not None else []
     optional_measured = [("measured", measured.build)] if inputs.measured else []
@@ -78,6 +80,7 @@ def build(inputs: Inputs, generated_at: str) -> Report:
             ("speed", speed.build),
             ("fidelity", fidelity.build),
             ("control_robustness", control_robustness.build),
+            ("model_form", model_form.build),
         )
     )
     status = b.results["status"].values

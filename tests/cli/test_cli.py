@@ -22,11 +22,15 @@ def test_simulate_writes_dataset_and_plot(tmp_path):
         assert ds.nut1_position.attrs["units"] == "m"
 
 
-def test_simulate_says_what_the_automatic_integrator_chose():
-    result = run("simulate", "ds2", "--duration", "0.2", "--integrator", "auto")
+def test_simulate_names_the_default_step_it_took():
+    """The default step follows the run's fidelity: the drive period where the preload allows the quasi-static screw
+    axial (ds1), and the retired automatic integrator is refused with the methods there are."""
+    result = run("simulate", "ds1", "--duration", "0.2")
     assert result.returncode == 0, result.stderr
-    # ds2's nut is free: the implicit attempt ends at the release budget, RK4 at the drive period solves the run
-    assert "integrator: auto: rk4 at 125 us; imex_euler at 125 us stopped at t = 0.020125 s" in result.stdout
+    assert "integrator: rk4 at 125 us" in result.stdout
+    retired = run("simulate", "ds2", "--duration", "0.2", "--integrator", "auto")
+    assert retired.returncode == 2 and "Traceback" not in retired.stderr
+    assert "invalid choice: 'auto'" in retired.stderr and "rk4" in retired.stderr
 
 
 def test_bad_input_is_a_clear_error():

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import twin
+from twin.engine.model import scale_reading_gain
 
 MEASURED = ["linear_encoder_position", "screw_angle_measured", "nut_speed_measured", "motor_speed_measured",
             "motor_current_measured", "torque_measured", "preload_force_measured", "external_force_measured"]
@@ -29,11 +30,16 @@ def test_ideal_instruments_give_the_true_feature():
 
 
 def test_quantized_linear_encoder_is_floor_of_true_position(bench):
-    """Ideal edges: the reading is floor quantisation of the true position at every acquisition sample."""
-    ds = twin.simulate("ds4", duration=2.0, fidelity={"encoders": "quantized"})
+    """Ideal edges: the reading is floor quantisation of the true position on the scale at every acquisition sample
+    (the sled's travel times the reading gain of the scale's thermal expansion and the Abbe error, exactly 1 at the
+    scale's reference temperature)."""
+    scene = twin.load_scene("ds4")
+    ds = twin.simulate(scene, duration=2.0, fidelity={"encoders": "quantized"})
     res = bench.value("sensors.linear_encoder_resolution")
     origin = bench.value("sensors.linear_encoder_scale_origin")
-    expected = (np.floor((origin + ds.nut1_position.values) / res) - np.floor(origin / res)) * res
+    gain = scale_reading_gain(bench.values(), scene.condition("room_temperature"))
+    assert gain != 1.0  # ds4's room is not at the scale's 20 degC: the expansion shows
+    expected = (np.floor((origin + ds.nut1_position.values * gain) / res) - np.floor(origin / res)) * res
     np.testing.assert_allclose(ds.linear_encoder_position.values, expected, rtol=0, atol=1e-12)
 
 

@@ -39,9 +39,9 @@ ERRORS = ({}, {"sensors.linear_encoder_phase_error": 0.21}, {"sensors.resolver_o
 
 
 def _runs():
-    """Runs of several data sets (one group configuration: the free-nut and preloaded sets without force demand,
-    and ds3 with its force step in a group of its own), room temperatures and supply pressures as a campaign
-    samples them, parameter changes and noise generators of their own."""
+    """Runs of several data sets (three group configurations: the preloaded sets with the quasi-static screw axial,
+    the free-nut sets with the dynamic one, and ds3 with its force step), room temperatures and supply pressures as
+    a campaign samples them, parameter changes and noise generators of their own."""
     params = twin.load_parameters()
     runs = []
     for k, scene_name in enumerate(["ds1", "ds2", "ds4", "ds5", "ds7", "ds2", "ds5", "ds3", "ds3", "ds6", "ds1"]):
@@ -73,19 +73,22 @@ def alone():
 
 
 def test_the_runs_share_groups(alone):
-    """The premise of the bit-identity tests: the data sets without force demand resolve to one configuration
-    (they share lanes), ds3 to another; every run succeeds and its features are finite."""
+    """The premise of the bit-identity tests: the preloaded data sets resolve to one configuration (they share
+    lanes), the free-nut sets without force demand to another, ds3 to a third; every run succeeds and its features
+    are finite."""
     runs = _runs()
-    fidelities = {alone[k].fidelity for k, (scene, _, _) in enumerate(runs) if scene.name != "ds3"}
-    assert len(fidelities) == 1
-    assert {alone[k].fidelity for k, (scene, _, _) in enumerate(runs) if scene.name == "ds3"} != fidelities
+    kinds = [("ds3" if scene.name == "ds3" else "preloaded" if scene.condition("preload") > 0 else "free")
+             for scene, _, _ in runs]
+    fidelities = {kind: {alone[k].fidelity for k in range(len(runs)) if kinds[k] == kind} for kind in set(kinds)}
+    assert all(len(found) == 1 for found in fidelities.values()) and len(set.union(*fidelities.values())) == 3
     keys = []
     for scene, params, _ in runs:  # what simulate_batch groups by (besides the options, common to all)
         fidelity = resolve_fidelity(scene, params)
         instruments = build_instruments(params.values(), scene.condition("room_temperature"), fidelity.levels,
                                         np.random.default_rng(0), 2, alone[0].dt)
         keys.append((group_key(build_model(scene, params, fidelity)), group_timing(instruments)))
-    assert len(set(keys)) == 2 and keys.count(keys[0]) == len(runs) - 2
+    assert len(set(keys)) == 3 and all(keys[i] == keys[j] for i in range(len(runs)) for j in range(len(runs))
+                                       if kinds[i] == kinds[j])
     for summary in alone:
         assert summary.status == "ok"
         assert math.isfinite(summary.features["backlash_feature"])

@@ -10,6 +10,7 @@ import twin
 from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_position_for_force
 from twin.fidelity import resolve_fidelity
+from twin.layout import K
 from twin.physics.ball_groove_friction import rolling_coefficient
 from twin.physics.ball_screw import helix_angle
 
@@ -101,15 +102,17 @@ def test_backlash_hysteresis_width_and_nut_dwell(bench, scene_factory):
                                           "phase": 0.0}],
                           backlash=backlash)
     ds = twin.simulate(scene, bench, fidelity=plant_fidelity(scene), output_dt=1.25e-4)
-    # the contacts' relative position: the screw's axial displacement and its twist at the nut (docs/model.md)
-    arm = bench.value("ball_screw.lead") / (2 * math.pi)
-    screw_at_nut = ds.screw_equivalent_position + ds.screw_axial_position - arm * ds.screw_twist
+    # the contacts' relative position: the screw's axial displacement and its twist at the nut (docs/model.md), at
+    # the lead of the room temperature (screw_equivalent_position takes the nominal lead, as Eq. 9.12 does)
+    model = build_model(scene, bench, resolve_fidelity(scene, bench, plant_fidelity(scene)))
+    arm = model.constants[K.LEAD_ARM]
+    nominal = bench.value("ball_screw.lead") / (2 * math.pi)
+    screw_at_nut = ds.screw_equivalent_position * (arm / nominal) + ds.screw_axial_position - arm * ds.screw_twist
     relative = (ds.nut1_position - screw_at_nut).sel(time=slice(1.0, None))
     width = float(relative.max() - relative.min())
     # Elastic part: the Hertz deflection (soft at low load) under the largest contact force on each
     # side of the loop, which arises when the screw re-engages the dwelling nut. The damping share of
     # that force makes the deflection slightly smaller, never larger.
-    model = build_model(scene, bench, resolve_fidelity(scene, bench, plant_fidelity(scene)))
     force = ds.nut1_contact_force.sel(time=slice(1.0, None))
     elastic = sum(abs(contact_position_for_force(model.constants, int(model.levels[CONTACT]), f)) - backlash / 2
                   for f in (float(force.max()), float(force.min())))

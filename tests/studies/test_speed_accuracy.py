@@ -23,17 +23,21 @@ def smooth_scene(scene_factory):
                                          "phase": -1.5707963267948966}], preload=1000.0)
 
 
-def _final_error(ds, reference):
-    return float(np.max(np.abs(ds.final_state - reference.final_state) / (np.abs(reference.final_state) + 1e-3)))
+def _final_error(ds, reference, exclude=()):
+    error = np.abs(ds.final_state - reference.final_state) / (np.abs(reference.final_state) + 1e-3)
+    kept = [str(name) for name in error[error.dims[0]].values if str(name) not in exclude]
+    return float(error.sel({error.dims[0]: kept}).max())
 
 
-@pytest.mark.parametrize("method, steps", [("rk4", (1.5625e-5, 7.8125e-6, 3.90625e-6)),
+@pytest.mark.parametrize("method, steps", [("rk4", (1.5625e-5, 7.8125e-6)),
                                            ("semi_implicit_euler", (7.8125e-6, 3.90625e-6, 1.953125e-6)),
                                            ("rosenbrock_w2", (1.953125e-6, 9.765625e-7, 4.8828125e-7))])
 def test_closed_loop_order_on_smooth_scene(bench, smooth_scene, method, steps):
     """The sampled-data loop keeps each method's order: its inputs are held between samples, on
     sample instants shared by every step size, so the plant ODE is smooth between them.
-    Measured slopes: RK4 4.2 (4.5 at 31 us, pre-asymptotic), semi-implicit Euler 1.01, W-method 1.98."""
+    Measured slopes: RK4 4.2 (4.5 at 31 us, pre-asymptotic), semi-implicit Euler 1.01, W-method 1.98. RK4 is
+    measured between 15.6 and 7.8 us: at 3.9 us its error (1e-8 relative, in the screw's axial speed, ~1e-11 m/s)
+    reaches the level of the reference run's rounding over its 1.2 million steps (session 6)."""
     params = bench.with_values(SMOOTH)
     reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7,
                               fidelity=plant_fidelity(smooth_scene))
@@ -59,7 +63,10 @@ def test_observed_order_on_full_scene():
     scene = twin.load_scene("nominal").with_duration(1.2).with_conditions({"zero_procedure": "preloaded"})
     fidelity = {**plant_fidelity(scene), "ball_groove_friction": "lumped"}
     reference = twin.simulate(scene, integrator="rk4", dt=9.765625e-7, fidelity=fidelity)
-    errs = [_final_error(twin.simulate(scene, integrator="rk4", dt=h, fidelity=fidelity), reference)
+    # the valve spool's hysteresis play is a discrete switch (order 1-2 on its own states: 1.05e-5, 3.9e-6, 1.2e-6
+    # in spool speed at 31, 16, 8 us since the power-consistent motor, measured); the order is read on the others
+    spool = ("spool_position", "spool_speed")
+    errs = [_final_error(twin.simulate(scene, integrator="rk4", dt=h, fidelity=fidelity), reference, spool)
             for h in (3.125e-5, 1.5625e-5, 7.8125e-6)]
     assert errs[0] / errs[1] > 8.0
     assert max(errs[1:]) < 1e-5
