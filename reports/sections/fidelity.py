@@ -37,12 +37,13 @@ def build(b: Builder):
         f"The campaign asked for fidelity '{requested}': with 'auto' each subsystem of the twin runs at the cheapest "
         "level the scene and its outputs allow (twin/fidelity/rules.toml). The audit re-runs the first "
         + (f"{runs} " if runs else "")
-        + "runs of every data set at full fidelity (and with RK4 where the campaign asked for integrator 'auto') "
-        "with the same parameters and noise and judges each feature's "
-        "paired mean shift (automatic minus full) by its 95 % Student-t interval: met when the interval lies within "
-        "the tolerance, not met when it lies beyond the tolerance plus the scene's numerical floor (the spread of "
-        "tight runs that differ only in their step or by picometres of backlash, which no fidelity reduction can be "
-        "blamed for), undetermined otherwise, insufficient data below two paired runs."
+        + "runs of every data set at full fidelity with the same parameters and noise and judges each feature by "
+        "the paired part of the accuracy rule (docs/accuracy.md): met when the 95 % Student-t interval of the mean "
+        "shift (automatic minus full) lies within ±0.05 µm and the 95 % interval of the ratio of standard deviations "
+        "within 1 ± 10 %, not met when either interval lies wholly outside, undetermined otherwise, insufficient "
+        "data below 5 paired runs. At a campaign's few audit runs this is a screen; the rule accepts a default from "
+        "200 paired runs per data set. The scene's numerical floor (the spread of tight runs that differ only in "
+        "their step or by picometres of backlash) is shown beside each verdict as context."
     )
     yield Callout(f"Audit result: {audit}.", statement_tone(audit))
     configured = [(d, attrs.pop(f"fidelity_{d}")) for d in b.datasets if f"fidelity_{d}" in attrs]
