@@ -18,12 +18,13 @@ def test_members_and_their_agreement_before_the_first_move():
     assert list(ensemble.gap_perturbation.values) == [0.0, 0.0, 1e-12, -1e-12]
     assert (ensemble.status == "ok").all() and len(runs) == 4
     # the screw stands still until 0.5 s, so nothing amplifies a difference yet (docs/accuracy.md): on true signals
-    # a picometre of backlash stays a picometre, and the coarser step differs by 6.2 nm (truncation and the
-    # discrete decisions of the sampled loops; 0.9 nm before the load cell's conditioner and the power-consistent
-    # motor, measured), still 60 times below ds2's 0.37 um floor
+    # a picometre of backlash stays a picometre, and the coarser step differs by 18 nm (truncation and the
+    # discrete decisions of the sampled loops, with the dynamic shaft the automatic fidelity takes on ds2; 0.9 nm
+    # before the load cell's conditioner and the power-consistent motor, measured), still 20 times below ds2's
+    # 0.37 um floor
     true = ensemble.backlash_feature_true.values
     assert abs(true[2] - true[0]) < 1e-11 and abs(true[3] - true[0]) < 1e-11
-    assert abs(true[1] - true[0]) < 1e-8
+    assert abs(true[1] - true[0]) < 4e-8
     assert float(runs[0].backlash_feature) == pytest.approx(float(ensemble.backlash_feature[0]), abs=0)
 
 
