@@ -211,6 +211,9 @@ def main() -> None:
             f"scaling {rows[0]['workers']} -> {rows[-1]['workers']} workers: "
             f"x{rows[-1]['runs_per_s'] / rows[0]['runs_per_s']:.2f}")
     print(f"driver peak RSS: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+    if args.synthetic and any(r["ok"] < r["runs"] for r in rows):
+        # the synthetic model has no failure of its own: a failed run is a broken benchmark, not a figure
+        raise SystemExit("campaign throughput: synthetic runs failed; the figures above measure failures")
 
 
 if __name__ == "__main__":

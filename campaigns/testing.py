@@ -86,7 +86,8 @@ class SyntheticModel:
             time.sleep(request.wall_time_limit + 3600.0)
         if fault == "crash":
             os._exit(3)
-        values = {**SYNTHETIC_CATALOG.conditions, **request.conditions}
+        values = {name: value for name, (value, _) in SYNTHETIC_CATALOG.conditions.items()}
+        values.update(request.conditions)
         params = {name: value for name, (value, _) in SYNTHETIC_CATALOG.parameters.items()}
         params.update(request.parameter_values)
         true = values["backlash"] + (values["preload"] + values["external_force"]) / params["synthetic.stiffness"]
