@@ -108,7 +108,9 @@ def convert(value, full_scale, bits):
 def lag_gain(dt, tau):
     """``1 - exp(-dt / tau)``: the fraction of a step input a first-order lag of time constant ``tau`` reaches
     in ``dt`` (accurate for ``dt << tau``: computed as ``-expm1(-dt / tau)``, :mod:`numerics.elementary`)."""
-    return -expm1(-dt / tau)
+    # tau = 0 (no conditioner): 1 exactly, as -expm1(-inf) gives in compiled code, without dividing by zero in
+    # plain Python (NUMBA_DISABLE_JIT)
+    return -expm1(-dt / tau) if tau > 0.0 else 1.0
 
 
 @numba.njit(**SCALAR)

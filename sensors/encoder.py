@@ -475,8 +475,7 @@ def frequency_method_speed(count, sample_count, resolution, window):
     Error below ``res / T_w``; the exact mean speed when the count is continuous (fidelity 0). 0 for an empty
     window.
     """
-    speed = (count - sample_count) * resolution / window
-    return speed if window > 0.0 else 0.0
+    return (count - sample_count) * resolution / window if window > 0.0 else 0.0
 
 
 @numba.njit(**SCALAR)

@@ -82,7 +82,9 @@ def _forward_flow(p_up, p_down, conductance, b_crit, rho0, t_ref, t_up, laminar_
     """ISO 6358 mass flow for ``p_up >= p_down`` (see :func:`mass_flow`); the three regimes are each computed and
     one is selected (branch-free)."""
     choked = conductance * rho0 * p_up * math.sqrt(t_ref / t_up)
-    ratio = p_down / p_up
+    # a select between scalars (both sides computed under numba's numpy error model); no division by an empty
+    # chamber's zero where the functions run as plain Python (NUMBA_DISABLE_JIT, benchmarks/mutation_score.py)
+    ratio = p_down / p_up if p_up > 0.0 else 1.0
     subsonic = choked * _subsonic_factor(ratio, b_crit)
     # Laminar band: linear in (p_up - p_down), matching value at laminar_ratio.
     laminar = choked * _subsonic_factor(laminar_ratio, b_crit) * (1.0 - ratio) / (1.0 - laminar_ratio)
