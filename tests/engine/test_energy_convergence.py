@@ -17,7 +17,8 @@ BALL_GROOVE_FRICTION_OFF = {
     "ball_screw.sliding_friction_g1": 0.0, "ball_screw.sliding_friction_g4": 0.0, "ball_screw.sliding_friction_g6": 0.0,
     "ball_screw.rolling_friction_load_coefficient": 0.0, "ball_screw.rolling_friction_speed_coefficient": 0.0,
 }
-LOSSLESS = {
+#: Every mechanical loss off (also the motor's energy balance, test_motor_energy_balance.py).
+MECHANICAL_LOSSES_OFF = {
     **BALL_GROOVE_FRICTION_OFF,
     "motor.viscous_damping": 0.0, "motor.friction_static_torque": 0.0, "motor.friction_dynamic_torque": 0.0,
     "reducer.efficiency": 1.0, "drivetrain.damping": 0.0, "ball_screw.contact_damping_coefficient": 0.0,
@@ -26,6 +27,9 @@ LOSSLESS = {
     "ball_screw.bearing_viscous_friction": 0.0, "sled.guide_roll_damping": 0.0,
     "sled.guide_friction_static": 0.0, "sled.guide_friction_dynamic": 0.0, "sled.guide_viscous_friction": 0.0,
     "preload.damping": 0.0,
+}
+LOSSLESS = {
+    **MECHANICAL_LOSSES_OFF,
     # decouple the electrical circuit: no torque from current, no back-EMF into it
     "motor.torque_constant": 1e-300, "motor.speed_constant": 1e-300,
     # a smooth chain: the reducer's play would make the torsional force only C0

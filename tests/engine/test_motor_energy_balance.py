@@ -13,6 +13,7 @@ would be 46 % of the mechanical energy delivered, 4600 times the bound asserted 
 
 import numpy as np
 import pytest
+from test_energy_convergence import MECHANICAL_LOSSES_OFF
 
 import twin
 from twin.engine.energy import mechanical_energy
@@ -24,18 +25,6 @@ from twin.fidelity import resolve_fidelity
 from twin.layout import N_INPUTS, N_MEMORY, K, S
 from twin.physics.motor import winding_resistance
 
-#: Every mechanical loss off, so that what the motor delivers stays in the chain as kinetic and elastic energy.
-LOSSLESS = {
-    "ball_screw.sliding_friction_g1": 0.0, "ball_screw.sliding_friction_g4": 0.0, "ball_screw.sliding_friction_g6": 0.0,
-    "ball_screw.rolling_friction_load_coefficient": 0.0, "ball_screw.rolling_friction_speed_coefficient": 0.0,
-    "motor.viscous_damping": 0.0, "motor.friction_static_torque": 0.0, "motor.friction_dynamic_torque": 0.0,
-    "reducer.efficiency": 1.0, "drivetrain.damping": 0.0, "ball_screw.contact_damping_coefficient": 0.0,
-    "ball_screw.screw_axial_damping": 0.0, "ball_screw.screw_rotational_damping": 0.0,
-    "ball_screw.bearing_friction_static_torque": 0.0, "ball_screw.bearing_friction_dynamic_torque": 0.0,
-    "ball_screw.bearing_viscous_friction": 0.0, "sled.guide_roll_damping": 0.0,
-    "sled.guide_friction_static": 0.0, "sled.guide_friction_dynamic": 0.0, "sled.guide_viscous_friction": 0.0,
-    "preload.damping": 0.0,
-}
 #: The full drive: the winding circuit with its Hall sensor and analog PI, the winding's temperature integrated;
 #: ideal instruments (no noise: the energy identity does not depend on what the loops read).
 FIDELITY = {"current_loop": "full", "motor_thermal": "dynamic", "encoders": "ideal", "analog_sensors": "ideal"}
@@ -59,7 +48,7 @@ def _energy_run(bench, dt):
     """RK4 over the run (the compiled loop's schedule: acquisition every 1 ms, speed loop every 125 us); returns
     the integrated energies ``[int v i, int R i^2, int k_t w i]``, the magnetic and mechanical energy change and
     the integral of ``|v i|`` [J]."""
-    params = bench.with_values(LOSSLESS)
+    params = bench.with_values(MECHANICAL_LOSSES_OFF)  # what the motor delivers stays in the chain
     scene = twin.load_scene("ds4").with_conditions({"cylinder": "detached"}).with_duration(DURATION)
     fidelity = resolve_fidelity(scene, params, FIDELITY)
     model = build_model(scene, params, fidelity)
