@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
+from campaigns.comparison import mean_shift
 from campaigns.units import estimate_with_interval
 
 #: Confidence of every interval of the comparison.
@@ -138,18 +138,7 @@ def pairing(a: xr.Dataset, b: xr.Dataset) -> tuple[bool, str, list[str]]:
 
 
 def _mean_shift(a: np.ndarray, b: np.ndarray, paired: bool) -> Shift:
-    if min(len(a), len(b)) < MIN_RUNS:
-        return Shift(math.nan, math.nan, math.nan)
-    q = 0.5 + 0.5 * CONFIDENCE
-    if paired:
-        d = b - a
-        half = float(stats.t.ppf(q, len(d) - 1) * d.std(ddof=1) / math.sqrt(len(d)))
-        return Shift(float(d.mean()), float(d.mean()) - half, float(d.mean()) + half)
-    va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
-    dof = (va + vb) ** 2 / (va**2 / (len(a) - 1) + vb**2 / (len(b) - 1)) if va + vb > 0 else len(a) + len(b) - 2
-    half = float(stats.t.ppf(q, dof) * math.sqrt(va + vb))
-    estimate = float(b.mean() - a.mean())
-    return Shift(estimate, estimate - half, estimate + half)
+    return Shift(*mean_shift(b, a, paired=paired, confidence=CONFIDENCE, min_runs=MIN_RUNS))
 
 
 def _sd_shift(a: np.ndarray, b: np.ndarray, paired: bool, rng: np.random.Generator) -> Shift:

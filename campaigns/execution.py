@@ -118,7 +118,8 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
     """The request of run ``run_index`` of data set ``dataset_index``.
 
     ``samples`` is the array of :func:`campaigns.sampling.sample`; sampled
-    ``scene.*`` targets become scene conditions, the others parameter values.
+    ``scene.*`` targets become scene conditions, the others parameter values,
+    with the data set's fixed ``parameters``.
     ``targets`` names the sampled columns (default: the spec's resolved table;
     :mod:`campaigns.replay` passes those stored in ``results.nc``).
     """
@@ -127,6 +128,7 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
     sampled, parameter_values = split_targets(
         {target: float(value) for target, value in zip(targets, samples[dataset_index, run_index], strict=False)})
     conditions = {**dataset.conditions, **sampled}
+    parameter_values = {**dataset.parameters, **parameter_values}  # a fixed sampled column holds its fixed value
     traced = run_index < spec.traces.runs_per_dataset
     return RunRequest(
         dataset=dataset.name,
@@ -143,6 +145,7 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
         outputs=tuple(spec.features) + (tuple(spec.traces.variables) if spec.traces.runs_per_dataset else ()),
         trace_decimation=spec.traces.decimation,
         wall_time_limit=spec.execution.timeout,
+        seed_index=spec.seed_index(dataset_index),
     )
 
 

@@ -2,13 +2,16 @@
 
 A model-form study (``campaigns/specs/model_form.toml``, issue 33) is a campaign whose data sets are baselines and
 one-at-a-time variants: a variant data set is named ``<baseline>__<label>`` and differs from its baseline in exactly
-one scene condition (the *assumption*; the spec states it in both). From the campaign's results and analysis this
+one scene condition (the *assumption*; the spec states it in both), or in the parameters it fixes alone (a parameter
+variant, named ``<baseline>__<assumption>_<value>``: one assumption may be several parameters, e.g. every
+ball-groove friction coefficient). From the campaign's results and analysis this
 module computes, per assumption and variant, per baseline data set and feature:
 
-* the shift of the feature's mean against the baseline with its Welch t interval at the analysis's confidence
-  (Welch 1947, Biometrika 34, 28-35; the Welch-Satterthwaite degrees of freedom). Run ``i`` of a variant has other
-  seeds than run ``i`` of its baseline (:mod:`campaigns.sampling` keys a run by its data set's index), so the two are
-  independent samples, never paired. A shift is stated only where its interval excludes zero (``shift_status``);
+* the shift of the feature's mean against the baseline with its t interval at the analysis's confidence
+  (:func:`campaigns.comparison.mean_shift`): of the run-by-run differences when the variant takes its baseline's
+  seeds (``seeds_from``: run ``i`` of both is one unit with one noise record under two assumptions, common random
+  numbers), else Welch's for independent samples. A shift is stated only where its interval excludes zero
+  (``shift_status``);
 * the requirement verdict of the observability sweep with every sweep data set replaced by its variant, computed by
   :func:`campaigns.analysis.observability_sweep` with the analysis's settings and bootstrap stream, against the
   analysis's verdict (both in the vocabulary of :data:`campaigns.comparison.VERDICTS`);
@@ -26,9 +29,9 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy.stats import t
 
 from campaigns.analysis import _OBSERVABILITY_STREAM, _used, observability_sweep, printed_estimate
+from campaigns.comparison import mean_shift
 from campaigns.files import write_netcdf
 
 #: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.
@@ -45,17 +48,28 @@ VERDICT_CHANGE = ("unchanged", "changed", "not_compared")
 
 @dataclass(frozen=True)
 class Variant:
-    """A variant data set: its baseline and the one condition that differs, with both values as written."""
+    """A variant data set: its baseline and the one assumption that differs, with both values as written.
+
+    A condition variant changes one scene condition (``assumption`` is its name); a parameter variant fixes
+    parameters (``parameters``, JSON, SI units) and is named ``<baseline>__<assumption>_<value>``. ``paired`` when
+    it takes its baseline's seeds (``seeds_from``): run ``i`` of both is then one unit under two assumptions.
+    """
 
     dataset: str
     baseline: str
     assumption: str
     value: str
     baseline_value: str
+    paired: bool = False
+    parameters: str = ""
 
     @property
     def label(self) -> str:
         return f"{self.assumption}={self.value}"
+
+
+def _changed(mine: dict, theirs: dict) -> list[str]:
+    return sorted(k for k in set(mine) | set(theirs) if mine.get(k) != theirs.get(k))
 
 
 def variants(spec: dict) -> list[Variant]:
@@ -65,56 +79,46 @@ def variants(spec: dict) -> list[Variant]:
     ------
     ValueError
         A ``<baseline>__<label>`` data set whose baseline is not a data set, whose scene differs from it, or that
-        does not differ from it in exactly one condition stated by both.
+        does not differ from it in exactly one condition stated by both or in its fixed parameters alone.
     """
     datasets = {d["name"]: d for d in spec["datasets"]}
+    sampled = {u["target"] for u in spec.get("uncertainties", [])}
     found, problems = [], []
     for name, entry in datasets.items():
         if SEPARATOR not in name:
             continue
-        baseline = name.split(SEPARATOR, 1)[0]
+        baseline, label = name.split(SEPARATOR, 1)
         if baseline not in datasets:
             problems.append(f"{name}: no baseline data set {baseline!r}")
             continue
-        if entry.get("scene") != datasets[baseline].get("scene"):
-            problems.append(f"{name}: scene {entry.get('scene')!r}, its baseline's is "
-                            f"{datasets[baseline].get('scene')!r}")
+        base = datasets[baseline]
+        if entry.get("scene") != base.get("scene"):
+            problems.append(f"{name}: scene {entry.get('scene')!r}, its baseline's is {base.get('scene')!r}")
             continue
-        mine, theirs = entry.get("conditions", {}), datasets[baseline].get("conditions", {})
-        changed = sorted(k for k in set(mine) | set(theirs) if mine.get(k) != theirs.get(k))
-        if len(changed) != 1 or changed[0] not in mine or changed[0] not in theirs:
-            problems.append(f"{name}: must differ from {baseline} in exactly one condition stated by both "
-                            f"(differs in: {', '.join(changed) or 'none'})")
+        paired = entry.get("seeds_from") == baseline
+        mine, theirs = entry.get("conditions", {}), base.get("conditions", {})
+        conditions = _changed(mine, theirs)
+        fixed, fixed_base = entry.get("parameters", {}), base.get("parameters", {})
+        parameters = _changed(fixed, fixed_base)
+        if parameters and not conditions:
+            assumption, _, value = label.rpartition("_")
+            if not assumption:
+                problems.append(f"{name}: a variant of parameters is named <baseline>__<assumption>_<value>")
+                continue
+            baseline_value = ("set by the data set" if any(k in fixed_base for k in parameters)
+                              else "sampled" if any(k in sampled for k in parameters) else "nominal")
+            found.append(Variant(name, baseline, assumption, value, baseline_value, paired,
+                                 json.dumps({k: fixed[k] for k in parameters if k in fixed}, sort_keys=True)))
             continue
-        key = changed[0]
-        found.append(Variant(name, baseline, key, str(mine[key]), str(theirs[key])))
+        if parameters or len(conditions) != 1 or conditions[0] not in mine or conditions[0] not in theirs:
+            problems.append(f"{name}: must differ from {baseline} in exactly one condition stated by both, or in its "
+                            f"parameters alone (differs in: {', '.join(conditions + parameters) or 'none'})")
+            continue
+        key = conditions[0]
+        found.append(Variant(name, baseline, key, str(mine[key]), str(theirs[key]), paired))
     if problems:
         raise ValueError("model-form study: " + "; ".join(problems))
     return found
-
-
-def mean_shift(variant, baseline, *, confidence: float = 0.95, min_runs: int = 2) -> tuple[float, float, float]:
-    """Shift of the mean ``mean(variant) - mean(baseline)`` of two independent samples with its Welch t interval.
-
-    Non-finite values are left out. NaN throughout when either sample has fewer than ``max(min_runs, 2)`` values
-    (a sample variance needs two). Two constant samples give an interval of zero width.
-
-    Returns
-    -------
-    tuple of float
-        ``(shift, lower, upper)``.
-    """
-    a, b = (np.asarray(x, dtype=float) for x in (variant, baseline))
-    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
-    if min(a.size, b.size) < max(min_runs, 2):
-        return math.nan, math.nan, math.nan
-    shift = float(a.mean() - b.mean())
-    va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
-    if va + vb == 0.0:
-        return shift, shift, shift
-    dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1))
-    half = float(t.ppf(0.5 + confidence / 2, dof) * math.sqrt(va + vb))
-    return shift, shift - half, shift + half
 
 
 def _settings(analysis: xr.Dataset) -> dict:
@@ -176,11 +180,14 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     for v in found:
         i, d = labels.index(v.label), baselines.index(v.baseline)
         for f, feature in enumerate(features):
-            a = results[feature].sel(dataset=v.dataset).values[used[feature].sel(dataset=v.dataset).values]
-            b = results[feature].sel(dataset=v.baseline).values[used[feature].sel(dataset=v.baseline).values]
-            n_variant[i, d, f], n_baseline[i, d, f] = a.size, b.size
-            shift[i, d, f], bounds[i, d, f, 0], bounds[i, d, f, 1] = mean_shift(a, b, confidence=confidence,
-                                                                                min_runs=min_runs)
+            # unused runs as NaN, so that a paired shift keeps run i against run i
+            a, b = (results[feature].sel(dataset=n).where(used[feature].sel(dataset=n)).values
+                    for n in (v.dataset, v.baseline))
+            kept = np.isfinite(a) & np.isfinite(b) if v.paired else None
+            n_variant[i, d, f], n_baseline[i, d, f] = ((kept.sum(), kept.sum()) if v.paired
+                                                       else (np.isfinite(a).sum(), np.isfinite(b).sum()))
+            shift[i, d, f], bounds[i, d, f, 0], bounds[i, d, f, 1] = mean_shift(
+                a, b, paired=v.paired, confidence=confidence, min_runs=min_runs)
             status[i, d, f] = SHIFT_STATUS.index(
                 "insufficient_data" if not math.isfinite(shift[i, d, f])
                 else "resolved" if bounds[i, d, f, 0] > 0 or bounds[i, d, f, 1] < 0 else "not_resolved")
@@ -203,7 +210,15 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     table = xr.Dataset(
         {
             "assumption": ("variant", np.array([first[k].assumption for k in labels], dtype=object),
-                           {"long_name": "the scene condition the variant changes (the modelling assumption)"}),
+                           {"long_name": "the modelling assumption the variant changes: a scene condition, or the "
+                                         "parameters in variant_parameters"}),
+            "variant_parameters": ("variant", np.array([first[k].parameters for k in labels], dtype=object),
+                                   {"long_name": "the parameters the variant fixes, JSON, SI units (empty for a "
+                                                 "scene condition)"}),
+            "pairing": ("variant", np.array(["paired" if first[k].paired else "independent" for k in labels],
+                                            dtype=object),
+                        {"long_name": "paired: the variant takes its baseline's seeds (seeds_from), the shift is "
+                                      "that of run-by-run differences; independent: Welch's two-sample interval"}),
             "variant_value": ("variant", np.array([first[k].value for k in labels], dtype=object),
                               {"long_name": "the assumption's value in the variant data sets"}),
             "baseline_value": ("variant", np.array([first[k].baseline_value for k in labels], dtype=object),
@@ -213,16 +228,18 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
                              "shift_status is resolved or not_resolved; print it only where resolved",
                 **feature_units}),
             "mean_shift_ci": (cells + ("bound",), bounds, {
-                "long_name": f"{confidence:g} Welch t interval of mean_shift (independent samples: a variant's "
-                             "runs have their own seeds)", **feature_units}),
+                "long_name": f"{confidence:g} t interval of mean_shift: of the run-by-run differences where the "
+                             "variant is paired, Welch's where independent (see pairing)", **feature_units}),
             "shift_status": (cells, status, {
                 "long_name": "whether the interval of mean_shift excludes zero (resolved), too few used runs on "
                              f"either side (insufficient_data: fewer than {min_runs}), or no such variant of the "
                              "data set (not_run)",
                 "flag_values": np.arange(len(SHIFT_STATUS), dtype=np.int8),
                 "flag_meanings": " ".join(SHIFT_STATUS)}),
-            "n_variant": (cells, n_variant, {"units": "1", "long_name": "used runs of the variant data set"}),
-            "n_baseline": (cells, n_baseline, {"units": "1", "long_name": "used runs of the baseline data set"}),
+            "n_variant": (cells, n_variant, {"units": "1", "long_name": "used runs of the variant data set (paired: "
+                                                                        "runs used on both sides)"}),
+            "n_baseline": (cells, n_baseline, {"units": "1", "long_name": "used runs of the baseline data set "
+                                                                          "(paired: runs used on both sides)"}),
             "baseline_verdict": ("feature", np.array(baseline_verdict, dtype=object), {
                 "long_name": "requirement verdict of the analysis (baseline sweep): met / not met / undetermined / "
                              "insufficient data"}),
@@ -249,8 +266,9 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
         "source_spec_hash": results.attrs.get("spec_hash", ""),
         "confidence": confidence,
         "min_ok_runs": min_runs,
-        "method": "one-at-a-time variants of scene conditions against their baseline data sets; mean shift with a "
-                  "Welch t interval; requirement verdict of the observability sweep recomputed on the variants",
+        "method": "one-at-a-time variants of scene conditions or parameters against their baseline data sets; "
+                  "mean shift with a t interval (paired where the variant takes its baseline's seeds, else Welch); "
+                  "requirement verdict of the observability sweep recomputed on the variants",
     }
     table.attrs["headline"] = headline(table)
     return table

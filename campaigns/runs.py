@@ -111,6 +111,8 @@ class RunRequest:
         model's automatic fidelity is the same for every run of a data set.
     wall_time_limit : float
         Wall-clock budget of the run [s].
+    seed_index : int or None
+        The data set whose random streams the run uses (``CampaignSpec.seed_index``); ``None``: its own.
     """
 
     dataset: str
@@ -127,10 +129,12 @@ class RunRequest:
     outputs: tuple[str, ...] = ()
     trace_decimation: int = 1
     wall_time_limit: float = math.inf
+    seed_index: int | None = None
 
     def noise_rng(self) -> np.random.Generator:
         """The run's sensor-noise generator (see :mod:`campaigns.sampling`)."""
-        return noise_generator(self.root_seed, self.dataset_index, self.run_index)
+        seed_index = self.dataset_index if self.seed_index is None else self.seed_index
+        return noise_generator(self.root_seed, seed_index, self.run_index)
 
 
 def record(request: RunRequest, status: str, reason: str, t_reached: float, wall_time: float, features=None, trace=None,

@@ -1,7 +1,9 @@
 """Sampling of the uncertainty table: stateless, per-run random streams.
 
 Run ``i`` of data set ``d`` (both zero-based, in spec order) owns the seed
-sequence ``SeedSequence(root_seed, spawn_key=(d, i))``. Its two children
+sequence ``SeedSequence(root_seed, spawn_key=(d, i))``, unless the data set takes
+the seeds of another (``seeds_from``: then ``d`` is that data set's index, and
+run ``i`` of both draws the same values and the same noise). Its two children
 (``.spawn(2)``) feed
 
 * child 0: the uncertain values, drawn in the order of the uncertainty table;
@@ -17,7 +19,7 @@ stored next to the results); analysis is a separate module.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy import special
@@ -75,10 +77,19 @@ def _truncated_normal(mean: float, sigma: float, low: float, high: float, rng: n
     return float(mean + sign * sigma * np.clip(special.ndtri(u), a, b))
 
 
-def sample_run(distributions: Sequence[Distribution], root_seed: int, dataset_index: int, run_index: int) -> np.ndarray:
-    """The uncertain values of one run, in table order (replays that run alone)."""
-    rng = _stream(root_seed, dataset_index, run_index, PARAMETER_STREAM)
-    return np.array([draw(d, rng) for d in distributions], dtype=float)
+def sample_run(distributions: Sequence[Distribution], root_seed: int, seed_index: int, run_index: int,
+               fixed: Mapping[int, float] | None = None) -> np.ndarray:
+    """The uncertain values of one run, in table order (replays that run alone).
+
+    ``seed_index`` is the data set whose streams the run uses (its own index unless the data set takes another's
+    seeds: ``CampaignSpec.seed_index``). ``fixed`` maps table columns to the values a data set fixes them at
+    (``CampaignSpec.fixed_columns``): every value is drawn first, so fixing one leaves the others as they were.
+    """
+    rng = _stream(root_seed, seed_index, run_index, PARAMETER_STREAM)
+    values = np.array([draw(d, rng) for d in distributions], dtype=float)
+    for column, value in (fixed or {}).items():
+        values[column] = value
+    return values
 
 
 def sample(spec) -> np.ndarray:
@@ -95,8 +106,10 @@ def sample(spec) -> np.ndarray:
         Shape ``(n_datasets, runs_per_dataset, n_uncertainties)``, SI units.
     """
     distributions = spec.distributions()
+    targets = [d.target for d in distributions]
     out = np.empty((len(spec.datasets), spec.runs_per_dataset, len(distributions)))
     for d in range(len(spec.datasets)):
+        seed_index, fixed = spec.seed_index(d), spec.fixed_columns(d, targets)
         for i in range(spec.runs_per_dataset):
-            out[d, i] = sample_run(distributions, spec.root_seed, d, i)
+            out[d, i] = sample_run(distributions, spec.root_seed, seed_index, i, fixed)
     return out

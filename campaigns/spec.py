@@ -214,13 +214,45 @@ def _condition_value(value):
 ConditionValue = Annotated[float | str, PlainValidator(_condition_value)]
 
 
+def _known_parameter(name: str, info: ValidationInfo) -> str:
+    if split_targets({name: None})[0]:
+        raise ValueError(f"{name} is a scene condition: set it in the data set's conditions")
+    catalog = _catalog(info)
+    if catalog is not None:
+        try:
+            catalog.nominal(name)
+        except KeyError as exc:
+            raise ValueError(str(exc.args[0])) from None
+    return name
+
+
+def _finite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"must be a finite number in the parameter's SI unit, got {value!r}")
+    return float(value)
+
+
+ParameterName = Annotated[str, AfterValidator(_known_parameter)]
+FiniteValue = Annotated[float, PlainValidator(_finite)]
+
+
 class Dataset(_Strict):
-    """A named set of condition overrides applied to a scene (Table 9.4)."""
+    """A named set of condition overrides applied to a scene (Table 9.4).
+
+    ``parameters`` fixes parameters for this data set only, in SI units as the parameter files give them: a
+    modelling assumption varied one data set at a time (a model-form study). A parameter the uncertainty table
+    samples is then not sampled in this data set: its drawn value is replaced by the fixed one (the draws still
+    happen, so every other row keeps its value). ``seeds_from`` names another data set whose random streams this
+    one uses (its uncertain values and its noise, run by run: common random numbers), so that the two differ only in
+    what the data set changes and their difference can be read run by run (:mod:`campaigns.sampling`).
+    """
 
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
     scene: str | None = None
     description: str = ""
     conditions: dict[ConditionName, ConditionValue] = {}
+    parameters: dict[ParameterName, FiniteValue] = {}
+    seeds_from: str | None = None
 
     @field_validator("scene")
     @classmethod
@@ -417,6 +449,18 @@ class CampaignSpec(_Strict):
         spec was validated without a catalog)."""
         return self._condition_units or dict(CONDITION_UNITS)
 
+    def seed_index(self, dataset_index: int) -> int:
+        """The index of the data set whose random streams data set ``dataset_index`` uses: its own, or that of the
+        data set its ``seeds_from`` names (:mod:`campaigns.sampling`)."""
+        named = self.datasets[dataset_index].seeds_from
+        return dataset_index if named is None else [d.name for d in self.datasets].index(named)
+
+    def fixed_columns(self, dataset_index: int, targets: list[str]) -> dict[int, float]:
+        """The columns of the uncertainty table (``targets``, in table order) that data set ``dataset_index`` fixes
+        by its ``parameters``, with their values."""
+        fixed = self.datasets[dataset_index].parameters
+        return {k: fixed[t] for k, t in enumerate(targets) if t in fixed}
+
     def distributions(self) -> list[Distribution]:
         """The resolved uncertainty table, in spec order (the sampling order)."""
         return [u.distribution_resolved for u in self.uncertainties]
@@ -424,12 +468,18 @@ class CampaignSpec(_Strict):
     def canonical(self) -> dict:
         """The spec with its resolved distributions, as plain JSON-ready data.
 
-        ``control_limits`` is left out when it holds the defaults, so specs written before the table
-        existed keep their hash (and their results directories).
+        ``control_limits`` is left out when it holds the defaults, and a data set's ``parameters`` and
+        ``seeds_from`` when not used, so specs written before they existed keep their hash (and their results
+        directories).
         """
         spec = self.model_dump(mode="json")
         if self.control_limits == ControlLimits():
             del spec["control_limits"]
+        for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
+            if not dataset["parameters"]:
+                del dataset["parameters"]
+            if dataset["seeds_from"] is None:
+                del dataset["seeds_from"]
         return {"spec": spec, "resolved": [d.as_dict() for d in self.distributions()]}
 
     def to_json(self) -> str:
@@ -487,10 +537,31 @@ def cross_field_problems(data: dict) -> list[str]:
         for name, value in (conditions.items() if isinstance(conditions, dict) else ()):
             if isinstance(value, (int, float)) and (problem := condition_range_problem(name, value)) is not None:
                 problems.append(f"datasets[{k}].conditions: {problem}")
+    problems += _seeds_from_problems(datasets)
     observability = data.get("observability")
     sweep = observability.get("sweep") if isinstance(observability, dict) else None
     if isinstance(sweep, list):
         problems += _sweep_problems([n for n in sweep if isinstance(n, str)], datasets, observability)
+    return problems
+
+
+def _seeds_from_problems(datasets: list[dict]) -> list[str]:
+    """``seeds_from`` names another data set, one that uses its own seeds (no chains: each data set's streams are
+    read from its own entry or from one other)."""
+    by_name = {d["name"]: d for d in datasets if isinstance(d.get("name"), str)}
+    problems = []
+    for k, dataset in enumerate(datasets):
+        named = dataset.get("seeds_from")
+        if named is None or not isinstance(named, str):
+            continue
+        if named == dataset.get("name"):
+            problems.append(f"datasets[{k}].seeds_from: names the data set itself; leave it out to use its own seeds")
+        elif named not in by_name:
+            problems.append(f"datasets[{k}].seeds_from: unknown data set {named!r}; "
+                            f"{spelling_hint(named, list(by_name))}known: {', '.join(by_name)}")
+        elif by_name[named].get("seeds_from") is not None:
+            problems.append(f"datasets[{k}].seeds_from: {named!r} itself uses the seeds of "
+                            f"{by_name[named]['seeds_from']!r}; name that data set instead")
     return problems
 
 
@@ -614,7 +685,8 @@ ROUND_OFF = 1e-9
 
 
 def support_checks(spec: CampaignSpec, catalog: Catalog | None) -> tuple[list[str], list[str]]:
-    """Every sampled range against what its target allows, before anything runs: ``(problems, warnings)``.
+    """Every sampled range, and every data set's fixed parameter, against what its target allows, before anything
+    runs: ``(problems, warnings)``.
 
     A problem: a range (uniform, truncated Gaussian: its bounds; a constant: its value; a Gaussian or lognormal:
     its centre) outside the bounds of the parameter file or of the scene condition, which every run would fail on.
@@ -662,6 +734,12 @@ def support_checks(spec: CampaignSpec, catalog: Catalog | None) -> tuple[list[st
         centre = d.value if d.kind == "constant" else d.mean if math.isfinite(d.mean) else 0.5 * (d.low + d.high)
         if name is None and (warning := parameters[d.target].implausible(centre)) is not None:
             warnings.append(f"uncertainties[{k}]: {warning}")
+    for k, dataset in enumerate(spec.datasets):
+        for name, value in dataset.parameters.items():
+            if (problem := parameters[name].check(value)) is not None:
+                problems.append(f"datasets[{k}].parameters: {problem}; every run of the data set would fail")
+            elif (warning := parameters[name].implausible(value)) is not None:
+                warnings.append(f"datasets[{k}].parameters: {warning}")
     return problems, warnings
 
 

@@ -11,9 +11,12 @@ import pytest
 import xarray as xr
 
 import campaigns
+import twin
 from campaigns import model_form
 from campaigns.analysis import observability_sweep
-from campaigns.comparison import VERDICTS
+from campaigns.bench import BenchCatalog
+from campaigns.comparison import VERDICTS, mean_shift
+from campaigns.spec import read_spec, validate_spec
 
 SPEC = Path(__file__).parents[2] / "campaigns" / "specs" / "model_form.toml"
 #: The sweep of the synthetic study [m]: ds4 is the reference, ds6 the one level below the 1 µm requirement.
@@ -51,6 +54,29 @@ def _results(variants: dict[str, tuple[dict, float, float]], runs: int = RUNS, s
     )
 
 
+def test_a_paired_variant_resolves_a_shift_independent_samples_cannot():
+    # every data set has a 1 µm run-to-run spread shared with its variants run by run (common random numbers); the
+    # variant adds 0.1 µm. Independent samples of 200 runs: standard error of the difference 0.1 µm, not resolved.
+    # Paired: the differences are 0.1 µm exactly (to rounding), so the interval is 0.1 µm wide at most 1e-15 m.
+    results = _results({"damping_x10": (None, 0.0, 0.0)})
+    rng = np.random.default_rng(7)
+    base = results["f"].values[: len(LEVELS)] + 1e-6 * rng.standard_normal((len(LEVELS), RUNS))
+    results["f"].values[: len(LEVELS)] = base
+    results["f"].values[len(LEVELS):] = base + 0.1e-6
+    spec = json.loads(results.attrs["spec_json"])
+    for entry in spec["spec"]["datasets"][len(LEVELS):]:
+        entry["parameters"] = {"ball_screw.contact_damping_coefficient": 0.05}
+    unpaired = model_form.model_form_dataset(results.assign_attrs(spec_json=json.dumps(spec)), _analysis(results))
+    for entry in spec["spec"]["datasets"][len(LEVELS):]:
+        entry["seeds_from"] = entry["name"].split("__")[0]
+    paired = model_form.model_form_dataset(results.assign_attrs(spec_json=json.dumps(spec)), _analysis(results))
+    assert str(unpaired["pairing"].item()) == "independent" and str(paired["pairing"].item()) == "paired"
+    assert (paired["shift_status"].values == model_form.SHIFT_STATUS.index("resolved")).all()
+    assert paired["mean_shift_ci"].values == pytest.approx(0.1e-6, abs=1e-15)
+    assert (unpaired["shift_status"].values == model_form.SHIFT_STATUS.index("not_resolved")).sum() >= 3
+    assert json.loads(str(paired["variant_parameters"].item())) == {"ball_screw.contact_damping_coefficient": 0.05}
+
+
 def _analysis(results: xr.Dataset) -> xr.Dataset:
     """The attributes and the baseline verdict an analysis.nc carries (its own settings of the sweep)."""
     attrs = {"bootstrap": json.dumps({"n_boot": 200, "confidence": 0.95, "seed": 0}), "false_alarm_rate": 0.05,
@@ -68,9 +94,18 @@ def _analysis(results: xr.Dataset) -> xr.Dataset:
 def test_welch_interval_known_answer():
     # a = 1, 2, 3 against a constant 0: shift 2, variance of the mean 1/3 with 2 degrees of freedom,
     # t_0.975(2) = 4.302653: half-width 4.302653 * sqrt(1/3) = 2.484138
-    shift, lower, upper = model_form.mean_shift([1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
+    shift, lower, upper = mean_shift([1.0, 2.0, 3.0], [0.0, 0.0, 0.0], paired=False)
     assert shift == pytest.approx(2.0)
     assert (lower, upper) == pytest.approx((2.0 - 2.484138, 2.0 + 2.484138), abs=1e-6)
+
+
+def test_paired_interval_known_answer_is_that_of_the_differences():
+    # differences 1, 2, 3 (and a pair with a NaN, left out): the same numbers as above, whatever the common part
+    common = np.array([5.0, -7.0, 100.0, 1.0])
+    shift, lower, upper = mean_shift(common + [1.0, 2.0, 3.0, np.nan], common, paired=True)
+    assert (shift, lower, upper) == pytest.approx((2.0, 2.0 - 2.484138, 2.0 + 2.484138), abs=1e-6)
+    with pytest.raises(ValueError, match="one value per run on both sides"):
+        mean_shift([1.0, 2.0], [1.0, 2.0, 3.0], paired=True)
 
 
 def test_welch_interval_matches_the_pooled_one_for_equal_samples_and_needs_two_runs():
@@ -80,10 +115,10 @@ def test_welch_interval_matches_the_pooled_one_for_equal_samples_and_needs_two_r
     b = (b - b.mean()) / b.std(ddof=1)
     from scipy.stats import t
     half = t.ppf(0.975, 98) * math.sqrt(2 / 50)
-    assert model_form.mean_shift(a, b) == pytest.approx((1.0, 1.0 - half, 1.0 + half))
-    assert all(math.isnan(x) for x in model_form.mean_shift([1.0], [1.0, 2.0]))
-    assert all(math.isnan(x) for x in model_form.mean_shift(a[:5], b, min_runs=20))
-    assert model_form.mean_shift([2.0, 2.0], [1.0, 1.0]) == (1.0, 1.0, 1.0)
+    assert mean_shift(a, b, paired=False) == pytest.approx((1.0, 1.0 - half, 1.0 + half))
+    assert all(math.isnan(x) for x in mean_shift([1.0], [1.0, 2.0], paired=False))
+    assert all(math.isnan(x) for x in mean_shift(a[:5], b, paired=False, min_runs=20))
+    assert mean_shift([2.0, 2.0], [1.0, 1.0], paired=False) == (1.0, 1.0, 1.0)
 
 
 def test_variants_read_the_changed_condition_from_the_spec():
@@ -93,12 +128,28 @@ def test_variants_read_the_changed_condition_from_the_spec():
         "ds4", "noise_path", "recorded", "feedback")
 
 
+def test_a_parameter_variant_is_named_by_its_label_and_paired_by_its_seeds():
+    fixed = {"ball_screw.contact_damping_coefficient": 0.05}
+    spec = {"datasets": [_dataset("ds4", 0.0),
+                         {**_dataset("ds4__contact_damping_x10", 0.0), "parameters": fixed, "seeds_from": "ds4"},
+                         {**_dataset("ds4__phases_fixed", 0.0), "parameters": {"sensors.phase": 0.0}}],
+            "uncertainties": [{"target": "sensors.phase"}]}
+    damping, phases = model_form.variants(spec)
+    assert (damping.assumption, damping.value, damping.baseline_value, damping.paired) == (
+        "contact_damping", "x10", "nominal", True)
+    assert json.loads(damping.parameters) == fixed
+    assert (phases.label, phases.baseline_value, phases.paired) == ("phases=fixed", "sampled", False)
+
+
 @pytest.mark.parametrize("entry, problem", [
     (_dataset("ds9__x", 0.0, {"noise_path": "recorded"}), "no baseline data set 'ds9'"),
     (_dataset("ds4__two", 0.0, {"noise_path": "recorded", "cylinder": "detached"}), "differs in: cylinder, noise_path"),
     (_dataset("ds4__none", 0.0), "differs in: none"),
+    ({**_dataset("ds4__both", 0.0, {"noise_path": "recorded"}), "parameters": {"a.b": 1.0}},
+     "differs in: noise_path, a.b"),
+    ({**_dataset("ds4__unlabelled", 0.0), "parameters": {"a.b": 1.0}}, "named <baseline>__<assumption>_<value>"),
 ])
-def test_a_variant_must_change_exactly_one_stated_condition_of_a_baseline(entry, problem):
+def test_a_variant_must_change_exactly_one_stated_condition_or_its_parameters_alone(entry, problem):
     with pytest.raises(ValueError, match=problem):
         model_form.variants({"datasets": [_dataset("ds4", 0.0), entry]})
 
@@ -176,26 +227,62 @@ def test_the_table_is_written_as_cf_netcdf(tmp_path):
         assert stored.attrs["headline"] == model_form.model_form_dataset(results, _analysis(results)).attrs["headline"]
 
 
+#: Every variant of the study (label: baseline value), each on the seven data sets but the cylinder's (not on ds3).
+STUDY_VARIANTS = {"noise_path=recorded": "feedback", "cylinder=detached": "attached", "contact_damping=half": "nominal",
+                  "contact_damping=x10": "nominal", "seal_friction=2pct": "nominal", "seal_friction=10pct": "nominal",
+                  "groove_friction=half": "nominal", "groove_friction=double": "nominal",
+                  "friction_split=25-75": "nominal", "friction_split=75-25": "nominal",
+                  "mounting_phases=fixed": "sampled"}
+
+
 def test_the_spec_pairs_every_variant_with_a_baseline_of_the_thesis_study():
     spec = campaigns.load_spec(SPEC)
     found = model_form.variants(spec.model_dump(mode="json"))
-    assert {v.label for v in found} == {"noise_path=recorded", "cylinder=detached"}
+    assert {v.label: v.baseline_value for v in found} == STUDY_VARIANTS
+    assert all(v.paired for v in found)  # every variant takes its baseline's seeds: shifts of run-by-run differences
     assert {v.baseline for v in found if v.assumption == "cylinder"} == {"ds1", "ds2", "ds4", "ds5", "ds6", "ds7"}
+    assert all(len([v for v in found if v.label == label]) == 7 for label in STUDY_VARIANTS if "cylinder" not in label)
     thesis = campaigns.load_spec(SPEC.with_name("thesis_backlash.toml"))
     # baselines first and in the thesis order, same seed and table: run i of ds1-ds7 is the thesis study's run i
     assert [d.name for d in spec.datasets[:7]] == [d.name for d in thesis.datasets]
     assert spec.root_seed == thesis.root_seed and spec.distributions() == thesis.distributions()
 
 
+def test_the_friction_split_variants_keep_the_calibrated_drag_and_the_friction_ones_scale_it():
+    """The split moves drag between sliding (g1, g4, g6) and rolling (k_gc) at the same Eq. 7.85 total: at the
+    calibration point (1 kN, 100 rpm) each carries half, so a sliding share s scales sliding by 2 s and rolling by
+    2 (1 - s); the friction variants scale all four alike."""
+    nominal = twin.load_parameters("bench")
+    sliding = ("ball_screw.sliding_friction_g1", "ball_screw.sliding_friction_g4", "ball_screw.sliding_friction_g6")
+    rolling = "ball_screw.rolling_friction_load_coefficient"
+    expected = {"25-75": (0.5, 1.5), "75-25": (1.5, 0.5), "half": (0.5, 0.5), "double": (2.0, 2.0)}
+    for v in model_form.variants(campaigns.load_spec(SPEC).model_dump(mode="json")):
+        if v.assumption not in ("friction_split", "groove_friction"):
+            continue
+        fixed, (s, r) = json.loads(v.parameters), expected[v.value]
+        assert {k: fixed[k] / nominal[k].value for k in sliding} == pytest.approx(dict.fromkeys(sliding, s), rel=1e-9)
+        assert fixed[rolling] / nominal[rolling].value == pytest.approx(r, rel=1e-9)
+
+
 @pytest.mark.slow
 def test_the_spec_runs_end_to_end_and_writes_the_table(tmp_path):
-    spec = campaigns.load_spec(SPEC, runs=3)
+    # one baseline and a condition and two parameter variants of it, 3 runs each: the whole path on the bench model
+    data = read_spec(SPEC)
+    data["datasets"] = [d for d in data["datasets"] if d["name"] in (
+        "ds4", "ds4__noise_path_recorded", "ds4__contact_damping_x10", "ds4__mounting_phases_fixed")]
+    data["observability"] = {"sweep": []}
+    data["runs_per_dataset"] = 3
+    spec = validate_spec(data, BenchCatalog())
     results = campaigns.run_campaign(spec, tmp_path, workers=1, progress=False)
     campaigns.analyze(results)
     with xr.open_dataset(tmp_path / model_form.FILE_NAME, engine="netcdf4") as table:
-        assert set(table["variant"].values) == {"noise_path=recorded", "cylinder=detached"}
-        assert (table["shift_status"].sel(variant="cylinder=detached", dataset="ds3").values
-                == model_form.SHIFT_STATUS.index("not_run")).all()
+        assert list(table["variant"].values) == ["noise_path=recorded", "contact_damping=x10", "mounting_phases=fixed"]
+        assert (table["pairing"].values == "paired").all()
         assert (table["verdict_change"].values == model_form.VERDICT_CHANGE.index("not_compared")).all()
-        assert table.attrs["headline"].startswith("No assumption varied (noise_path, cylinder) changes a requirement "
-                                                  "verdict (0 compared")
+    with xr.open_dataset(results, engine="netcdf4") as stored:
+        # the fixed phases are stored as the values the runs used; every other draw is the baseline's, run by run
+        phase = stored["sensors.linear_encoder_mounting_phase"]
+        assert (phase.sel(dataset="ds4__mounting_phases_fixed") == 0.0).all()
+        assert (phase.sel(dataset="ds4") > 0.0).all()
+        gain = stored["sensors.torque_meter_sensitivity_error_range1"]
+        assert (gain.sel(dataset="ds4__contact_damping_x10") == gain.sel(dataset="ds4")).all()
