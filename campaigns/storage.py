@@ -539,7 +539,7 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "spec_hash": spec.spec_hash(),
         "root_seed_entropy": str(spec.root_seed),
         "seeding": "run i of data set d: SeedSequence(root_seed, spawn_key=(d, i)).spawn(2) -> [parameters, "
-                   "sensor noise]",
+                   "sensor noise]; d is the index of the data set named by seeds_from where a data set sets it",
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
         **_provenance_attrs(chunks),
