@@ -8,6 +8,7 @@ sentence are quoted from it, never composed here; a shift is shown only where it
 
 from __future__ import annotations
 
+import json
 from weakref import WeakKeyDictionary
 
 from campaigns import model_form
@@ -82,12 +83,12 @@ def build(b: Builder):
     yield Paragraph(
         "Each variant data set is a baseline data set with one modelling assumption changed: "
         + "; ".join(assumptions) + ". The shift is the variant's mean of a feature minus the baseline's, with its "
-        f"{confidence * 100:g} % Welch interval (a variant's runs have their own seeds, so the two samples are "
-        "independent); a shift whose interval holds zero is shown as its interval only. The requirement verdict of "
-        "the observability sweep is recomputed with every sweep data set replaced by its variant, with the "
-        "analysis's settings. Contact damping, seal friction, the ball-groove friction coefficients and the fixed "
-        "mounting phases are not varied: a spec cannot yet set a parameter per data set (docs/model.md, "
-        "Model-form study, gives their ranges).")
+        f"{confidence * 100:g} % interval: where the variant takes its baseline's seeds (paired: run i of both is "
+        "the same unit with the same noise record under the two assumptions) the t interval of the run-by-run "
+        "differences, otherwise Welch's; a shift whose interval holds zero is shown as its interval only. The "
+        "requirement verdict of the observability sweep is recomputed with every sweep data set replaced by its "
+        "variant, with the analysis's settings. docs/model.md, Model-form study, gives each assumption's range and "
+        "its source.")
     yield Callout(table.attrs["headline"], _CHANGED_TONE if _changed(table) else "info")
     features = [str(f) for f in table["feature"].values]
     rows = [(str(table["assumption"].values[i]), str(variant), feature,
@@ -106,7 +107,10 @@ def build(b: Builder):
         datasets = [str(d) for d in part["dataset"].values
                     if (part["shift_status"].sel(dataset=d).values != model_form.SHIFT_STATUS.index("not_run")).any()]
         rows = [(d, *(_cell(table, variant, d, f) for f in features)) for d in datasets]
+        fixed = json.loads(str(part["variant_parameters"].item()) or "{}")
+        fixes = f" The variant fixes {', '.join(f'{k} = {v:g}' for k, v in fixed.items())} (SI units)." if fixed else ""
         yield b.table(f"Shift of each feature's mean with {variant} against the baseline, per data set, with its "
-                      f"{confidence * 100:g} % interval.", ("Data set", *features), rows,
+                      f"{confidence * 100:g} % interval ({part['pairing'].item()}).{fixes}", ("Data set", *features),
+                      rows,
                       muted=[bool((part["shift_status"].sel(dataset=d).values == insufficient).all())
                              for d in datasets])
