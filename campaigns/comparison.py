@@ -18,45 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-from scipy.stats import chi2, ks_2samp, t
-
-
-def mean_shift(new, old, *, paired: bool, confidence: float = 0.95, min_runs: int = 2) -> tuple[float, float, float]:
-    """Shift of the mean ``mean(new) - mean(old)`` with its Student t interval at ``confidence``: of the run-by-run
-    differences when ``paired`` (the two samples share their seeds run by run, common random numbers: ``new[i]`` and
-    ``old[i]`` are one run under two configurations), else Welch's for independent samples (Welch 1947, Biometrika
-    34, 28-35; the Welch-Satterthwaite degrees of freedom).
-
-    Non-finite values are left out (a pair when either is). NaN throughout when a side has fewer than
-    ``max(min_runs, 2)`` values (a variance needs two). Samples without spread give an interval of zero width.
-
-    Returns
-    -------
-    tuple of float
-        ``(shift, lower, upper)``.
-    """
-    a, b = np.asarray(new, dtype=float), np.asarray(old, dtype=float)
-    if paired:
-        if a.shape != b.shape:
-            raise ValueError(f"a paired shift needs one value per run on both sides, got {a.size} and {b.size}")
-        kept = np.isfinite(a) & np.isfinite(b)
-        a, b = a[kept], b[kept]
-    else:
-        a, b = a[np.isfinite(a)], b[np.isfinite(b)]
-    if min(a.size, b.size) < max(min_runs, 2):
-        return math.nan, math.nan, math.nan
-    if paired:
-        d = a - b
-        shift, variance, dof = float(d.mean()), d.var(ddof=1) / d.size, d.size - 1
-    else:
-        shift = float(a.mean() - b.mean())
-        va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
-        variance = va + vb
-        dof = variance**2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1)) if variance > 0.0 else 1.0
-    if variance == 0.0:
-        return shift, shift, shift
-    half = float(t.ppf(0.5 + confidence / 2, dof) * math.sqrt(variance))
-    return shift, shift - half, shift + half
+from scipy.stats import chi2, ks_2samp
 
 
 def _paired_figures(a: np.ndarray, b: np.ndarray) -> dict[str, float]:

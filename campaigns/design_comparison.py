@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from campaigns.comparison import mean_shift
+from campaigns.analysis import mean_shift
 from campaigns.units import estimate_with_interval
 
 #: Confidence of every interval of the comparison.

@@ -8,7 +8,7 @@ ball-groove friction coefficient). From the campaign's results and analysis this
 module computes, per assumption and variant, per baseline data set and feature:
 
 * the shift of the feature's mean against the baseline with its t interval at the analysis's confidence
-  (:func:`campaigns.comparison.mean_shift`): of the run-by-run differences when the variant takes its baseline's
+  (:func:`campaigns.analysis.mean_shift`): of the run-by-run differences when the variant takes its baseline's
   seeds (``seeds_from``: run ``i`` of both is one unit with one noise record under two assumptions, common random
   numbers), else Welch's for independent samples. A shift is stated only where its interval excludes zero
   (``shift_status``);
@@ -30,8 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis import _OBSERVABILITY_STREAM, _used, observability_sweep, printed_estimate
-from campaigns.comparison import mean_shift
+from campaigns.analysis import _OBSERVABILITY_STREAM, _used, mean_shift, observability_sweep, printed_estimate
 from campaigns.files import write_netcdf
 
 #: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.

@@ -13,9 +13,9 @@ import xarray as xr
 import campaigns
 import twin
 from campaigns import model_form
-from campaigns.analysis import observability_sweep
+from campaigns.analysis import mean_shift, observability_sweep
 from campaigns.bench import BenchCatalog
-from campaigns.comparison import VERDICTS, mean_shift
+from campaigns.comparison import VERDICTS
 from campaigns.spec import read_spec, validate_spec
 
 SPEC = Path(__file__).parents[2] / "campaigns" / "specs" / "model_form.toml"
