@@ -51,8 +51,10 @@ def page_one(b: Builder, executive) -> tuple:
     return blocks[:first_table] + (sentence,) + blocks[first_table:]
 
 
-def _cell(table, variant: str, dataset: str, feature: str) -> str:
-    """A shift as the data resolve it: the value with its interval, only the interval, or why there is none."""
+def _cell(table, variant: str, dataset: str, feature: str, runs: int) -> str:
+    """A shift as the data resolve it: the value with its interval, only the interval, or why there is none; with
+    the runs it rests on when fewer than the ``runs`` of a data set (failed runs: the survivors may not represent the
+    data set)."""
     cell = table.sel(variant=variant, dataset=dataset, feature=feature)
     status = model_form.SHIFT_STATUS[int(cell["shift_status"])]
     if status == "not_run":
@@ -61,13 +63,15 @@ def _cell(table, variant: str, dataset: str, feature: str) -> str:
         return f"insufficient data (n = {int(cell['n_variant'])}, {int(cell['n_baseline'])})"
     lower, upper = (float(v) for v in cell["mean_shift_ci"].values)
     unit = str(table["feature_units"].sel(feature=feature).item())
+    n = min(int(cell["n_variant"]), int(cell["n_baseline"]))
+    runs_note = f"; n = {n} of {runs}" if n < runs else ""
     if status == "not_resolved":
         low, high = model_form.shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
-        return f"not resolved: within {low} to {high}"
+        return f"not resolved: within {low} to {high}{runs_note}"
     value = printed_estimate(float(cell["mean_shift"]), (lower, upper))
     (shown,) = model_form.shown_quantities((value,), 0.5 * (upper - lower), unit, extra=0)
     low, high = model_form.shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
-    return f"{'+' if value >= 0 else ''}{shown} ({low} to {high})"
+    return f"{'+' if value >= 0 else ''}{shown} ({low} to {high}{runs_note})"
 
 
 def build(b: Builder):
@@ -106,7 +110,7 @@ def build(b: Builder):
         part = table.sel(variant=variant)
         datasets = [str(d) for d in part["dataset"].values
                     if (part["shift_status"].sel(dataset=d).values != model_form.SHIFT_STATUS.index("not_run")).any()]
-        rows = [(d, *(_cell(table, variant, d, f) for f in features)) for d in datasets]
+        rows = [(d, *(_cell(table, variant, d, f, b.results.sizes["run"]) for f in features)) for d in datasets]
         fixed = json.loads(str(part["variant_parameters"].item()) or "{}")
         fixes = f" The variant fixes {', '.join(f'{k} = {v:g}' for k, v in fixed.items())} (SI units)." if fixed else ""
         yield b.table(f"Shift of each feature's mean with {variant} against the baseline, per data set, with its "
