@@ -98,11 +98,14 @@ from campaigns.analysis import (
     REQUIREMENT_SOURCE,
     RESOLUTIONS,
     SWEEP_QUANTITIES,
+    _feature_units,
+    _used,
     min_runs_for_quantile_bound,
     minimum_detectable,
     printed_estimate,
     quantile_bound_rank,
     requirement_verdict,
+    sweep_levels,
     sweep_resolution,
 )
 
@@ -176,9 +179,12 @@ def _detection(n: np.ndarray, mean: np.ndarray, squares: np.ndarray, false_alarm
     baseline_n, baseline_mean = n[..., 0, :], mean[..., 0, :]
     margin = (stats.t.ppf(1.0 - false_alarm_rate, dof[..., :1]) * scatter[..., :1]
               * np.sqrt(1.0 + 1.0 / baseline_n))
-    shift = np.abs(mean - baseline_mean[..., None, :])  # the threshold on the side of the shift
+    excess = np.abs(mean - baseline_mean[..., None, :]) - margin[..., None, :]  # threshold on the side of the shift
+    # a level without test-to-test scatter (a feature fixed by the unit alone) flags every test or none
+    deterministic = np.where(np.isnan(excess), math.nan, np.where(excess > 0.0, math.inf, -math.inf))
     with np.errstate(invalid="ignore", divide="ignore"):
-        probability = stats.norm.cdf((shift - margin[..., None, :]) / scatter[..., :, None])
+        probability = stats.norm.cdf(np.where(scatter[..., :, None] > 0.0, excess / scatter[..., :, None],
+                                              deterministic))
     return {"dof": dof, "scatter": scatter, "low": baseline_mean - margin, "high": baseline_mean + margin,
             "probability": probability}
 
@@ -251,7 +257,7 @@ def unit_detection(levels, values, *, false_alarm_rate: float = FALSE_ALARM_RATE
         out["estimate"][u] = estimate if math.isfinite(estimate) else math.inf
         out["bracket"][u] = lower, upper
     if used.sum() >= 2:
-        for level in range(n_levels):
+        for level in np.flatnonzero(out["scatter"] > 0.0):  # without scatter there is nothing to check
             groups = [row[np.isfinite(row)] for row in values[level, used]]
             out["equal_scatter_pvalue"][level] = stats.levene(*groups, center="median").pvalue
             # residuals scaled to the scatter of one test (n / (n - 1): each unit's mean removed)
@@ -510,6 +516,13 @@ def within_unit_statement(ds: xr.Dataset) -> str:
         ds[f"within_unit_{stem}"].values, p_scatter, p_normal, strict=True) if min(a, b) < limit]
     check = (f"rejected at {', '.join(rejected)}, so the units' thresholds are not those of their own scatter"
              if rejected else "not rejected")
+    if np.isnan(p_scatter).all() and np.isnan(p_normal).all():
+        return (f"{verdict}: within-unit minimum detectable {quantity} growth of the "
+                f"{DESIGN_REVIEW_QUANTILE * 100:g}th-percentile unit {figure(DESIGN_REVIEW_QUANTILE)}"
+                f"{'; ' + '; '.join(parts) if parts else ''} ({used} units, {counts} ok repeats per unit and level, "
+                f"{ds.sizes['level']} levels) {against}; the feature does not vary from test to test (no scatter "
+                "at any level): each unit's tests give one value per level, so every growth that moves it is "
+                "detected and the figure is the first such sweep level")
     return (
         f"{verdict}: within-unit minimum detectable {quantity} growth of the "
         f"{DESIGN_REVIEW_QUANTILE * 100:g}th-percentile unit {figure(DESIGN_REVIEW_QUANTILE)}"
@@ -522,3 +535,79 @@ def within_unit_statement(ds: xr.Dataset) -> str:
         f"{check} (Brown-Forsythe and D'Agostino-Pearson smallest p = {np.nanmin(p_scatter):.2g} and "
         f"{np.nanmin(p_normal):.2g}, at {CHECK_SIGNIFICANCE:g} over {ds.sizes['level']} levels)"
     )
+
+
+def unit_values(results: xr.Dataset, feature: str, datasets: list[str], condition: str = "backlash",
+                reference: str | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """A within-unit campaign's ``values[level, unit, repeat]`` of ``feature`` along its observability sweep.
+
+    Parameters
+    ----------
+    results : xarray.Dataset
+        A campaign's ``results.nc`` with the ``unit`` and ``repeat`` coordinates along ``run`` (the spec's
+        ``[units]``).
+    feature : str
+    datasets, condition, reference
+        The sweep (``observability`` of the spec; :func:`campaigns.analysis.sweep_levels`).
+
+    Returns
+    -------
+    tuple
+        The fault sizes [SI] in increasing order (the reference first), the values (NaN: a run not ok or a
+        non-finite feature, as the analysis excludes them) and the data sets in the order of the levels.
+    """
+    sizes, _ = sweep_levels(results, datasets, condition, reference)
+    order = np.argsort(sizes, kind="stable")
+    unit, repeat = results["unit"].values, results["repeat"].values
+    values = np.full((len(datasets), int(unit.max()) + 1, int(repeat.max()) + 1), math.nan)
+    used = _used(results, feature)
+    for level, d in enumerate(order):
+        row = results[feature].sel(dataset=datasets[d]).values
+        values[level, unit, repeat] = np.where(used.sel(dataset=datasets[d]).values, row, math.nan)
+    return sizes[order], values, [datasets[d] for d in order]
+
+
+def within_unit_analysis(results: xr.Dataset, features: list[str], observability: dict, *, seed: int = 0,
+                         stream: int = 0, **options) -> xr.Dataset:
+    """:func:`within_unit_dataset` of every feature of a within-unit campaign, along a ``feature`` dimension.
+
+    Parameters
+    ----------
+    results : xarray.Dataset
+        The campaign's ``results.nc`` (with ``unit`` and ``repeat`` along ``run``).
+    features : list of str
+    observability : dict
+        The spec's ``observability`` table (sweep, condition, reference, requirement and its source).
+    seed, stream : int
+        The bootstrap of feature ``f`` draws from ``SeedSequence(seed, spawn_key=(stream, f))``.
+    **options
+        ``false_alarm_rate``, ``power``, ``n_boot``, ``confidence`` of :func:`within_unit_dataset`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The variables of :func:`within_unit_dataset` with a ``feature`` dimension (the fault levels once, with the
+        ``level_dataset`` coordinate naming each level's data set), and its settings as global attributes.
+    """
+    condition = observability.get("condition", "backlash")
+    stem = SWEEP_QUANTITIES[condition][0].replace(" ", "_")
+    requirement = {"requirement": observability.get("requirement") or BACKLASH_REQUIREMENT,
+                   "requirement_source": observability.get("requirement_source") or REQUIREMENT_SOURCE}
+    per_feature = []
+    for f, feature in enumerate(features):
+        levels, values, names = unit_values(results, feature, observability["sweep"], condition,
+                                            observability.get("reference"))
+        per_feature.append(within_unit_dataset(
+            levels, values, feature_units=str(results[feature].attrs.get("units", "1")), condition=condition,
+            seed=np.random.SeedSequence(seed, spawn_key=(stream, f)), **requirement, **options))
+    levels_name = f"within_unit_{stem}"
+    combined = xr.concat([ds.drop_vars(levels_name) for ds in per_feature], dim="feature",
+                         combine_attrs="override")
+    combined[levels_name] = per_feature[0][levels_name]
+    in_feature_units = _feature_units([str(results[f].attrs.get("units", "1")) for f in features])
+    for name in ("within_unit_scatter", "within_unit_threshold_low", "within_unit_threshold_high"):
+        combined[name].attrs.pop("units")
+        combined[name].attrs.update(in_feature_units)
+    return combined.assign_coords(
+        feature=("feature", np.array(features, dtype=object)),
+        level_dataset=("level", np.array(names, dtype=object), {"long_name": "data set of the fault level"}))
