@@ -958,7 +958,17 @@ def analysis_dataset(
         combined = xr.concat([s.drop_vars(levels) for s in per_feature], dim="feature")
         analysis = analysis.merge(combined.assign_coords(feature=analysis["feature"]))
         analysis[levels] = per_feature[0][levels]
-    if within_unit and sweep:
+    else:
+        statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
+        analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object),
+                                           _VERDICT_ATTRS)
+        analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object),
+                                             _STATEMENT_ATTRS)
+        analysis["runs_to_decide"] = ("feature", np.full(len(features), math.nan), {"units": "1"})
+        analysis["runs_to_decide_reason"] = ("feature", np.full(len(features), "no observability sweep",
+                                                                dtype=object))
+    within_unit_settings = {}
+    if within_unit:  # a spec with [units] has a sweep (campaigns.spec)
         from campaigns.within_unit import within_unit_analysis  # here: within_unit builds on this module
 
         analysis["requirement_statement"] = ("feature", np.array(
@@ -971,15 +981,6 @@ def analysis_dataset(
                                      confidence=confidence)
         within_unit_settings = found.attrs
         analysis = analysis.merge(found.drop_attrs(deep=False), combine_attrs="override")
-    else:
-        statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
-        analysis["requirement_verdict"] = ("feature", np.full(len(features), "insufficient data", dtype=object),
-                                           _VERDICT_ATTRS)
-        analysis["requirement_statement"] = ("feature", np.full(len(features), statement, dtype=object),
-                                             _STATEMENT_ATTRS)
-        analysis["runs_to_decide"] = ("feature", np.full(len(features), math.nan), {"units": "1"})
-        analysis["runs_to_decide_reason"] = ("feature", np.full(len(features), "no observability sweep",
-                                                                dtype=object))
     analysis.attrs = {
         "Conventions": "CF-1.8",
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",
@@ -998,7 +999,7 @@ def analysis_dataset(
         "requirement": requirement[0],
         "requirement_units": SWEEP_QUANTITIES[condition][1],
         "requirement_source": requirement[1],
-        **(within_unit_settings if within_unit and sweep else {}),
+        **within_unit_settings,
     }
     robustness = control_robustness(results, correlate=bootstrap_correlation, verdict_rule=requirement_verdict,
                                     features=features, n_boot=n_boot, confidence=confidence, seed=seed,
