@@ -319,6 +319,15 @@ class Observability(_Strict):
     requirement_source: str = ""
 
 
+#: Rows of the bench's table that change from test to test of one unit, besides the scene conditions (room
+#: temperature, supply pressure): the load cell's repeatability (a per-test scatter by definition) and the encoders'
+#: mounting phases (where a test's start falls within a 4 µm or 2.5 µm signal period moves with the start position,
+#: which the screw's thermal growth alone shifts by ~18 µm over Table 9.5's 20 K); docs/campaigns.md, "Within-unit
+#: campaigns", argues every row.
+PER_TEST_BY_NATURE = ("sensors.load_cell_repeatability_error", "sensors.linear_encoder_mounting_phase",
+                      "sensors.torque_meter_encoder_mounting_phase")
+
+
 def _unit_floor(count: int) -> int:
     if count < MIN_UNITS:
         raise ValueError(f"{count} units is below the floor of {MIN_UNITS}: with fewer, not even the largest unit "
@@ -342,8 +351,9 @@ class Units(_Strict):
     must be ``count * repeats``. The rows of the uncertainty table named in ``per_test`` are redrawn from test to
     test; every other row is a fixed error of the unit, drawn once per unit and shared by all its tests in every
     data set (:mod:`campaigns.sampling`). ``per_test`` defaults to the table's ``scene.*`` rows (the test
-    conditions). The fault levels are the observability sweep's data sets; analysis adds the within-unit verdict
-    (:mod:`campaigns.within_unit`) beside the between-unit one, which then uses one test per unit (repeat 0).
+    conditions) and its rows among :data:`PER_TEST_BY_NATURE`. The fault levels are the observability sweep's data
+    sets; analysis adds the within-unit verdict (:mod:`campaigns.within_unit`) beside the between-unit one, which
+    then uses one test per unit (repeat 0).
     """
 
     count: Annotated[int, AfterValidator(_unit_floor)]
@@ -497,12 +507,13 @@ class CampaignSpec(_Strict):
 
     def per_test_targets(self) -> list[str]:
         """The targets redrawn from test to test in a within-unit campaign (``units.per_test``, by default the
-        table's ``scene.*`` rows); empty without ``[units]``."""
+        table's ``scene.*`` rows and its rows among :data:`PER_TEST_BY_NATURE`); empty without ``[units]``."""
         if self.units is None:
             return []
         if self.units.per_test is not None:
             return list(self.units.per_test)
-        return [u.target for u in self.uncertainties if split_targets({u.target: None})[0]]
+        return [u.target for u in self.uncertainties
+                if split_targets({u.target: None})[0] or u.target in PER_TEST_BY_NATURE]
 
     def unit_draws(self, run_index: int, targets: list[str]) -> dict:
         """What :func:`campaigns.sampling.sample_run` needs of ``[units]`` for run ``run_index``: the unit it tests
@@ -529,6 +540,8 @@ class CampaignSpec(_Strict):
             del spec["control_limits"]
         if self.units is None:
             del spec["units"]
+        else:  # the rows as sampled, so that a change of the default is a change of the hash
+            spec["units"]["per_test"] = self.per_test_targets()
         for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
             if not dataset["parameters"]:
                 del dataset["parameters"]

@@ -72,6 +72,8 @@ def test_the_per_test_rows_default_to_the_scene_conditions(within_unit_spec):
     targets = [d.target for d in within_unit_spec.distributions()]
     assert within_unit_spec.per_test_targets() == [targets[k] for k in PER_TEST]
     assert within_unit_spec.unit_draws(7, targets) == {"unit": 7 // REPEATS, "per_unit": PER_UNIT}
+    # stored as sampled: the hash changes with the rows, not with how they were written
+    assert within_unit_spec.canonical()["spec"]["units"]["per_test"] == [targets[k] for k in PER_TEST]
 
 
 def test_a_units_fixed_errors_are_shared_by_all_its_tests_and_the_per_test_rows_are_redrawn(within_unit_spec):
@@ -240,3 +242,17 @@ def test_units_need_an_observability_sweep_with_one_level_per_data_set(tmp_path)
         '"b5"]', '"b1again"]')
     with pytest.raises(SpecError, match="units: the sweep's data sets must each set a different backlash"):
         load(write_spec(tmp_path, twice))
+
+
+@pytest.mark.parametrize("name, sweep", [
+    ("backlash_within_unit.toml", ["ds4", "b0_5", "b1", "b2", "ds6"]),
+    ("preload_loss_within_unit.toml", ["p1000", "p950", "p900", "p800", "p600"]),
+])
+def test_the_shipped_within_unit_specs_validate_with_the_default_per_test_rows(name, sweep):
+    spec = campaigns.load_spec(SYNTHETIC_SPEC.parents[3] / "campaigns" / "specs" / name)
+    assert (spec.units.count, spec.units.repeats, spec.runs_per_dataset) == (60, 5, 300)
+    assert [d.name for d in spec.datasets] == spec.observability.sweep == sweep
+    assert spec.per_test_targets() == [
+        "scene.room_temperature", "scene.supply_pressure", "sensors.load_cell_repeatability_error",
+        "sensors.linear_encoder_mounting_phase", "sensors.torque_meter_encoder_mounting_phase"]
+    assert len(spec.distributions()) - len(spec.per_test_targets()) > 40  # every other row: a fixed error of the unit
