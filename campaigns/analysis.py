@@ -941,7 +941,7 @@ def analysis_dataset(
     condition = observability.get("condition", "backlash")
     requirement = (observability.get("requirement") or BACKLASH_REQUIREMENT, observability.get("requirement_source")
                    or REQUIREMENT_SOURCE)
-    within_unit = stored_spec.get("units") is not None
+    within_unit = stored_spec.get("units") is not None and bool(sweep)  # a fidelity audit's runs keep units, no sweep
     # A unit's tests share its fixed errors: between units, one test per unit keeps the sweep's runs independent.
     between_units = results.isel(run=results["repeat"].values == 0) if within_unit else results
     if sweep:
@@ -968,7 +968,7 @@ def analysis_dataset(
         analysis["runs_to_decide_reason"] = ("feature", np.full(len(features), "no observability sweep",
                                                                 dtype=object))
     within_unit_settings = {}
-    if within_unit:  # a spec with [units] has a sweep (campaigns.spec)
+    if within_unit:
         from campaigns.within_unit import within_unit_analysis  # here: within_unit builds on this module
 
         analysis["requirement_statement"] = ("feature", np.array(

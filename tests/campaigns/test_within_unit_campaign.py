@@ -23,6 +23,7 @@ from scipy import stats
 import campaigns
 from campaigns.analysis import analysis_dataset, summary
 from campaigns.execution import build_request
+from campaigns.fidelity_audit import full_fidelity_variant
 from campaigns.replay import replay_run
 from campaigns.sampling import UNIT_STREAM, draw, sample
 from campaigns.spec import SpecError
@@ -96,6 +97,11 @@ def test_each_test_has_its_own_noise(within_unit_spec):
     first, second = (build_request(within_unit_spec, samples, 1, run).noise_rng().normal() for run in (0, 1))
     other_level = build_request(within_unit_spec, samples, 2, 0).noise_rng().normal()
     assert len({first, second, other_level}) == 3
+
+
+def test_the_fidelity_audit_reruns_the_same_tests_of_the_same_units(within_unit_spec):
+    audit = full_fidelity_variant(within_unit_spec, 10)
+    np.testing.assert_array_equal(sample(audit), sample(within_unit_spec)[:, :10])
 
 
 def test_a_per_unit_row_made_per_test_changes_that_row_only(tmp_path, within_unit_spec):
