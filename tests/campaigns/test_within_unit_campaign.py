@@ -23,6 +23,7 @@ from scipy import stats
 import campaigns
 from campaigns.analysis import analysis_dataset, summary
 from campaigns.execution import build_request
+from campaigns.export import runs_table
 from campaigns.fidelity_audit import full_fidelity_variant
 from campaigns.replay import replay_run
 from campaigns.sampling import UNIT_STREAM, draw, sample
@@ -130,6 +131,13 @@ def test_results_name_the_unit_and_the_repeat_of_every_run(within_unit_results):
         assert f"spawn_key=({UNIT_STREAM}, u)" in results.attrs["seeding"]
         offsets = results["synthetic.offset"].values.reshape(len(LEVELS), UNITS, REPEATS)
         assert (offsets == offsets[:1, :, :1]).all()
+
+
+def test_the_runs_table_of_an_export_names_the_unit_and_the_repeat(within_unit_results):
+    with xr.open_dataset(within_unit_results) as results:
+        table = runs_table(results)
+    row = table[(table["dataset"] == "b2") & (table["run"] == 100)].iloc[0]
+    assert (row["unit"], row["repeat"]) == (100 // REPEATS, 100 % REPEATS)
 
 
 def test_a_within_unit_run_replays_bit_for_bit(within_unit_results):
