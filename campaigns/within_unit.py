@@ -2,11 +2,12 @@
 
 The observability sweep of :mod:`campaigns.analysis` answers a between-unit question: every run draws fresh
 tolerances, so its threshold separates one unknown unit from a population of healthy ones. A PHM bench tests the
-same unit repeatedly: that unit's fixed errors (encoder phase errors, mounting phases, sensitivities, lead error)
-stay fixed, and only test-to-test uncertainties (room temperature, supply pressure, electrical noise) change. The
-data of a within-unit campaign are ``values[level, unit, repeat]``: ``U`` units (tolerances drawn once per unit),
-tested at fault sizes ``levels`` (the first, 0, is the unit's own baseline) with ``R`` repeats per level that
-redraw only the test-to-test uncertainties. Non-finite values are failed runs: excluded and counted.
+same unit repeatedly: that unit's fixed errors (encoder phase errors, sensitivities, lead error) stay fixed, and
+only test-to-test uncertainties (room temperature, supply pressure, the encoders' mounting phases, electrical noise)
+change (which rows are which: docs/campaigns.md, "Within-unit campaigns"). The data of a within-unit campaign are
+``values[level, unit, repeat]``: ``U`` units (tolerances drawn once per unit), tested at fault sizes ``levels`` (the
+first, 0, is the unit's own baseline) with ``R`` repeats per level that redraw only the test-to-test uncertainties.
+Non-finite values are failed runs: excluded and counted.
 
 The rule: a unit's threshold from its own baseline and a scatter pooled over units
 --------------------------------------------------------------------------------------
@@ -80,6 +81,13 @@ with fewer, not even the largest unit bounds the 95th-percentile unit from above
 removed), and the check of the shared scatter needs 3: the deviations of 2 repeats from their median are equal (half
 their difference), so a Brown-Forsythe test of 2-repeat units has no within-unit variation to compare with. The rule
 itself is valid from there on; more repeats shrink the estimation noise above.
+
+In a campaign
+-------------
+A spec with ``[units]`` (:class:`campaigns.spec.Units`) runs the units' tests at every level of its observability
+sweep; :func:`unit_values` reads ``values[level, unit, repeat]`` from its ``results.nc`` and
+:func:`within_unit_analysis` adds this module's variables, per feature, to ``analysis.nc``
+(:func:`campaigns.analysis.analysis_dataset`), whose between-unit sweep then uses one test per unit.
 """
 
 from __future__ import annotations
