@@ -270,3 +270,16 @@ def test_the_shipped_within_unit_specs_validate_with_the_default_per_test_rows(n
         "scene.room_temperature", "scene.supply_pressure", "sensors.load_cell_repeatability_error",
         "sensors.linear_encoder_mounting_phase", "sensors.torque_meter_encoder_mounting_phase"]
     assert len(spec.distributions()) - len(spec.per_test_targets()) > 40  # every other row: a fixed error of the unit
+
+
+def test_twin_campaign_analyze_prints_the_within_unit_statement_after_the_between_unit_one(
+        within_unit_results, tmp_path, capsys):
+    from app.cli import main  # the CLI on the library's results, as a user runs it
+
+    assert main(["campaign", "analyze", str(within_unit_results), "--out", str(tmp_path / "analysis.nc")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    between = next(k for k, line in enumerate(lines) if line.startswith("backlash_feature: "))
+    assert lines[between + 1].startswith("backlash_feature within unit: ")
+    with xr.open_dataset(tmp_path / "analysis.nc") as analysis:
+        assert lines[between + 1].endswith(
+            analysis["within_unit_requirement_statement"].sel(feature="backlash_feature").item())
