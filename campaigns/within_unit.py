@@ -395,15 +395,15 @@ def within_unit_dataset(levels, values, *, feature_units: str = "1", condition: 
         {
             f"within_unit_{stem}": ("level", levels, {"units": unit, "long_name": f"{quantity} of the level, from "
                                                                                   "the unit's baseline"}),
-            "within_unit_n_used": (("level", "unit"), units["n_used"], dimensionless | {
+            "within_unit_n_used": (("level", "unit"), units["n_used"].astype(np.int32), dimensionless | {
                 "long_name": "ok repeats of the unit at the level"}),
-            "within_unit_n_excluded": (("level", "unit"), units["n_excluded"], dimensionless | {
+            "within_unit_n_excluded": (("level", "unit"), units["n_excluded"].astype(np.int32), dimensionless | {
                 "long_name": "failed (non-finite) repeats of the unit at the level, excluded"}),
             "within_unit_scatter": ("level", units["scatter"], {
                 "units": feature_units,
                 "long_name": "test-to-test standard deviation at the level, pooled over the used units after "
                              "removing each unit's own mean"}),
-            "within_unit_scatter_dof": ("level", units["dof"], dimensionless | {
+            "within_unit_scatter_dof": ("level", units["dof"].astype(np.int32), dimensionless | {
                 "long_name": "degrees of freedom of within_unit_scatter (sum over used units of repeats - 1)"}),
             "within_unit_equal_scatter_pvalue": ("level", units["equal_scatter_pvalue"], dimensionless | {
                 "long_name": "Brown-Forsythe test of equal test-to-test variances across units at the level "
@@ -446,16 +446,17 @@ def within_unit_dataset(levels, values, *, feature_units: str = "1", condition: 
                              "units and order statistics of the units: lower = a sweep level not detected, upper = "
                              "a sweep level detected (inf: not reached)",
                 "confidence": confidence, "n_boot": n_boot}),
-            "within_unit_n_units_used": ((), found["n_units_used"], dimensionless | {
+            "within_unit_n_units_used": ((), np.int32(found["n_units_used"]), dimensionless | {
                 "long_name": f"units with at least {min_repeats} ok repeats at every level",
                 "min_units": found["min_units"]}),
             "within_unit_requirement_verdict": ((), found["verdict"], {
                 "long_name": f"verdict on the requirement for the {DESIGN_REVIEW_QUANTILE * 100:g}th-percentile "
                              "unit: met / not met / undetermined / insufficient data"}),
         },
-        coords={
-            "level": ("level", np.arange(len(levels)), {"long_name": "index of the fault level (0: baseline)"}),
-            "unit": ("unit", np.arange(units["used"].size), {"long_name": "index of the unit"}),
+        coords={  # 32-bit integers: CF 1.8 (Sec. 2.2) has no 64-bit type
+            "level": ("level", np.arange(len(levels), dtype=np.int32), {
+                "long_name": "index of the fault level (0: baseline)"}),
+            "unit": ("unit", np.arange(units["used"].size, dtype=np.int32), {"long_name": "index of the unit"}),
             "unit_quantile": ("unit_quantile", found["quantiles"], {
                 "units": "1", "long_name": "quantile of the unit population"}),
             "bound": ("bound", np.array(["lower", "upper"], dtype=object)),

@@ -283,3 +283,24 @@ def test_twin_campaign_analyze_prints_the_within_unit_statement_after_the_betwee
     with xr.open_dataset(tmp_path / "analysis.nc") as analysis:
         assert lines[between + 1].endswith(
             analysis["within_unit_requirement_statement"].sel(feature="backlash_feature").item())
+
+
+def test_the_cf_compliance_checker_finds_no_high_priority_issue_in_the_within_unit_files(within_unit_results, tmp_path):
+    """results.nc with its unit and repeat coordinates, analysis.nc with the within-unit variables (CF 1.8: no
+    failed high-priority check, no crashed check; the 64-bit integers CF has no type for are 32-bit)."""
+    pytest.importorskip("compliance_checker")
+    from compliance_checker.base import BaseCheck
+    from compliance_checker.suite import CheckSuite
+
+    suite = CheckSuite()
+    suite.load_all_available_checkers()
+    analysis = campaigns.analyze(within_unit_results, tmp_path / "analysis.nc", n_boot=100)
+
+    def failed(result) -> bool:
+        value = result.value
+        return value[0] < value[1] if isinstance(value, tuple) else value is False
+
+    for path in (within_unit_results, analysis):
+        groups, errors = suite.run_all(suite.load_dataset(str(path)), ["cf:1.8"])["cf:1.8"]
+        assert [(r.name, r.msgs) for r in groups if r.weight == BaseCheck.HIGH and failed(r)] == [], path.name
+        assert errors == {}, path.name
