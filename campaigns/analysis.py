@@ -74,6 +74,8 @@ SWEEP_QUANTITIES = {"backlash": ("backlash", "m", 1e6, "µm"), "preload": ("prel
 _OBSERVABILITY_STREAM = 1_000_003
 #: Spawn-key tag of the first-order index bootstrap's random stream.
 _SENSITIVITY_STREAM = 1_000_033
+#: Spawn-key tag of the within-unit bootstrap's random stream (:mod:`campaigns.within_unit`).
+_WITHIN_UNIT_STREAM = 1_000_037
 #: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
 _EXPLAINED = 1e-18
 
@@ -638,6 +640,15 @@ def _used(results: xr.Dataset, feature: str) -> xr.DataArray:
     return (results["status"] == "ok") & np.isfinite(results[feature])
 
 
+def sweep_levels(results: xr.Dataset, datasets: list[str], condition: str = "backlash",
+                 reference: str | None = None) -> tuple[np.ndarray, int]:
+    """The fault size [SI] of each sweep data set, ``|condition - condition of the reference|``, and the index of the
+    reference (``reference`` named, else the data set where the condition is zero)."""
+    values = np.array([float(results[f"condition_{condition}"].sel(dataset=n)) for n in datasets])
+    index = datasets.index(reference) if reference is not None else int(np.flatnonzero(values == 0.0)[0])
+    return np.abs(values - values[index]), index
+
+
 def observability_sweep(
     results: xr.Dataset,
     feature: str,
@@ -690,9 +701,7 @@ def observability_sweep(
     """
     quantity, unit, _, _ = SWEEP_QUANTITIES[condition]
     stem = quantity.replace(" ", "_")
-    values = np.array([float(results[f"condition_{condition}"].sel(dataset=n)) for n in datasets])
-    reference = datasets.index(reference) if reference is not None else int(np.flatnonzero(values == 0.0)[0])
-    backlash = np.abs(values - values[reference])  # the fault size of each sweep data set
+    backlash, reference = sweep_levels(results, datasets, condition, reference)
     used = _used(results, feature)
     samples = [results[feature].sel(dataset=n).values[used.sel(dataset=n).values] for n in datasets]
     n_used = {n: len(s) for n, s in zip(datasets, samples, strict=False)}
@@ -964,15 +973,19 @@ def analysis_dataset(
         "status": ("status", np.array(statuses, dtype=object)),
     }
     analysis = xr.Dataset(data_vars, coords=coords)
-    observability = json.loads(results.attrs["spec_json"])["spec"]["observability"]
+    stored_spec = json.loads(results.attrs["spec_json"])["spec"]
+    observability = stored_spec["observability"]
     sweep = observability["sweep"]
     condition = observability.get("condition", "backlash")
     requirement = (observability.get("requirement") or BACKLASH_REQUIREMENT, observability.get("requirement_source")
                    or REQUIREMENT_SOURCE)
+    within_unit = stored_spec.get("units") is not None and bool(sweep)  # a fidelity audit's runs keep units, no sweep
+    # A unit's tests share its fixed errors: between units, one test per unit keeps the sweep's runs independent.
+    between_units = results.isel(run=results["repeat"].values == 0) if within_unit else results
     if sweep:
         per_feature = [
             observability_sweep(
-                results, feature, sweep, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
+                between_units, feature, sweep, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
                 confidence=confidence, min_runs=min_detection_runs,
                 seed=np.random.SeedSequence(seed, spawn_key=(_OBSERVABILITY_STREAM, f)), condition=condition,
                 reference=observability.get("reference"), requirement=requirement[0], requirement_source=requirement[1],
@@ -992,6 +1005,20 @@ def analysis_dataset(
         analysis["runs_to_decide"] = ("feature", np.full(len(features), math.nan), {"units": "1"})
         analysis["runs_to_decide_reason"] = ("feature", np.full(len(features), "no observability sweep",
                                                                 dtype=object))
+    within_unit_settings = {}
+    if within_unit:
+        from campaigns.within_unit import within_unit_analysis  # here: within_unit builds on this module
+
+        analysis["requirement_statement"] = ("feature", np.array(
+            [f"{statement}; between units: one test per unit (repeat 0 of each of the "
+             f"{between_units.sizes['run']} units), since a unit's tests share its fixed errors and are not "
+             "independent draws" for statement in analysis["requirement_statement"].values], dtype=object),
+            _STATEMENT_ATTRS)
+        found = within_unit_analysis(results, features, observability, seed=seed, stream=_WITHIN_UNIT_STREAM,
+                                     false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
+                                     confidence=confidence)
+        within_unit_settings = found.attrs
+        analysis = analysis.merge(found.drop_attrs(deep=False), combine_attrs="override")
     analysis.attrs = {
         "Conventions": "CF-1.8",
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",
@@ -1010,6 +1037,7 @@ def analysis_dataset(
         "requirement": requirement[0],
         "requirement_units": SWEEP_QUANTITIES[condition][1],
         "requirement_source": requirement[1],
+        **within_unit_settings,
     }
     robustness = control_robustness(results, correlate=bootstrap_correlation, verdict_rule=requirement_verdict,
                                     features=features, n_boot=n_boot, confidence=confidence, seed=seed,
@@ -1032,13 +1060,17 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     Returns
     -------
     tuple of list of str
-        ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature, and one
-        warning per feature with data sets below ``min_ok_runs`` ok runs.
+        ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature (a within-unit campaign's
+        ``"<feature> within unit: <within_unit_requirement_statement>"`` after it), and one warning per feature
+        with data sets below ``min_ok_runs`` ok runs.
     """
     statements, warnings = [], []
     min_ok_runs = int(analysis.attrs["min_ok_runs"])
     for feature in (str(f) for f in analysis["feature"].values):
         statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
+        if "within_unit_requirement_statement" in analysis:
+            statements.append(f"{feature} within unit: "
+                              f"{analysis['within_unit_requirement_statement'].sel(feature=feature).item()}")
         n_used = analysis["n_used"].sel(feature=feature)
         short = [f"{d} ({_runs(int(n))})" for d, n in zip(analysis["dataset"].values, n_used.values, strict=False)
                  if n < min_ok_runs]

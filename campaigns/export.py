@@ -4,8 +4,9 @@
 variable per column, every column with its unit in the header (``backlash_feature [m]``, ``[1]`` for a ratio):
 
 ``runs``
-    one row per run: data set, run, status, failure reason, the data set's conditions, every sampled parameter, every
-    feature, the loop margins, the integrator, ``t_reached`` and the wall time;
+    one row per run: data set, run (with unit and repeat in a within-unit campaign), status, failure reason, the
+    data set's conditions, every sampled parameter, every feature, the loop margins, the integrator, ``t_reached``
+    and the wall time;
 ``features`` (analysis)
     per data set and feature: runs used and excluded, whether the data suffice, mean and standard deviation;
 ``sensitivity`` (analysis)
@@ -53,6 +54,9 @@ def runs_table(results: xr.Dataset) -> pd.DataFrame:
         "dataset": np.repeat(names, len(runs)),
         "run": np.tile(runs, len(names)),
     }
+    for name in ("unit", "repeat"):  # a within-unit campaign: which unit, which of its tests
+        if name in results.coords:
+            columns[name] = np.tile(results[name].values, len(names))
     by_role = {role: [str(v) for v in results.data_vars if results[v].attrs.get("role") == role]
                for role in ("sampled", "feature", "margin")}
     for name in ("status", "failure_reason"):

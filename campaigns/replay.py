@@ -84,7 +84,8 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
     d = names.index(dataset)
     distributions = [Distribution(**row) for row in canonical["resolved"]]
     targets = [dist.target for dist in distributions]
-    values = sample_run(distributions, spec.root_seed, spec.seed_index(d), run, spec.fixed_columns(d, targets))
+    values = sample_run(distributions, spec.root_seed, spec.seed_index(d), run, spec.fixed_columns(d, targets),
+                        **spec.unit_draws(run, targets))
     recorded = np.array([float(stored[t].values[d, run]) for t in targets])
     if not np.array_equal(values, recorded):
         differ = [t for t, a, b in zip(targets, values, recorded, strict=False) if a != b]

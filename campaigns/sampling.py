@@ -9,6 +9,13 @@ run ``i`` of both draws the same values and the same noise). Its two children
 * child 0: the uncertain values, drawn in the order of the uncertainty table;
 * child 1: the run's sensor-noise :class:`numpy.random.Generator`.
 
+A within-unit campaign (the spec's ``[units]``: run ``i`` tests unit ``u = i // repeats``) draws the unit's fixed
+errors from a stream of the unit alone, ``SeedSequence(root_seed, spawn_key=(UNIT_STREAM, u))``, the same in every
+data set: each row that is not redrawn from test to test takes its value from that stream (the whole table is drawn
+from it in table order, so moving a row between per-test and per-unit changes that row only), and the per-test rows
+and the noise come from the run's own ``(d, i)`` streams as above. The unit's tests at every fault level therefore
+share its fixed errors (common random numbers across the unit's tests).
+
 No state is carried from run to run, so any run can be replayed alone
 (:func:`sample_run` and :func:`noise_generator` with its indices), and the
 values do not depend on how runs are grouped into chunks or spread over workers.
@@ -28,6 +35,9 @@ from campaigns.distributions import Distribution
 
 #: Index of each child of a run's seed sequence.
 PARAMETER_STREAM, NOISE_STREAM = 0, 1
+#: First spawn key of a unit's stream: no data set index reaches it (a spec holds a few dozen data sets), so a unit's
+#: stream ``(UNIT_STREAM, u)`` is never a run's ``(d, i)``.
+UNIT_STREAM = 2**31 - 1
 
 
 def run_seed_sequence(root_seed: int, dataset_index: int, run_index: int) -> np.random.SeedSequence:
@@ -42,6 +52,11 @@ def _stream(root_seed: int, dataset_index: int, run_index: int, which: int) -> n
 def noise_generator(root_seed: int, dataset_index: int, run_index: int) -> np.random.Generator:
     """The sensor-noise generator of one run (child 1 of its seed sequence)."""
     return _stream(root_seed, dataset_index, run_index, NOISE_STREAM)
+
+
+def unit_generator(root_seed: int, unit: int) -> np.random.Generator:
+    """The generator of unit ``unit``'s fixed errors in a within-unit campaign (see the module docstring)."""
+    return np.random.default_rng(np.random.SeedSequence(root_seed, spawn_key=(UNIT_STREAM, unit)))
 
 
 def draw(distribution: Distribution, rng: np.random.Generator) -> float:
@@ -78,15 +93,22 @@ def _truncated_normal(mean: float, sigma: float, low: float, high: float, rng: n
 
 
 def sample_run(distributions: Sequence[Distribution], root_seed: int, seed_index: int, run_index: int,
-               fixed: Mapping[int, float] | None = None) -> np.ndarray:
+               fixed: Mapping[int, float] | None = None, *, unit: int | None = None,
+               per_unit: Sequence[int] = ()) -> np.ndarray:
     """The uncertain values of one run, in table order (replays that run alone).
 
     ``seed_index`` is the data set whose streams the run uses (its own index unless the data set takes another's
     seeds: ``CampaignSpec.seed_index``). ``fixed`` maps table columns to the values a data set fixes them at
     (``CampaignSpec.fixed_columns``): every value is drawn first, so fixing one leaves the others as they were.
+    In a within-unit campaign ``unit`` is the unit the run tests and ``per_unit`` the columns drawn from that unit's
+    stream (``CampaignSpec.unit_draws``); the fixed values still win.
     """
     rng = _stream(root_seed, seed_index, run_index, PARAMETER_STREAM)
     values = np.array([draw(d, rng) for d in distributions], dtype=float)
+    if unit is not None:
+        unit_rng = unit_generator(root_seed, unit)
+        unit_values = np.array([draw(d, unit_rng) for d in distributions], dtype=float)
+        values[list(per_unit)] = unit_values[list(per_unit)]
     for column, value in (fixed or {}).items():
         values[column] = value
     return values
@@ -111,5 +133,5 @@ def sample(spec) -> np.ndarray:
     for d in range(len(spec.datasets)):
         seed_index, fixed = spec.seed_index(d), spec.fixed_columns(d, targets)
         for i in range(spec.runs_per_dataset):
-            out[d, i] = sample_run(distributions, spec.root_seed, seed_index, i, fixed)
+            out[d, i] = sample_run(distributions, spec.root_seed, seed_index, i, fixed, **spec.unit_draws(i, targets))
     return out

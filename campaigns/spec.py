@@ -39,6 +39,7 @@ from campaigns.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog, spell
 from campaigns.control_limits import ControlLimits
 from campaigns.distributions import Distribution, DistributionKind
 from campaigns.ranges import resolve, shape_problems
+from campaigns.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
 from twin.errors import InputError
 from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
@@ -318,6 +319,48 @@ class Observability(_Strict):
     requirement_source: str = ""
 
 
+#: Rows of the bench's table that change from test to test of one unit, besides the scene conditions (room
+#: temperature, supply pressure): the load cell's repeatability (a per-test scatter by definition) and the encoders'
+#: mounting phases (where a test's start falls within a 4 µm or 2.5 µm signal period moves with the start position,
+#: which the screw's thermal growth alone shifts by ~18 µm over Table 9.5's 20 K); docs/campaigns.md, "Within-unit
+#: campaigns", argues every row.
+PER_TEST_BY_NATURE = ("sensors.load_cell_repeatability_error", "sensors.linear_encoder_mounting_phase",
+                      "sensors.torque_meter_encoder_mounting_phase")
+
+
+def _unit_floor(count: int) -> int:
+    if count < MIN_UNITS:
+        raise ValueError(f"{count} units is below the floor of {MIN_UNITS}: with fewer, not even the largest unit "
+                         f"bounds the {DESIGN_REVIEW_QUANTILE * 100:g}th-percentile unit the within-unit verdict is "
+                         "about with 95 % confidence (campaigns.within_unit.MIN_UNITS)")
+    return count
+
+
+def _repeat_floor(repeats: int) -> int:
+    if repeats < MIN_REPEATS:
+        raise ValueError(f"{repeats} repeats is below the floor of {MIN_REPEATS}: the check that the units share one "
+                         "test-to-test scatter (Brown-Forsythe) needs 3 tests per unit and fault level "
+                         "(campaigns.within_unit.MIN_REPEATS)")
+    return repeats
+
+
+class Units(_Strict):
+    """A within-unit campaign: the same ``count`` units tested ``repeats`` times at every fault level (issue 29).
+
+    Run ``i`` of every data set tests unit ``i // repeats`` for the ``i % repeats``-th time, so ``runs_per_dataset``
+    must be ``count * repeats``. The rows of the uncertainty table named in ``per_test`` are redrawn from test to
+    test; every other row is a fixed error of the unit, drawn once per unit and shared by all its tests in every
+    data set (:mod:`campaigns.sampling`). ``per_test`` defaults to the table's ``scene.*`` rows (the test
+    conditions) and its rows among :data:`PER_TEST_BY_NATURE`. The fault levels are the observability sweep's data
+    sets; analysis adds the within-unit verdict (:mod:`campaigns.within_unit`) beside the between-unit one, which
+    then uses one test per unit (repeat 0).
+    """
+
+    count: Annotated[int, AfterValidator(_unit_floor)]
+    repeats: Annotated[int, AfterValidator(_repeat_floor)]
+    per_test: list[str] | None = None
+
+
 class Uncertainty(_Strict):
     """One row of the uncertainty table (Table 9.5).
 
@@ -404,6 +447,7 @@ class CampaignSpec(_Strict):
     uncertainties: list[Uncertainty] = []
     observability: Observability = Observability()
     control_limits: ControlLimits = ControlLimits()
+    units: Units | None = None
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
     _warnings: list[str] = PrivateAttr(default_factory=list)
@@ -461,6 +505,25 @@ class CampaignSpec(_Strict):
         fixed = self.datasets[dataset_index].parameters
         return {k: fixed[t] for k, t in enumerate(targets) if t in fixed}
 
+    def per_test_targets(self) -> list[str]:
+        """The targets redrawn from test to test in a within-unit campaign (``units.per_test``, by default the
+        table's ``scene.*`` rows and its rows among :data:`PER_TEST_BY_NATURE`); empty without ``[units]``."""
+        if self.units is None:
+            return []
+        if self.units.per_test is not None:
+            return list(self.units.per_test)
+        return [u.target for u in self.uncertainties
+                if split_targets({u.target: None})[0] or u.target in PER_TEST_BY_NATURE]
+
+    def unit_draws(self, run_index: int, targets: list[str]) -> dict:
+        """What :func:`campaigns.sampling.sample_run` needs of ``[units]`` for run ``run_index``: the unit it tests
+        and the columns of the table (``targets``) drawn once per unit; ``{}`` without ``[units]``."""
+        if self.units is None:
+            return {}
+        per_test = set(self.per_test_targets())
+        return {"unit": run_index // self.units.repeats,
+                "per_unit": [k for k, t in enumerate(targets) if t not in per_test]}
+
     def distributions(self) -> list[Distribution]:
         """The resolved uncertainty table, in spec order (the sampling order)."""
         return [u.distribution_resolved for u in self.uncertainties]
@@ -468,13 +531,17 @@ class CampaignSpec(_Strict):
     def canonical(self) -> dict:
         """The spec with its resolved distributions, as plain JSON-ready data.
 
-        ``control_limits`` is left out when it holds the defaults, and a data set's ``parameters`` and
-        ``seeds_from`` when not used, so specs written before they existed keep their hash (and their results
+        ``control_limits`` is left out when it holds the defaults, and ``units`` and a data set's ``parameters``
+        and ``seeds_from`` when not used, so specs written before they existed keep their hash (and their results
         directories).
         """
         spec = self.model_dump(mode="json")
         if self.control_limits == ControlLimits():
             del spec["control_limits"]
+        if self.units is None:
+            del spec["units"]
+        else:  # the rows as sampled, so that a change of the default is a change of the hash
+            spec["units"]["per_test"] = self.per_test_targets()
         for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
             if not dataset["parameters"]:
                 del dataset["parameters"]
@@ -542,6 +609,36 @@ def cross_field_problems(data: dict) -> list[str]:
     sweep = observability.get("sweep") if isinstance(observability, dict) else None
     if isinstance(sweep, list):
         problems += _sweep_problems([n for n in sweep if isinstance(n, str)], datasets, observability)
+    if isinstance(data.get("units"), dict):
+        problems += _units_problems(data["units"], data, targets, sweep if isinstance(sweep, list) else [])
+    return problems
+
+
+def _units_problems(units: dict, data: dict, targets: list[str], sweep: list) -> list[str]:
+    """``[units]`` against the rest of the spec: its ``per_test`` rows are rows of the table, the fault levels are an
+    observability sweep, and every run of a data set is one test of one unit (``runs_per_dataset = count x
+    repeats``)."""
+    problems = []
+    per_test = units.get("per_test")
+    for name in per_test if isinstance(per_test, list) else []:
+        if isinstance(name, str) and name not in targets:
+            problems.append(f"units.per_test: {name!r} is not a row of the uncertainty table; "
+                            f"{spelling_hint(name, targets)}per_test names rows of uncertainties: "
+                            f"{', '.join(targets) or 'none'}")
+    if not sweep:
+        problems.append("units: a within-unit campaign needs observability.sweep: its data sets are the fault levels "
+                        "each unit is tested at (the healthy reference and at least one fault size)")
+    observability = data.get("observability") if isinstance(data.get("observability"), dict) else {}
+    condition = observability.get("condition", "backlash")
+    levels = [d.get("conditions", {}).get(condition) for d in _listed(data, "datasets")
+              if d.get("name") in sweep and isinstance(d.get("conditions"), dict)]
+    if len(set(levels)) < len(levels):
+        problems.append(f"units: the sweep's data sets must each set a different {condition} (one fault level each)")
+    count, repeats, runs = units.get("count"), units.get("repeats"), data.get("runs_per_dataset")
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in (count, repeats, runs)) and runs != count * repeats:
+        problems.append(f"runs_per_dataset: {runs} runs, but [units] tests {count} units {repeats} times each: set "
+                        f"runs_per_dataset = {count * repeats} (run i of a data set is test i % {repeats} of unit "
+                        f"i // {repeats})")
     return problems
 
 

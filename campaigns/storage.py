@@ -48,6 +48,7 @@ from campaigns import provenance as prov
 from campaigns.files import CONVENTIONS, CampaignError, atomic_write, check_output, write_netcdf
 from campaigns.provenance import package_versions
 from campaigns.runs import STATUS_MEANINGS, STATUSES
+from campaigns.sampling import UNIT_STREAM
 from campaigns.spec import CampaignSpec
 from campaigns.units import HALF_RANGE_SIGMAS
 
@@ -521,6 +522,14 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "scene": ("dataset", np.array([d.scene or spec.base.scene for d in spec.datasets], dtype=object),
                   {"long_name": "scene"}),
     }
+    if spec.units is not None:  # a within-unit campaign: run i of every data set is test i % R of unit i // R
+        runs = np.arange(spec.runs_per_dataset, dtype=np.int32)
+        coords["unit"] = ("run", runs // spec.units.repeats, {
+            "units": "1", "long_name": "unit the run tests (its fixed errors drawn once per unit, shared by all its "
+                                       "tests in every data set)"})
+        coords["repeat"] = ("run", runs % spec.units.repeats, {
+            "units": "1", "long_name": "test of the unit at the data set's fault level (its per-test uncertainties "
+                                       "and noise redrawn)"})
     if k_traces and trace_len:
         coords["trace_run"] = ("trace_run", np.arange(k_traces, dtype=np.int32),
                                {"units": "1", "long_name": "run index of the kept traces"})
@@ -539,7 +548,10 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "spec_hash": spec.spec_hash(),
         "root_seed_entropy": str(spec.root_seed),
         "seeding": "run i of data set d: SeedSequence(root_seed, spawn_key=(d, i)).spawn(2) -> [parameters, "
-                   "sensor noise]; d is the index of the data set named by seeds_from where a data set sets it",
+                   "sensor noise]; d is the index of the data set named by seeds_from where a data set sets it"
+                   + (f"; [units]: run i tests unit u = i // {spec.units.repeats}, whose rows other than "
+                      f"{', '.join(spec.per_test_targets()) or 'none'} are drawn from SeedSequence(root_seed, "
+                      f"spawn_key=({UNIT_STREAM}, u)), the same in every data set" if spec.units is not None else ""),
         "half_range_sigmas": HALF_RANGE_SIGMAS,
         "package_versions": json.dumps(package_versions(), sort_keys=True),
         **_provenance_attrs(chunks),

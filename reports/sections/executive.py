@@ -89,6 +89,22 @@ def verdicts(b: Builder, link: str):
         statement = str(a["requirement_statement"].sel(feature=feature).item())
         verdict = str(a["requirement_verdict"].sel(feature=feature).item())
         yield Callout(f"{feature}: {statement}", VERDICT_TONES.get(verdict, "info"), link)
+        if "within_unit_requirement_statement" in a:  # a within-unit campaign: the unit's own verdict beside it
+            statement = str(a["within_unit_requirement_statement"].sel(feature=feature).item())
+            verdict = str(a["within_unit_requirement_verdict"].sel(feature=feature).item())
+            yield Callout(f"{feature} within unit: {statement}", VERDICT_TONES.get(verdict, "info"), link)
+
+
+def within_unit_decision(b: Builder, feature: str) -> Callout | None:
+    """The within-unit decision of a campaign with ``[units]``: the analysis's verdict and statement, verbatim, on
+    the line after the between-unit decision (``None`` for other campaigns)."""
+    a = b.analysis
+    if "within_unit_requirement_statement" not in a:
+        return None
+    verdict = str(a["within_unit_requirement_verdict"].sel(feature=feature).item())
+    statement = str(a["within_unit_requirement_statement"].sel(feature=feature).item())
+    return Callout(f"{DECISIONS.get(verdict, verdict.upper())} — within unit (the same unit tested as it wears), "
+                   f"{feature_words(b, feature)}: {statement}", VERDICT_TONES.get(verdict, "info"), "observability")
 
 
 def _no_verdict(link: str) -> Callout:
@@ -335,6 +351,8 @@ def build(b: Builder):
     else:
         for feature in b.measured:
             yield observability_decision(b, feature)
+            if (within := within_unit_decision(b, feature)) is not None:
+                yield within
     yield from limit_decisions(a)
     if b.inputs.comparison is not None:
         c = b.inputs.comparison
