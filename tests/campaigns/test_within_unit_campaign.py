@@ -272,6 +272,16 @@ def test_the_shipped_within_unit_specs_validate_with_the_default_per_test_rows(n
     assert len(spec.distributions()) - len(spec.per_test_targets()) > 40  # every other row: a fixed error of the unit
 
 
+def test_the_homed_start_variant_fixes_the_encoders_mounting_phases_per_unit_and_changes_nothing_else():
+    specs = SYNTHETIC_SPEC.parents[3] / "campaigns" / "specs"
+    default = campaigns.load_spec(specs / "backlash_within_unit.toml")
+    homed = campaigns.load_spec(specs / "backlash_within_unit_phases_per_unit.toml")
+    assert set(default.per_test_targets()) - set(homed.per_test_targets()) == {
+        "sensors.linear_encoder_mounting_phase", "sensors.torque_meter_encoder_mounting_phase"}
+    assert homed.datasets == default.datasets and homed.distributions() == default.distributions()
+    assert (homed.root_seed, homed.units.count, homed.units.repeats) == (default.root_seed, 60, 5)
+
+
 def test_twin_campaign_analyze_prints_the_within_unit_statement_after_the_between_unit_one(
         within_unit_results, tmp_path, capsys):
     from app.cli import main  # the CLI on the library's results, as a user runs it
