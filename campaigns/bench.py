@@ -49,7 +49,8 @@ def dataset_conditions(spec) -> tuple[dict, dict]:
         entries["external_force_peak"] = {"value": force_demand_peak(scene), "unit": "N"}
         return entries
 
-    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_conditions(dict(d.conditions)))
+    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_procedure(d.procedure)
+                          .with_conditions(dict(d.conditions)))
                 for d in spec.datasets}
     return datasets, described(_scene(spec.base.scene))
 
@@ -86,7 +87,7 @@ def run_margins(request: RunRequest) -> tuple[dict[str, float], str]:
     values = dict.fromkeys(MARGIN_VARIABLES, math.nan)
     notes = []
     try:
-        scene = _scene(request.scene).with_conditions(request.conditions)
+        scene = run_scene(request)
         p = _parameters(request.parameters).with_values(request.parameter_values).values()
     except Exception as exc:  # noqa: BLE001 - a bad parameter set is recorded, not raised
         return values, f"parameters: {type(exc).__name__}: {exc}"
@@ -200,6 +201,11 @@ def _scene(name: str):
     return twin.load_scene(name)
 
 
+def run_scene(request: RunRequest):
+    """The scene a run simulates: the data set's scene, its test procedure, then its conditions."""
+    return _scene(request.scene).with_procedure(request.procedure).with_conditions(request.conditions)
+
+
 @lru_cache(maxsize=2)
 def _parameters(name: str):
     return twin.load_parameters(name)
@@ -213,7 +219,7 @@ def simulate_run(request: RunRequest) -> dict:
     (:mod:`campaigns.sandbox`); without isolation a run that returns over its
     budget is recorded as ``timeout`` (:func:`campaigns.runs.execute`).
     """
-    scene = _scene(request.scene).with_conditions(request.conditions)
+    scene = run_scene(request)
     params = _parameters(request.parameters).with_values(request.parameter_values)
     options = {k: v for k, v in request.solver.items() if v is not None}
     options.update(throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None)
@@ -249,7 +255,7 @@ def simulate_group(requests: list[RunRequest]) -> list[dict]:
         first = requests[untraced[0]]
         options = {key: value for key, value in first.solver.items() if value is not None}
         options.update(throw=False, outputs=list(first.outputs) or None)
-        runs = [(_scene(requests[k].scene).with_conditions(requests[k].conditions),
+        runs = [(run_scene(requests[k]),
                  _parameters(requests[k].parameters).with_values(requests[k].parameter_values),
                  requests[k].noise_rng()) for k in untraced]
         for k, summary in zip(untraced, twin.simulate_batch(runs, lanes=len(runs), **options), strict=True):
@@ -268,7 +274,8 @@ def _warm_up(request: RunRequest) -> None:
     run's clock starts (:func:`campaigns.runs.warm_up`)."""
     # the warm-up lasts 10 ms whatever the run's own duration (a request may carry one in its solver options)
     options = {k: v for k, v in request.solver.items() if v is not None and k != "duration"}
-    twin.simulate(_scene(request.scene), _parameters(request.parameters), throw=False, duration=0.01,
+    twin.simulate(_scene(request.scene).with_procedure(request.procedure), _parameters(request.parameters),
+                  throw=False, duration=0.01,
                   outputs=list(request.outputs) or None, **options)
 
 

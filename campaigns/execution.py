@@ -146,6 +146,7 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
         trace_decimation=spec.traces.decimation,
         wall_time_limit=spec.execution.timeout,
         seed_index=spec.seed_index(dataset_index),
+        procedure=dict(dataset.procedure),
     )
 
 

@@ -92,8 +92,8 @@ def numerical_floors(spec: CampaignSpec, features: list[str]) -> dict[tuple[str,
         if name not in table or name not in list_scenes():
             continue
         scene = load_scene(name)
-        if any(scene.conditions.get(k) != v for k, v in dataset.conditions.items()):
-            continue  # other conditions than those measured: the floor is not known
+        if dataset.procedure or any(scene.conditions.get(k) != v for k, v in dataset.conditions.items()):
+            continue  # another procedure or other conditions than those measured: the floor is not known
         floors.update({(dataset.name, f): float(table[name][f]) for f in features if f in table[name]})
     return floors
 

@@ -51,7 +51,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -113,6 +113,9 @@ class RunRequest:
         Wall-clock budget of the run [s].
     seed_index : int or None
         The data set whose random streams the run uses (``CampaignSpec.seed_index``); ``None``: its own.
+    procedure : dict
+        The data set's test-procedure knobs (``twin.scenes.procedure.KNOBS``), applied to the scene before its
+        conditions; empty: the scene's own profiles.
     """
 
     dataset: str
@@ -130,6 +133,7 @@ class RunRequest:
     trace_decimation: int = 1
     wall_time_limit: float = math.inf
     seed_index: int | None = None
+    procedure: dict[str, Any] = field(default_factory=dict)
 
     def noise_rng(self) -> np.random.Generator:
         """The run's sensor-noise generator (see :mod:`campaigns.sampling`)."""
@@ -165,7 +169,8 @@ def warm_up(run_function: RunFunction, request: RunRequest) -> None:
     A failing warm-up is ignored here: the run itself then fails and is recorded with its reason.
     """
     hook = getattr(run_function, "warm_up", None)
-    key = (run_function_name(run_function), request.scene, request.parameters,
+    key = (run_function_name(run_function), request.scene, json.dumps(request.procedure, sort_keys=True),
+           request.parameters,
            json.dumps(request.solver, sort_keys=True, default=str), request.outputs)
     if hook is None or key in _warmed:
         return

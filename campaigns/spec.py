@@ -44,6 +44,7 @@ from twin.errors import InputError
 from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
 from twin.scenes import split_targets
+from twin.scenes.procedure import procedure_problems
 from twin.tomlfiles import read_inheriting
 
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
@@ -246,6 +247,9 @@ class Dataset(_Strict):
     happen, so every other row keeps its value). ``seeds_from`` names another data set whose random streams this
     one uses (its uncertain values and its noise, run by run: common random numbers), so that the two differ only in
     what the data set changes and their difference can be read run by run (:mod:`campaigns.sampling`).
+    ``procedure`` replaces the scene's demand profiles by a test procedure's knobs (:data:`twin.scenes.procedure.KNOBS`:
+    preload setting, external force, motion amplitude and frequency, cycles, dwell, zero procedure); the data set's
+    ``conditions`` apply after it (a preload loss is the condition ``preload`` below the procedure's setting).
     """
 
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
@@ -254,11 +258,21 @@ class Dataset(_Strict):
     conditions: dict[ConditionName, ConditionValue] = {}
     parameters: dict[ParameterName, FiniteValue] = {}
     seeds_from: str | None = None
+    procedure: dict[str, int | float | str] = {}
 
     @field_validator("scene")
     @classmethod
     def _known_scene(cls, scene: str | None, info: ValidationInfo) -> str | None:
         return Base._known_scene(scene, info) if scene is not None else None
+
+    @field_validator("procedure")
+    @classmethod
+    def _procedure_knobs(cls, procedure: dict[str, int | float | str]) -> dict[str, int | float | str]:
+        """Known knobs within the bench's ranges (every problem listed)."""
+        problems = procedure_problems(procedure)
+        if problems:
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
+        return procedure
 
     @field_validator("conditions")
     @classmethod
@@ -531,8 +545,8 @@ class CampaignSpec(_Strict):
     def canonical(self) -> dict:
         """The spec with its resolved distributions, as plain JSON-ready data.
 
-        ``control_limits`` is left out when it holds the defaults, and ``units`` and a data set's ``parameters``
-        and ``seeds_from`` when not used, so specs written before they existed keep their hash (and their results
+        ``control_limits`` is left out when it holds the defaults, and ``units`` and a data set's ``parameters``,
+        ``seeds_from`` and ``procedure`` when not used, so specs written before they existed keep their hash (and their results
         directories).
         """
         spec = self.model_dump(mode="json")
@@ -547,6 +561,8 @@ class CampaignSpec(_Strict):
                 del dataset["parameters"]
             if dataset["seeds_from"] is None:
                 del dataset["seeds_from"]
+            if not dataset["procedure"]:
+                del dataset["procedure"]
         return {"spec": spec, "resolved": [d.as_dict() for d in self.distributions()]}
 
     def to_json(self) -> str:

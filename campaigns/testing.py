@@ -10,7 +10,8 @@ monotonically, with a known ranking of strength, on the sampled values:
 + TEMPERATURE_SLOPE * (room_temperature - 298.15 K) + noise``
 
 with ``noise ~ N(0, NOISE_SIGMA)`` from the run's noise generator, and
-``synthetic.inert`` having no effect. Faults can be injected into chosen runs.
+``synthetic.inert`` having no effect. A run with a test procedure (``RunRequest.procedure``) scales the backlash
+term and the noise by :func:`procedure_effect`. Faults can be injected into chosen runs.
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ from campaigns.runs import RunRequest
 
 NOISE_SIGMA = 0.2e-6
 TEMPERATURE_SLOPE = 0.05e-6
+#: The synthetic model's procedure effect (:func:`procedure_effect`): preload [N] and external force [N] scales.
+PROCEDURE_PRELOAD_SCALE = 500.0
+PROCEDURE_FORCE_SCALE = 1000.0
 
 SYNTHETIC_CATALOG = StaticCatalog(
     parameters={
@@ -87,15 +91,18 @@ class SyntheticModel:
         if fault == "crash":
             os._exit(3)
         values = {name: value for name, (value, _) in SYNTHETIC_CATALOG.conditions.items()}
+        values.update({k: v for k, v in request.procedure.items() if k in values})
         values.update(request.conditions)
         params = {name: value for name, (value, _) in SYNTHETIC_CATALOG.parameters.items()}
         params.update(request.parameter_values)
-        true = values["backlash"] + (values["preload"] + values["external_force"]) / params["synthetic.stiffness"]
+        sensitivity, noise_scale = procedure_effect(request.procedure)
+        true = (sensitivity * values["backlash"]
+                + (values["preload"] + values["external_force"]) / params["synthetic.stiffness"])
         measured = (
             params["synthetic.gain"] * true
             + params["synthetic.offset"]
             + TEMPERATURE_SLOPE * (values["room_temperature"] - 298.15)
-            + request.noise_rng().normal(0.0, NOISE_SIGMA)
+            + request.noise_rng().normal(0.0, NOISE_SIGMA * noise_scale)
         )
         if fault == "nan":
             measured = math.nan
@@ -106,6 +113,19 @@ class SyntheticModel:
             "features": {"backlash_feature": measured, "backlash_feature_true": true},
             "trace": _trace(true, measured) if request.trace_variables else None,
         }
+
+
+def procedure_effect(knobs: dict) -> tuple[float, float]:
+    """The synthetic model's answer to a test procedure (:mod:`twin.scenes.procedure` knobs), with a known best:
+    the backlash term is scaled by ``exp(-preload / PROCEDURE_PRELOAD_SCALE)`` (a preload hides the play) and the
+    noise by ``(1 + |external_force| / PROCEDURE_FORCE_SCALE) / sqrt(cycles / 4)`` (a load disturbs, cycles average).
+    No procedure: ``(1, 1)``."""
+    if not knobs:
+        return 1.0, 1.0
+    sensitivity = math.exp(-float(knobs.get("preload", 0.0)) / PROCEDURE_PRELOAD_SCALE)
+    noise = (1.0 + abs(float(knobs.get("external_force", 0.0))) / PROCEDURE_FORCE_SCALE) / math.sqrt(
+        float(knobs.get("cycles", 4)) / 4.0)
+    return sensitivity, noise
 
 
 def _trace(true: float, measured: float) -> xr.Dataset:

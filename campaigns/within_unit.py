@@ -275,6 +275,49 @@ def unit_detection(levels, values, *, false_alarm_rate: float = FALSE_ALARM_RATE
     return out
 
 
+def extrapolated_detectable(values, growth: float, *, false_alarm_rate: float = FALSE_ALARM_RATE,
+                            power: float = POWER, min_repeats: int = MIN_REPEATS) -> np.ndarray:
+    """Each unit's detectable growth under the rule of :func:`unit_detection`, extrapolated linearly from one level.
+
+    With the baseline and one growth level only (a screening campaign, :mod:`campaigns.procedure_search`), a unit
+    whose feature moved by ``s`` at ``growth`` is taken to move by ``s g / growth`` at ``g``; the rule flags a test
+    with probability ``power`` once the shift exceeds the unit's threshold margin by ``z_power`` scatters, so
+
+        g_u = growth (margin_u + z_power sigma) / |s_u|
+
+    with the pooled scatters and margins of the rule. A ranking statistic (the feature need not be linear in the
+    fault); verdicts come from the full sweep.
+
+    Parameters
+    ----------
+    values : array_like, shape (2, U, R)
+        The feature at the baseline and at ``growth``; non-finite: a failed run.
+    growth : float
+        The fault growth of the second level [SI], > 0.
+
+    Returns
+    -------
+    numpy.ndarray, shape (U,)
+        ``inf`` where the unit did not move; NaN for a unit with fewer than ``min_repeats`` ok repeats at a level.
+    """
+    values = np.asarray(values, dtype=float)
+    if values.ndim != 3 or values.shape[0] != 2 or not growth > 0:
+        raise ValueError(f"values must have shape (2, units, repeats) and growth be > 0, got {values.shape} and "
+                         f"{growth!r}")
+    n, mean, squares = _cells(values)
+    used = (n >= min_repeats).all(axis=0)
+    out = np.full(values.shape[1], math.nan)
+    if not used.any():
+        return out
+    rule = _detection(n[:, used], mean[:, used], squares[:, used], false_alarm_rate)
+    margin = (rule["high"] - rule["low"]) / 2.0
+    shift = np.abs(mean[1, used] - mean[0, used])
+    with np.errstate(divide="ignore"):
+        out[used] = np.where(shift > 0.0, growth * (margin + stats.norm.ppf(power) * rule["scatter"][1]) / shift,
+                             math.inf)
+    return out
+
+
 def population_detectable(levels, values, *, quantiles=UNIT_QUANTILES, false_alarm_rate: float = FALSE_ALARM_RATE,
                           power: float = POWER, n_boot: int = 1000, confidence: float = CONFIDENCE,
                           min_units: int | None = None, min_repeats: int = MIN_REPEATS, seed=None,

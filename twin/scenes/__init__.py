@@ -23,6 +23,7 @@ import numpy as np
 
 from twin.errors import SceneError, did_you_mean
 from twin.layout import OUTPUT_NAMES
+from twin.scenes.procedure import apply_procedure
 from twin.scenes.profiles import compile_profile
 from twin.tomlfiles import read_inheriting
 
@@ -185,6 +186,11 @@ class Scene:
     def with_conditions(self, overrides: Mapping[str, Any]) -> Scene:
         """Copy with some conditions replaced (validated; all problems reported at once)."""
         return replace(self, conditions={**self.conditions, **overrides})
+
+    def with_procedure(self, knobs: Mapping[str, Any]) -> Scene:
+        """Copy with the demand profiles, duration, preload and zero procedure of a test procedure's knobs
+        (:mod:`twin.scenes.procedure`); empty ``knobs``: the scene itself."""
+        return apply_procedure(self, knobs)
 
     def with_duration(self, duration: float) -> Scene:
         return replace(self, duration=duration)
