@@ -452,6 +452,48 @@ def cmd_export(args) -> int:
     return 0
 
 
+#: Files a procedure search writes in its --out (besides its candidates' campaigns under candidates/).
+SEARCH_FILES = ("search.nc", "ranking.csv", "search_report.html", "search_report.pdf", "pareto.png")
+
+
+def cmd_procedure_search(args) -> int:
+    from campaigns.files import check_outputs
+    from campaigns.procedure_search import describe_plan, design, load_search, run_search, test_duration
+    from campaigns.storage import CampaignError
+
+    _check_bounds(workers=args.workers)
+    spec = load_search(args.spec, quick=args.quick)
+    out = args.out or Path("out") / spec.name
+    print(f"procedure search {spec.name}: {describe_plan(spec)}")
+    for candidate in design(spec):
+        knobs = ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) else f"{k} {v}"
+                          for k, v in candidate.shown.items())
+        label = " (reference: the base scene's own procedure)" if candidate.reference else ""
+        print(f"  {candidate.name}{label}: {knobs}; {test_duration(spec, candidate):.3g} s per test")
+    if args.plan:
+        return 0
+    if not args.resume:
+        check_outputs(out, SEARCH_FILES, force=args.force)
+        if (out / "candidates").exists():
+            raise CampaignError(f"{out / 'candidates'}: holds the campaigns of an earlier search; --resume continues "
+                                "it (finished runs kept), a new --out starts another (--force never replaces a "
+                                "campaign's own files)")
+    announce = Stages()
+    path = run_search(spec, out, workers=args.workers, resume=args.resume, announce=announce)
+    print(f"wrote {path}\nwrote {path.parent / 'ranking.csv'}")
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="netcdf4") as handle:
+        print(handle.attrs["statement"])
+    from reports import build_search_report  # lazy: figures and typst only when a report is written
+
+    announce("report", "the ranked table, the Pareto chart, HTML and PDF")
+    for kind, written in build_search_report(path, out).items():
+        print(f"wrote {kind}: {written.resolve()}")
+    announce("done", f"total {time.perf_counter() - announce.start:.0f} s")
+    return 0
+
+
 def cmd_chapter5(args) -> int:
     from app.studies.chapter5 import run_chapter5
     from campaigns.files import check_outputs
@@ -598,6 +640,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("test", type=Path, help="a measured test written by `twin measure import`")
     p.add_argument("--campaign", type=Path, required=True, help="results.nc of the campaign")
     p.set_defaults(func=cmd_measure_diagnose)
+
+    procedure = sub.add_parser("procedure", help="test procedures: search the knobs for the one that detects a fault "
+                                                 "within one unit soonest")
+    procedure_sub = procedure.add_subparsers(dest="procedure_command", required=True)
+    p = procedure_sub.add_parser("search", help="coarse design, screening rounds and finalists' campaigns; ranked "
+                                                "table, Pareto chart and report (campaigns/specs/procedure_*.toml)")
+    p.add_argument("spec", type=Path, help="search spec (TOML)")
+    p.add_argument("--out", type=Path, help="output directory (default: out/<search name>)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of each campaign (default 2)")
+    p.add_argument("--quick", action="store_true", help="the smallest plan that still ranks: 3 candidates, 1 "
+                                                        "finalist, the floors of units and repeats")
+    p.add_argument("--plan", action="store_true", help="print the plan and the candidates, run nothing")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted search in --out (finished runs "
+                                                         "kept; the search's own files rewritten)")
+    p.add_argument("--force", action="store_true", help="replace the files of an earlier search in --out")
+    p.set_defaults(func=cmd_procedure_search)
 
     add_serve_parser(sub)
     return parser

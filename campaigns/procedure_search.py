@@ -67,6 +67,8 @@ FAULTS = {
 SCREENING_BOOTSTRAP = 1000
 #: Confidence of the screening bounds.
 SCREENING_CONFIDENCE = 0.95
+#: Candidates of a ``--quick`` search (the reference and two others, or the reference and the spec's anchors).
+QUICK_CANDIDATES = 3
 #: The stream of the coarse design (spawned from the campaign's root seed; the runs use other streams).
 DESIGN_STREAM = 7
 
@@ -161,12 +163,10 @@ def _problems(spec: SearchSpec) -> list[str]:
             continue
         knob = KNOBS[name]
         values = given if isinstance(given, list) else [given]
-        if knob.choices:
-            problems += [f"knobs.{p}" for v in values for p in procedure_problems({name: v})]
-        elif not values or len(values) > 2 or any(isinstance(v, str) for v in values):
+        if not knob.choices and (not values or len(values) > 2 or any(isinstance(v, str) for v in values)):
             problems.append(f"knobs.{name}: give [low, high] or one number [{knob.unit}], got {given!r}")
-        else:
-            problems += [f"knobs.{p}" for v in values for p in procedure_problems({name: v})]
+        else:  # each value against the knob's own range (speed limits of a pair: below, over the ranges)
+            problems += [p for v in values if (p := knob.problem(f"knobs.{name}", v)) is not None]
     if problems:
         return problems
     ranges = spec.ranges()
@@ -217,9 +217,9 @@ def _problems(spec: SearchSpec) -> list[str]:
 def load_search(path: str | Path, *, quick: bool = False, catalog=None) -> SearchSpec:
     """Read and check a search spec; every problem in one :class:`campaigns.spec.SpecError` before any run.
 
-    ``quick`` replaces the budget by the smallest plan that still ranks (3 candidates, 1 finalist, the floors of
-    units and repeats): what a CI run or a first look affords. ``catalog`` validates the candidates' campaigns
-    (default: the bench's)."""
+    ``quick`` replaces the budget by a plan that still ranks: :data:`QUICK_CANDIDATES` candidates (or the reference
+    and the anchors), one screening round, one finalist, the floors of units and repeats: a first look. ``catalog``
+    validates the candidates' campaigns (default: the bench's)."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -227,9 +227,9 @@ def load_search(path: str | Path, *, quick: bool = False, catalog=None) -> Searc
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise SpecError([f"{path}: cannot read the search spec ({exc})"]) from None
     if quick and isinstance(data.get("budget"), dict):
-        data["budget"] = {**data["budget"], "candidates": 3, "finalists": 1, "units": MIN_UNITS,
-                          "repeats": MIN_REPEATS}
-        data["budget"]["runs"] = max(int(data["budget"].get("runs", 1)), 1)
+        anchors = data.get("anchors") if isinstance(data.get("anchors"), list) else []
+        data["budget"] = {**data["budget"], "candidates": max(QUICK_CANDIDATES, len(anchors) + 1), "finalists": 1,
+                          "rounds": 1, "units": MIN_UNITS, "repeats": MIN_REPEATS}
     try:
         spec = SearchSpec.model_validate(data)
     except ValidationError as exc:
@@ -487,8 +487,11 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
     alive = list(candidates)
     repeats = spec.budget.repeats
     features = list(spec.features)
-    scores = {f: {} for f in features}     # feature -> candidate -> (estimate, low, high) of its last round
-    round0 = {"point": {f: {} for f in features}, "replicates": {f: {} for f in features}}  # paired comparisons
+    # feature -> candidate -> (estimate, low, high): of round 0 (every candidate on the same units and repeats, the
+    # table's comparable figure) and of the last round the candidate ran (what selected it)
+    scores = {f: {} for f in features}
+    last_scores = {f: {} for f in features}
+    round0 = {f: {} for f in features}  # feature -> candidate -> round-0 bootstrap replicates (paired differences)
     round_reached = {}
     evidence = {}
     screening = _rounds(spec)[:-1]
@@ -512,10 +515,10 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
         for f in features:
             found = screening_scores(np.stack(values[f]), spec.screening, seed=seed)
             for c, candidate in enumerate(alive):
-                scores[f][candidate.name] = (found["estimate"][c], found["low"][c], found["high"][c])
+                last_scores[f][candidate.name] = (found["estimate"][c], found["low"][c], found["high"][c])
                 if k == 0:
-                    round0["point"][f][candidate.name] = found["estimate"][c]
-                    round0["replicates"][f][candidate.name] = found["replicates"][:, c]
+                    scores[f][candidate.name] = last_scores[f][candidate.name]
+                    round0[f][candidate.name] = found["replicates"][:, c]
             best_per_candidate = np.minimum(best_per_candidate, found["estimate"])
         last = k == len(screening) - 1  # the last round keeps the finalists, the others the better half
         keep = min(len(alive), spec.budget.finalists if last else max(spec.budget.finalists, math.ceil(len(alive) / 2)))
@@ -532,7 +535,7 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
         analysis = analyze(results)
         with xr.open_dataset(analysis, engine="netcdf4") as handle:
             finals[candidate.name] = handle.load()
-    table = search_dataset(spec, candidates, scores, round0, round_reached, finals, evidence, out)
+    table = search_dataset(spec, candidates, scores, last_scores, round0, round_reached, finals, evidence, out)
     path = out / "search.nc"
     table.to_netcdf(path, engine="netcdf4")
     ranking_table(table).to_csv(out / "ranking.csv", index=False)
@@ -595,9 +598,12 @@ def _final_figures(analysis: xr.Dataset, features: list[str], condition: str) ->
             "statement": str(analysis["within_unit_requirement_statement"].sel(feature=feature).item())}
 
 
-def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, round0: dict, round_reached: dict,
-                   finals: dict, evidence: dict, out: Path) -> xr.Dataset:
-    """``search.nc``: every candidate's knobs, duration, scores, round, verdicts, Pareto front, rank and evidence."""
+def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, last_scores: dict, round0: dict,
+                   round_reached: dict, finals: dict, evidence: dict, out: Path) -> xr.Dataset:
+    """``search.nc``: every candidate's knobs, duration, scores, round, verdicts, Pareto front, rank and evidence.
+
+    ``scores``/``last_scores``: ``{feature: {candidate: (estimate, low, high)}}`` of round 0 and of the last round
+    each candidate ran; ``round0``: ``{feature: {candidate: bootstrap replicates}}`` of round 0."""
     names = [c.name for c in candidates]
     features = list(spec.features)
     unit = spec.fault_unit
@@ -608,21 +614,24 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
     best_f = np.argmin(np.where(np.isfinite(estimate), estimate, math.inf), axis=1)
     take = np.arange(len(names))
     score, score_low, score_high = estimate[take, best_f], low[take, best_f], high[take, best_f]
+    last = np.array([[last_scores[f][n] for f in features] for n in names], dtype=float)  # (candidate, feature, 3)
+    last_best = np.argmin(np.where(np.isfinite(last[:, :, 0]), last[:, :, 0], math.inf), axis=1)
+    last = last[take, last_best]
     durations = np.array([test_duration(spec, c) for c in candidates])
     final = {n: _final_figures(finals[n], features, spec.condition) for n in finals}
-    # rank: finalists by their verdict's bounds, then the others by the round they reached and their score
+    # rank: finalists by their verdict's bounds, then the others by the round they reached and their score in it
     def key(k: int):
         n = names[k]
         if n in final:
             return (0, final[n]["high"], -final[n]["low"] if math.isfinite(final[n]["low"]) else 0.0, score[k])
-        return (1, -round_reached[n], score[k] if math.isfinite(score[k]) else math.inf, durations[k])
+        return (1, -round_reached[n], last[k, 0] if math.isfinite(last[k, 0]) else math.inf, durations[k])
     order = sorted(range(len(names)), key=key)
     rank = np.empty(len(names), dtype=np.int32)
     rank[order] = np.arange(1, len(names) + 1)
     best = order[0]
     # paired differences to the best on round 0 (every candidate on the same units and repeats)
-    replicate = np.stack([np.min(np.stack([round0["replicates"][f][n] for f in features]), axis=0) for n in names])
-    first = np.array([min(round0["point"][f][n] for f in features) for n in names])
+    replicate = np.stack([np.min(np.stack([round0[f][n] for f in features]), axis=0) for n in names])
+    first = np.min(estimate, axis=1)
     with np.errstate(invalid="ignore"):
         differences = replicate - replicate[best]
         difference = first - first[best]
@@ -645,8 +654,8 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
             variables[f"knob_{name}"] = ("candidate", np.array(values, dtype=float), attrs | {"units": knob.unit})
     rel = {n: os.path.relpath(evidence[n], out) for n in names}
     finals_stage = {n: "final" if n in final else f"round{round_reached[n]}" for n in names}
-    rerun = [f"twin campaign run {os.path.join(os.path.dirname(rel[n]), finals_stage[n] + '.toml')} --out {rel[n]} "
-             f"--resume{' --analyze' if n in final else ''}" for n in names]
+    rerun = [f"twin campaign run {os.path.join(os.path.dirname(rel[n]), finals_stage[n] + '.toml')}"
+             f"{' --analyze' if n in final else ''}" for n in names]
     ds = xr.Dataset(
         {
             **variables,
@@ -655,8 +664,9 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
                 "long_name": "the reference procedure (the base scene's own profiles)", "flag_values": np.array(
                     [0, 1], dtype=np.int8), "flag_meanings": "candidate reference"}),
             "screening_estimate": (("candidate", "feature"), np.where(np.isfinite(estimate), estimate, math.nan),
-                                   fault_units | {"long_name": "screening estimate: the 95th-percentile unit's "
-                                                  "detectable growth, extrapolated from the screening level"}),
+                                   fault_units | {"long_name": "screening estimate of round 0 (every candidate on the "
+                                                  "same units and repeats): the 95th-percentile unit's detectable "
+                                                  "growth, extrapolated from the screening level"}),
             "screening_low": (("candidate", "feature"), np.where(np.isfinite(low), low, math.nan), fault_units | {
                 "long_name": "lower bound of the screening estimate (bootstrap over units)"}),
             "screening_high": (("candidate", "feature"), np.where(np.isfinite(high), high, math.nan), fault_units | {
@@ -668,6 +678,12 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
                 "long_name": "screening estimate of the best feature"}),
             "score_low": ("candidate", np.where(np.isfinite(score_low), score_low, math.nan), fault_units),
             "score_high": ("candidate", np.where(np.isfinite(score_high), score_high, math.nan), fault_units),
+            "score_last_round": ("candidate", np.where(np.isfinite(last[:, 0]), last[:, 0], math.nan), fault_units | {
+                "long_name": "screening estimate of the best feature in the last round the candidate ran (more "
+                             "repeats than round 0: what selected it)"}),
+            "score_last_round_low": ("candidate", np.where(np.isfinite(last[:, 1]), last[:, 1], math.nan), fault_units),
+            "score_last_round_high": ("candidate", np.where(np.isfinite(last[:, 2]), last[:, 2], math.nan),
+                                      fault_units),
             "round_reached": ("candidate", np.array([round_reached[n] for n in names], dtype=np.int32), {
                 "units": "1", "long_name": "last screening round the candidate ran (0: eliminated after the first)"}),
             "finalist": ("candidate", np.array([n in final for n in names], dtype=np.int8), {
@@ -694,7 +710,8 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
             "evidence": ("candidate", np.array([rel[n] for n in names], dtype=object), {
                 "long_name": "the candidate's last campaign directory, relative to the search directory"}),
             "rerun": ("candidate", np.array(rerun, dtype=object), {
-                "long_name": "the command that re-runs (resumes) that campaign, from the search directory"}),
+                "long_name": "the command that runs that campaign again (the same seeds, so the same numbers) from the "
+                             "search directory, into out/<campaign name>"}),
         },
         coords={"candidate": ("candidate", np.array(names, dtype=object)),
                 "feature": ("feature", np.array(features, dtype=object))},
