@@ -454,9 +454,14 @@ def duration_tradeoff(duration, estimate, low, high, *, front, labels: dict[int,
             set_scale("log")
             axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
             axis.set_minor_formatter(NullFormatter())
+    ax.autoscale_view()
+    to_axes = ax.transData + ax.transAxes.inverted()
     for index, text in labels.items():
         if shown[index]:
-            ax.annotate(text, (duration[index], estimate[index]), xytext=(8, 8), textcoords="offset points",
+            # written towards the middle of the axes, so a label at either end stays inside them
+            left = to_axes.transform((duration[index], estimate[index]))[0] > 0.6
+            ax.annotate(text, (duration[index], estimate[index]), xytext=(-8 if left else 8, 8),
+                        textcoords="offset points", ha="right" if left else "left",
                         fontsize=8, arrowprops={"arrowstyle": "-", "color": "black", "lw": 0.6},
                         bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85})
     ax.set(xlabel=xlabel, ylabel=ylabel)

@@ -221,8 +221,9 @@ class _Search:
     def is_reference(self, i: int) -> bool:
         return int(self.value("reference", i)) == 1
 
-    def knob_columns(self) -> list[tuple[str, list[str]]]:
-        """Per knob: its column header (name and display unit) and its cells, one per candidate (file order)."""
+    def knob_columns(self) -> list[tuple[str, str, list[str]]]:
+        """Per knob: its name in words, its display unit (``""`` for none) and its cells, one per candidate (file
+        order), all in the one display unit of the column."""
         columns = []
         for knob in self.knobs:
             var = self.ds[f"knob_{knob}"]
@@ -230,10 +231,9 @@ class _Search:
             if var.dtype.kind in "fiu":
                 values = var.values.astype(float)
                 factor, shown = display_scale(str(var.attrs.get("units", "")), values)
-                header = name if shown == "–" else f"{name} [{shown}]"
-                columns.append((header, [plain(v * factor) for v in values]))
+                columns.append((name, "" if shown == "–" else shown, [plain(v * factor) for v in values]))
             else:
-                columns.append((name, [_text(v) or NONE for v in var.values]))
+                columns.append((name, "", [_text(v) or NONE for v in var.values]))
         return columns
 
     def score_note(self, i: int) -> str:
@@ -265,7 +265,8 @@ def build(search, path: Path, generated_at: str) -> Report:
     # the statement verbatim, after the decision (and the verdict, unless the statement starts with it)
     decision = DECISIONS.get(verdict, verdict.upper()) + ("" if statement.startswith(verdict) else f" ({verdict})")
     summary = [Callout(f"{decision} — {statement}", VERDICT_TONES.get(verdict, "info"))]
-    procedure = "; ".join(f"{header} {cells[best]}" for header, cells in knob_columns)
+    procedure = "; ".join(f"{name} {cells[best]}" + (f" {unit}" if unit and cells[best] != NONE else "")
+                          for name, unit, cells in knob_columns)
     summary.append(Paragraph(
         f"Best procedure: {s.best} (rank {plain(s.value('rank', best))}): {procedure}; test duration "
         f"{plain(s.value('test_duration', best))} s. Its screening estimate ({_text(s.value('best_feature', best))}): "
@@ -279,7 +280,7 @@ def build(search, path: Path, generated_at: str) -> Report:
 
     sections = (
         Section("chart", "Screening estimate against test duration", (chart_figure(s, best, reference),)),
-        Section("reproduction", "Reproduction", tuple(reproduction(s, knob_columns))),
+        Section("reproduction", "Reproduction", tuple(reproduction(s))),
     )
     name = _text(s.attrs["name"])
     facts = (
@@ -307,7 +308,8 @@ def build(search, path: Path, generated_at: str) -> Report:
 
 def ranked_table(s: _Search, knob_columns) -> Table:
     """Table 1: one row per candidate in rank order."""
-    header = ("rank", "candidate", *(h for h, _ in knob_columns), "test duration [s]", "best feature",
+    header = ("rank", "candidate", *(f"{name} [{unit}]" if unit else name for name, unit, _ in knob_columns),
+              "test duration [s]", "best feature",
               "screening estimate (95 % interval)", "within-unit bracket", "within-unit verdict", "Pareto front",
               "difference to best (95 % interval)")
     rows = []
@@ -319,7 +321,7 @@ def ranked_table(s: _Search, knob_columns) -> Table:
         rows.append((
             plain(s.value("rank", i)),
             s.ids[i] + (" (reference)" if s.is_reference(i) else ""),
-            *(cells[i] for _, cells in knob_columns),
+            *(cells[i] for _, _, cells in knob_columns),
             plain(s.value("test_duration", i)),
             _text(s.value("best_feature", i)) or NONE,
             score,
@@ -334,8 +336,7 @@ def ranked_table(s: _Search, knob_columns) -> Table:
                "growth between two levels of the finalist's full campaign) and its verdict are given for finalists "
                f"only ({NONE} otherwise). The difference to the best is paired over the same units; {NONE}: not "
                "resolved.")
-    widths = (0.45, 1.0, *(0.85 for _ in knob_columns), 0.85, 1.25, 2.1, 1.0,
-              0.9, 0.6, 2.1)
+    widths = (0.45, 1.0, *(1.0 for _ in knob_columns), 0.85, 1.25, 1.9, 1.0, 0.9, 0.6, 1.9)
     return Table(1, caption, header, tuple(rows), widths=widths)
 
 
@@ -371,7 +372,7 @@ def chart_figure(s: _Search, best: int, reference: list[int]) -> Figure:
     return Figure(1, "chart", caption, png)
 
 
-def reproduction(s: _Search, knob_columns):
+def reproduction(s: _Search):
     """What re-runs each candidate, the search spec and the plan, verbatim."""
     yield Paragraph("Each candidate's campaign directory (relative to the search directory) and the command that "
                     "re-runs it, in rank order:")
@@ -383,7 +384,7 @@ def reproduction(s: _Search, knob_columns):
                   _text(s.value("rerun", i)), ""]
     yield Code("\n".join(lines).rstrip("\n"))
     yield Heading("Knobs")
-    yield Table(2, "The knobs of the search, in the order of the ranked table.",
+    yield Table(2, "The knobs of the search in the order of the ranked table, with the unit the file stores them in.",
                 ("knob", "meaning", "unit"),
                 tuple((k, _text(s.ds[f"knob_{k}"].attrs.get("long_name", "")) or NONE,
                        _text(s.ds[f"knob_{k}"].attrs.get("units", "")) or NONE) for k in s.knobs))

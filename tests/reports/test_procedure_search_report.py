@@ -128,7 +128,7 @@ def test_page_one_gives_the_statement_verdict_and_best_before_the_table(pages):
     assert "backlash growth" in first and "1 µm" in first
     table = first.index("Table 1")
     assert 0 <= first.index(" ".join(STATEMENT.split())) < table
-    assert 0 <= first.index("(met)") < table
+    assert 0 <= first.index("GO — met:") < table  # the decision, then the statement that starts with its verdict
     assert 0 <= first.index("Best procedure: p03") < table
     assert "reference" in first
 
@@ -140,6 +140,26 @@ def test_the_table_is_in_rank_order_with_the_reference_marked(html, pages):
     first = pages[0]
     positions = [first.index(name, first.index("Table 1")) for name in ("p03", "p01", "p00 (reference)", "p02")]
     assert positions == sorted(positions)
+
+
+def test_the_statement_is_in_the_tone_of_its_verdict(html):
+    assert '<div class="callout good">GO — met: the best procedure p03' in html
+
+
+def test_a_preload_loss_search_reads_in_newtons_with_its_verdict(tmp_path):
+    search = search_dataset()
+    for name in ("score", "score_low", "score_high", "difference_to_best", "difference_low", "difference_high",
+                 "within_unit_low", "within_unit_high", "screening_estimate", "screening_low", "screening_high"):
+        search[name] = search[name] * 1e8  # 0.84 µm -> 84 N
+    search.attrs.update(fault="preload_loss", fault_unit="N", requirement=200.0, verdict="not met",
+                        statement="no procedure resolves a preload loss of 200 N within 1 h")
+    path = tmp_path / "search.nc"
+    search.to_netcdf(path, engine="netcdf4")
+    html = reports.build_search_report(path, tmp_path / "out", generated_at=GENERATED_AT)["html"].read_text("utf-8")
+    assert "preload loss; requirement 200 N" in html
+    assert ('<div class="callout bad">NO-GO (not met) — no procedure resolves a preload loss of 200 N within 1 h'
+            in html)
+    assert "84 N (95 % interval 71 … 97 N)" in _rows(html)[0]
 
 
 def test_the_file_text_is_escaped_in_html(html):
