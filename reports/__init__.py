@@ -4,6 +4,10 @@ Entry point (the ``twin report`` CLI calls it)::
 
     reports.build_report(results_path, analysis_path=None, out_dir=..., *, accuracy_path=None, generated_at=None)
 
+and, for a test-procedure search (``twin procedure search``, :mod:`reports.procedure_search`)::
+
+    reports.build_search_report(search_path, out_dir, *, generated_at=None)
+
 Data flow: ``results.nc`` (+ ``analysis.nc``, + accuracy data) --:mod:`reports.inputs`-->
 loaded data --:mod:`reports.content`--> one :class:`reports.model.Report` -->
 :mod:`reports.html` and :mod:`reports.pdf`. See ``docs/reports.md``.
@@ -15,8 +19,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from reports.errors import ReportError
+from reports.procedure_search import build_search_report
 
-__all__ = ["build_report", "ReportError"]
+__all__ = ["build_report", "build_search_report", "ReportError"]
 
 
 def build_report(

@@ -20,7 +20,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 from scipy import stats
 
 #: Pixels per inch of the stored PNGs: sharp on a laptop screen and on paper at the page width.
@@ -418,4 +418,52 @@ def limit_strips(grid: list[list[tuple]], categories: list[str], *, row_labels: 
                 ax.set_title(col_titles[col])
             if col == 0:
                 ax.set_ylabel(row_labels[row])
+    return _png(fig)
+
+
+@_styled
+def duration_tradeoff(duration, estimate, low, high, *, front, labels: dict[int, str], requirement: tuple[str, float],
+                      xlabel: str, ylabel: str, log: bool, log_x: bool = False) -> bytes:
+    """A screening estimate against test duration per candidate procedure, the Pareto front joined by a step line.
+
+    ``duration``, ``estimate``, ``low`` and ``high`` are per candidate (NaN: not drawn), in display units; each point
+    carries a vertical bar from ``low`` to ``high``. ``front`` are the indices of the Pareto-front candidates,
+    ``labels`` the text written beside some candidates (index -> text), ``requirement`` ``(label, value)`` a
+    horizontal line; ``log`` draws a logarithmic value axis, ``log_x`` a logarithmic duration axis (ticks in plain
+    numbers).
+    """
+    duration, estimate, low, high = (np.asarray(v, dtype=float) for v in (duration, estimate, low, high))
+    fig = _new(1, 1, 4.2)
+    ax = fig.axes[0]
+    shown = np.isfinite(duration) & np.isfinite(estimate)
+    on_front = np.zeros(duration.size, bool)
+    on_front[list(front)] = True
+    for mask, color, label in ((shown & ~on_front, "#8a8f98", "candidate (95 % interval)"),
+                               (shown & on_front, "#1f5aa6", "Pareto front (95 % interval)")):
+        if mask.any():
+            bars = np.isfinite(low) & np.isfinite(high) & mask
+            ax.errorbar(duration[bars], (low[bars] + high[bars]) / 2, yerr=(high[bars] - low[bars]) / 2, fmt="none",
+                        ecolor=color, elinewidth=1.0, capsize=2.5, alpha=0.8)
+            ax.plot(duration[mask], estimate[mask], "o", color=color, ms=5, label=label, zorder=3)
+    steps = [i for i in sorted(front, key=lambda i: duration[i]) if shown[i]]
+    if len(steps) > 1:
+        ax.step(duration[steps], estimate[steps], where="post", color="#1f5aa6", lw=1.2, zorder=2)
+    ax.axhline(requirement[1], color="#2e7d32", ls="--", lw=1.4, label=requirement[0])
+    for scaled, axis, set_scale in ((log, ax.yaxis, ax.set_yscale), (log_x, ax.xaxis, ax.set_xscale)):
+        if scaled:
+            set_scale("log")
+            axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+            axis.set_minor_formatter(NullFormatter())
+    ax.autoscale_view()
+    to_axes = ax.transData + ax.transAxes.inverted()
+    for index, text in labels.items():
+        if shown[index]:
+            # written towards the middle of the axes, so a label at either end stays inside them
+            left = to_axes.transform((duration[index], estimate[index]))[0] > 0.6
+            ax.annotate(text, (duration[index], estimate[index]), xytext=(-8 if left else 8, 8),
+                        textcoords="offset points", ha="right" if left else "left",
+                        fontsize=8, arrowprops={"arrowstyle": "-", "color": "black", "lw": 0.6},
+                        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85})
+    ax.set(xlabel=xlabel, ylabel=ylabel)
+    _legend_outside(fig, [ax], ncols=3)
     return _png(fig)

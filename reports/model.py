@@ -40,11 +40,20 @@ class Heading:
 
 
 @dataclass(frozen=True)
+class Code:
+    """Preformatted text shown in a monospace font with its line breaks kept (a command, a spec file); no markup:
+    renderers escape it."""
+
+    text: str
+
+
+@dataclass(frozen=True)
 class Table:
     """A numbered table; every cell is already formatted text.
 
     ``muted`` flags rows whose statistics rest on too few runs: renderers grey them out
-    (the row itself says why).
+    (the row itself says why). ``widths`` are the columns' relative widths in the PDF (empty: the renderer's
+    default), for a wide table whose long cells need the room.
     """
 
     number: int
@@ -52,6 +61,7 @@ class Table:
     header: tuple[str, ...]
     rows: tuple[tuple[str, ...], ...]
     muted: tuple[bool, ...] = ()
+    widths: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -64,7 +74,7 @@ class Figure:
     png: bytes
 
 
-Block = Paragraph | Callout | Heading | Table | Figure
+Block = Paragraph | Callout | Heading | Code | Table | Figure
 
 
 @dataclass(frozen=True)
@@ -92,6 +102,14 @@ class Report:
         The executive summary on page 1: the question, the verdicts, the data sets, the
         top influences, the failures and the fidelity audit, each linking to its section.
     sections : tuple of Section
+    summary_title : str
+        Heading of the page-1 blocks (``executive``).
+    contents : bool
+        Whether a table of contents follows page 1 (a short report goes without).
+    landscape : bool
+        Whether the PDF's pages are landscape A4 (a wide table on page 1).
+    source : str
+        What the report was generated from, in the footer's words.
     """
 
     title: str
@@ -100,6 +118,10 @@ class Report:
     facts: tuple[tuple[str, str], ...]
     executive: tuple[Block, ...] = field(default=())
     sections: tuple[Section, ...] = field(default=())
+    summary_title: str = "Executive summary"
+    contents: bool = True
+    landscape: bool = False
+    source: str = "the stored campaign files"
 
     def link_text(self, key: str) -> str:
         """``§6 Observability``: how a link to the section ``key`` reads."""

@@ -35,6 +35,9 @@ def _document(report: Report, figure_names: dict[int, str]) -> dict:
 
     return {
         "title": report.title,
+        "summary_title": report.summary_title,
+        "contents": report.contents,
+        "landscape": report.landscape,
         "subtitle": report.subtitle,
         "generated_at": report.generated_at,
         "facts": [list(f) for f in report.facts],

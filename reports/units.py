@@ -9,9 +9,9 @@ the report, read the same way); this module adds the figures' axis labels.
 
 from __future__ import annotations
 
-from campaigns.units import display_scale, number, quantity, quantity_range
+from campaigns.units import display_scale, estimate_with_interval, number, quantity, quantity_range
 
-__all__ = ["axis_label", "display_scale", "number", "quantity", "quantity_range"]
+__all__ = ["axis_label", "display_scale", "estimate_with_interval", "number", "quantity", "quantity_range"]
 
 
 def axis_label(name: str, unit: str) -> str:
