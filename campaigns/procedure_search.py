@@ -86,7 +86,7 @@ class Budget(_Strict):
     runs: int = Field(gt=0)
     candidates: int = Field(ge=2)
     finalists: int = Field(default=2, ge=1)
-    rounds: int = Field(default=2, ge=1)
+    rounds: int = Field(default=1, ge=1)
     units: int = Field(default=MIN_UNITS, ge=MIN_UNITS)
     repeats: int = Field(default=MIN_REPEATS, ge=MIN_REPEATS)
 
@@ -512,6 +512,7 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
                 values[f].append(v)
         seed = np.random.SeedSequence(int(spec.campaign_data.get("root_seed", 0)), spawn_key=(DESIGN_STREAM, k))
         best_per_candidate = np.full(len(alive), math.inf)
+        best_replicates = np.full((SCREENING_BOOTSTRAP, len(alive)), math.inf)
         for f in features:
             found = screening_scores(np.stack(values[f]), spec.screening, seed=seed)
             for c, candidate in enumerate(alive):
@@ -520,10 +521,14 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
                     scores[f][candidate.name] = last_scores[f][candidate.name]
                     round0[f][candidate.name] = found["replicates"][:, c]
             best_per_candidate = np.minimum(best_per_candidate, found["estimate"])
+            best_replicates = np.minimum(best_replicates, found["replicates"])
         last = k == len(screening) - 1  # the last round keeps the finalists, the others the better half
         keep = min(len(alive), spec.budget.finalists if last else max(spec.budget.finalists, math.ceil(len(alive) / 2)))
         order = np.argsort(best_per_candidate, kind="stable")
-        alive = [alive[i] for i in sorted(order[:keep])]
+        kept = sorted(order[:keep])
+        # how sure the screening is of its pick: the share of bootstrap replicates whose best candidate was kept
+        selection_confidence = float(np.isin(np.argmin(best_replicates, axis=1), kept).mean())
+        alive = [alive[i] for i in kept]
         repeats *= 2
     finals = {}
     announce("final", f"{len(alive)} finalists x {spec.budget.units} units x {spec.budget.repeats} repeats x "
@@ -536,6 +541,8 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
         with xr.open_dataset(analysis, engine="netcdf4") as handle:
             finals[candidate.name] = handle.load()
     table = search_dataset(spec, candidates, scores, last_scores, round0, round_reached, finals, evidence, out)
+    table.attrs["selection_confidence"] = selection_confidence
+    table.attrs["statement"] = search_statement(table)
     path = out / "search.nc"
     table.to_netcdf(path, engine="netcdf4")
     ranking_table(table).to_csv(out / "ranking.csv", index=False)
@@ -780,7 +787,9 @@ def search_statement(ds: xr.Dataset) -> str:
             f"{float(row['test_duration']):.3g} s per test): the 95th-percentile unit detects a {fault} of "
             f"{_interval(float(row['within_unit_low']), float(row['within_unit_high']), unit)} with "
             f"{row['best_feature'].item()} (requirement {requirement}; {ds.attrs['units']} units x "
-            f"{ds.attrs['repeats']} tests per level, {n} finalist(s) with the full sweep).")
+            f"{ds.attrs['repeats']} tests per level, {n} finalist(s) with the full sweep"
+            + (f"; the screening kept the best candidate of {float(ds.attrs['selection_confidence']) * 100:.0f} % of "
+               "its bootstrap replicates" if "selection_confidence" in ds.attrs else "") + ").")
     reference = [str(c) for c in ds["candidate"].values if int(ds["reference"].sel(candidate=c))]
     if not reference or reference[0] == best:
         others = ds.where(ds["candidate"] != best, drop=True)

@@ -546,8 +546,8 @@ class CampaignSpec(_Strict):
         """The spec with its resolved distributions, as plain JSON-ready data.
 
         ``control_limits`` is left out when it holds the defaults, and ``units`` and a data set's ``parameters``,
-        ``seeds_from`` and ``procedure`` when not used, so specs written before they existed keep their hash (and their results
-        directories).
+        ``seeds_from`` and ``procedure`` when not used, so specs written before they existed keep their hash (and
+        their results directories).
         """
         spec = self.model_dump(mode="json")
         if self.control_limits == ControlLimits():

@@ -1,0 +1,135 @@
+"""Procedure search: successive halving against evaluating every candidate with the full sweep, side by side.
+
+Usage::
+
+    python benchmarks/procedure_search.py --quick          # synthetic model, 4 candidates (CI)
+    python benchmarks/procedure_search.py --candidates 8   # synthetic model, 8 candidates
+
+Both strategies run on the synthetic model (campaigns.testing: its answer to a procedure is known, so the best
+candidate is known) with the same design, units and seeds:
+
+* **halving** (``campaigns.procedure_search.run_search``): every candidate screened at two levels, the better half
+  screened again with twice the repeats, the best one through the full sweep;
+* **exhaustive**: every candidate through the full sweep and the within-unit analysis, the best by the analysis's
+  bounds of the 95th-percentile unit.
+
+Printed: runs, wall time and the candidate each strategy picks (and the known best), with the ratios. The choice of
+successive halving over a surrogate rests on these figures (docs/campaigns.md, "Procedure search").
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import xarray as xr
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from campaigns import analyze, run_campaign  # noqa: E402
+from campaigns.procedure_search import (  # noqa: E402
+    DESIGN_STREAM,
+    design,
+    load_search,
+    plan_runs,
+    run_search,
+    write_candidate_spec,
+)
+from campaigns.testing import SYNTHETIC_CATALOG, procedure_effect, synthetic_run  # noqa: E402
+from campaigns.within_unit import MIN_REPEATS, MIN_UNITS  # noqa: E402
+
+SYNTHETIC_SPEC = ROOT / "tests" / "campaigns" / "data" / "synthetic.toml"
+CAMPAIGN = f"""
+extends = "{SYNTHETIC_SPEC}"
+name = "bench_search_campaign"
+runs_per_dataset = {MIN_UNITS * MIN_REPEATS}
+[execution]
+isolation = "none"
+[traces]
+runs_per_dataset = 0
+[observability]
+sweep = ["b0", "b1"]
+[units]
+count = {MIN_UNITS}
+repeats = {MIN_REPEATS}
+[[datasets]]
+name = "b0"
+scene = "ds2"
+conditions = {{ backlash = 0.0, preload = 0.0, external_force = 0.0 }}
+[[datasets]]
+name = "b1"
+scene = "ds2"
+conditions = {{ backlash = 1e-6, preload = 0.0, external_force = 0.0 }}
+"""
+SEARCH = """
+name = "bench_search"
+campaign = "campaign.toml"
+fault = "backlash"
+scene = "ds2"
+levels = [0.5e-6, 1e-6, 2e-6]
+features = ["backlash_feature"]
+[knobs]
+preload = [0.0, 1000.0]
+external_force = [0.0, 2000.0]
+cycles = [1, 8]
+[budget]
+runs = 100000
+candidates = {candidates}
+finalists = 1
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="4 candidates (CI)")
+    parser.add_argument("--candidates", type=int, default=8)
+    args = parser.parse_args()
+    candidates = 4 if args.quick else args.candidates
+    with tempfile.TemporaryDirectory() as scratch:
+        root = Path(scratch)
+        (root / "campaign.toml").write_text(CAMPAIGN)
+        (root / "search.toml").write_text(SEARCH.format(candidates=candidates))
+        spec = load_search(root / "search.toml", catalog=SYNTHETIC_CATALOG)
+        known = {c.name: (lambda e: e[1] / e[0])(procedure_effect(c.knobs)) for c in design(spec)}
+        best_known = min(known, key=known.get)
+
+        start = time.perf_counter()
+        path = run_search(spec, root / "halving", workers=1, progress=False, run_function=synthetic_run,
+                          catalog=SYNTHETIC_CATALOG)
+        halving_wall = time.perf_counter() - start
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            halving_best = ds.attrs["best"]
+
+        start, exhaustive_runs, figures = time.perf_counter(), 0, {}
+        for candidate in design(spec):
+            directory = root / "exhaustive" / candidate.name
+            campaign = write_candidate_spec(spec, candidate, "final", spec.budget.repeats, directory,
+                                            SYNTHETIC_CATALOG)
+            results = run_campaign(campaign, directory / "final", workers=1, progress=False,
+                                   run_function=synthetic_run, catalog=SYNTHETIC_CATALOG)
+            exhaustive_runs += len(campaign.datasets) * campaign.runs_per_dataset
+            with xr.open_dataset(analyze(results), engine="netcdf4") as analysis:
+                bounds = analysis["within_unit_minimum_detectable_backlash_ci"].sel(
+                    unit_quantile=0.95, feature="backlash_feature").values
+            figures[candidate.name] = (bounds[1] if math.isfinite(bounds[1]) else math.inf, -bounds[0])
+        exhaustive_wall = time.perf_counter() - start
+        exhaustive_best = min(figures, key=figures.get)
+
+    print(f"procedure search on the synthetic model: {candidates} candidates, {MIN_UNITS} units, "
+          f"{MIN_REPEATS} repeats; design stream {DESIGN_STREAM}")
+    print(f"  known best (smallest noise/sensitivity of campaigns.testing.procedure_effect): {best_known}")
+    print(f"  {'strategy':<12} {'runs':>7} {'wall [s]':>9}  best")
+    print(f"  {'halving':<12} {plan_runs(spec):>7} {halving_wall:>9.1f}  {halving_best}")
+    print(f"  {'exhaustive':<12} {exhaustive_runs:>7} {exhaustive_wall:>9.1f}  {exhaustive_best}")
+    print(f"  ratio halving/exhaustive: runs {plan_runs(spec) / exhaustive_runs:.2f}, "
+          f"wall {halving_wall / exhaustive_wall:.2f}; same best: {halving_best == exhaustive_best}, "
+          f"halving finds the known best: {halving_best == best_known}")
+
+
+if __name__ == "__main__":
+    main()
