@@ -401,9 +401,10 @@ def _rounds(spec: SearchSpec, *, smallest: bool = False) -> list[tuple[str, int]
     out, alive, repeats = [], candidates, budget.repeats
     while True:
         out.append((f"round{len(out)}", alive * budget.units * repeats * 2))
-        if alive <= finalists or len(out) == budget.rounds:
+        following = max(finalists, math.ceil(alive / 2))
+        if following <= finalists or len(out) == budget.rounds:  # the last round picks the finalists
             break
-        alive, repeats = max(finalists, math.ceil(alive / 2)), repeats * 2
+        alive, repeats = following, repeats * 2
     out.append(("final", finalists * budget.units * budget.repeats * (len(spec.levels) + 1)))
     return out
 

@@ -105,7 +105,15 @@ def test_the_plan_counts_every_run_and_the_files_hold_them(searched):
     assert describe_plan(spec).endswith(f"total {plan_runs(spec)} runs")
     files = [xr.open_dataset(p, engine="netcdf4") for p in out.glob("candidates/*/*/results.nc")]
     ran = sum(f.sizes["dataset"] * f.sizes["run"] for f in files)
-    assert ran == plan_runs(spec) == 4 * 177 * 2 + 2 * 354 * 2 + 1 * 177 * 4
+    assert ran == plan_runs(spec) == 4 * 177 * 2 + 1 * 177 * 4
+
+
+def test_each_further_round_halves_the_candidates_and_doubles_the_repeats(tmp_path):
+    spec = load(write(tmp_path, SEARCH.replace("finalists = 1", "finalists = 1\nrounds = 3")))
+    assert describe_plan(spec) == (
+        "round0: 4 candidates x 59 units x 3 repeats x 2 levels = 1416 runs; "
+        "round1: 2 candidates x 59 units x 6 repeats x 2 levels = 1416 runs; "
+        "final: the best 1 x 59 units x 3 repeats x 4 levels = 708 runs; total 3540 runs")
 
 
 def test_the_design_is_the_reference_the_anchors_then_a_seeded_latin_hypercube(searched):
@@ -221,7 +229,7 @@ def test_pareto_front():
     (("[budget]", "[reference]\namplitude = 1e-3\n\n[budget]"),
      "reference.amplitude: not a condition of the reference"),
     (("runs = 4000", "runs = 100"), "budget.runs: 100 runs cannot rank anything: the smallest plan"),
-    (("runs = 4000", "runs = 3000"), "budget.runs: the plan needs 3540 runs"),
+    (("runs = 4000", "runs = 2000"), "budget.runs: the plan needs 2124 runs"),
     (("candidates = 4", "candidates = 1"), "budget.candidates"),
     (("finalists = 1", "finalists = 5"), "finalists = 5 is more than the 4 candidates"),
     (("levels = [0.5e-6, 1e-6, 2e-6]", "levels = [1e-6, 0.5e-6]"), "levels: must be positive growths in increasing"),
