@@ -9,6 +9,9 @@ before any run.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -269,3 +272,23 @@ def test_a_candidate_spec_file_with_other_content_is_not_overwritten(tmp_path):
         run_search(spec, tmp_path / "out", workers=1, progress=False, run_function=synthetic_run,
                    catalog=SYNTHETIC_CATALOG)
     assert (target / "round0.toml").read_text() == "# mine\n"
+
+
+@pytest.mark.parametrize("name, runs", [("procedure_backlash", 5400), ("procedure_preload_loss", 5400)])
+def test_the_shipped_searches_are_valid_and_their_plans_fit_their_budgets(name, runs):
+    """Loaded against the bench (its catalog and scenes): the reference and one design point make valid campaigns."""
+    spec = load_search(Path(campaigns.__file__).parent / "specs" / f"{name}.toml")
+    assert plan_runs(spec) == runs <= spec.budget.runs
+    assert design(spec)[0].reference and len(design(spec)) == spec.budget.candidates
+
+
+def test_the_cli_prints_the_plan_and_refuses_bad_input_in_one_line(tmp_path):
+    twin = [sys.executable, "-m", "app.cli", "procedure", "search"]
+    shipped = str(Path(campaigns.__file__).parent / "specs" / "procedure_backlash.toml")
+    plan = subprocess.run([*twin, shipped, "--plan"], capture_output=True, text=True, check=True)
+    assert "total 5400 runs" in plan.stdout and "p00 (reference: the base scene's own procedure)" in plan.stdout
+    bad = write(tmp_path, SEARCH.replace("cycles = [1, 8]", "cycle = [1, 8]"))
+    refused = subprocess.run([*twin, str(bad), "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert refused.returncode == 2 and refused.stderr.startswith("twin: error:") and "did you mean 'cycles'" in \
+        refused.stderr
+    assert not (tmp_path / "out").exists()
