@@ -243,14 +243,17 @@ def load_search(path: str | Path, *, quick: bool = False, catalog=None) -> Searc
     if quick:
         spec = spec.model_copy(update={"budget": spec.budget.model_copy(update={"runs": plan_runs(spec)})})
     problems = _problems(spec)
-    if not problems:  # the reference and one candidate of the design must make valid campaigns
+    if not problems:
+        failing: dict[str, list[str]] = {}  # problem -> the candidates whose campaign has it
         with tempfile.TemporaryDirectory() as scratch:
-            for candidate in design(spec)[:2]:
+            for candidate in design(spec):  # every candidate's campaigns, before any of them runs
                 try:
                     write_candidate_spec(spec, candidate, "final", spec.budget.repeats, Path(scratch), catalog)
                 except SpecError as exc:
-                    problems += [f"campaign of {candidate.name}: {p}" for p in exc.problems]
+                    for problem in exc.problems:
+                        failing.setdefault(problem, []).append(candidate.name)
                 (Path(scratch) / "final.toml").unlink(missing_ok=True)
+        problems += [f"campaign of {', '.join(names)}: {problem}" for problem, names in failing.items()]
     if problems:
         raise SpecError(problems)
     return spec
@@ -305,7 +308,9 @@ def _within_speed(knobs: dict) -> dict:
     """A design point faster than the bench (Table 9.3) or too slow for the features gets the nearest frequency its
     amplitude allows (the knobs' box is not cut to the speed limits, so the Latin hypercube spans the box)."""
     circumference = 2 * math.pi * knobs["amplitude"]
-    frequency = min(max(knobs["frequency"], MINIMUM_PEAK_SPEED / circumference), NOMINAL_SPEED / circumference)
+    # 0.1 % inside the limits: the design's 4 significant digits must not round a frequency back over one
+    frequency = min(max(knobs["frequency"], 1.001 * MINIMUM_PEAK_SPEED / circumference),
+                    0.999 * NOMINAL_SPEED / circumference)
     return {**knobs, "frequency": float(f"{frequency:.4g}")} if frequency != knobs["frequency"] else knobs
 
 
