@@ -44,45 +44,8 @@ from campaigns.procedure_search import (  # noqa: E402
 from campaigns.testing import SYNTHETIC_CATALOG, procedure_effect, synthetic_run  # noqa: E402
 from campaigns.within_unit import MIN_REPEATS, MIN_UNITS  # noqa: E402
 
-SYNTHETIC_SPEC = ROOT / "tests" / "campaigns" / "data" / "synthetic.toml"
-CAMPAIGN = f"""
-extends = "{SYNTHETIC_SPEC}"
-name = "bench_search_campaign"
-runs_per_dataset = {MIN_UNITS * MIN_REPEATS}
-[execution]
-isolation = "none"
-[traces]
-runs_per_dataset = 0
-[observability]
-sweep = ["b0", "b1"]
-[units]
-count = {MIN_UNITS}
-repeats = {MIN_REPEATS}
-[[datasets]]
-name = "b0"
-scene = "ds2"
-conditions = {{ backlash = 0.0, preload = 0.0, external_force = 0.0 }}
-[[datasets]]
-name = "b1"
-scene = "ds2"
-conditions = {{ backlash = 1e-6, preload = 0.0, external_force = 0.0 }}
-"""
-SEARCH = """
-name = "bench_search"
-campaign = "campaign.toml"
-fault = "backlash"
-scene = "ds2"
-levels = [0.5e-6, 1e-6, 2e-6]
-features = ["backlash_feature"]
-[knobs]
-preload = [0.0, 1000.0]
-external_force = [0.0, 2000.0]
-cycles = [1, 8]
-[budget]
-runs = 100000
-candidates = {candidates}
-finalists = 1
-"""
+#: The tests' synthetic search (its campaign beside it): 4 candidates, the reference and one anchor among them.
+SEARCH = ROOT / "tests" / "campaigns" / "data" / "synthetic_search.toml"
 
 
 def main() -> None:
@@ -93,8 +56,10 @@ def main() -> None:
     candidates = 4 if args.quick else args.candidates
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
-        (root / "campaign.toml").write_text(CAMPAIGN)
-        (root / "search.toml").write_text(SEARCH.format(candidates=candidates))
+        campaign = SEARCH.parent / "synthetic_search_campaign.toml"
+        (root / "search.toml").write_text(
+            SEARCH.read_text().replace('campaign = "synthetic_search_campaign.toml"', f'campaign = "{campaign}"')
+            .replace("candidates = 4", f"candidates = {candidates}").replace("runs = 4000", "runs = 100000"))
         spec = load_search(root / "search.toml", catalog=SYNTHETIC_CATALOG)
         known = {c.name: (lambda e: e[1] / e[0])(procedure_effect(c.knobs)) for c in design(spec)}
         best_known = min(known, key=known.get)

@@ -33,52 +33,14 @@ from campaigns.procedure_search import (
 )
 from campaigns.spec import SpecError
 from campaigns.testing import SYNTHETIC_CATALOG, procedure_effect, synthetic_run
-from campaigns.within_unit import MIN_REPEATS, MIN_UNITS, extrapolated_detectable
+from campaigns.within_unit import extrapolated_detectable
 
-CAMPAIGN = f"""
-extends = "{SYNTHETIC_SPEC}"
-name = "synthetic_search_campaign"
-runs_per_dataset = {MIN_UNITS * MIN_REPEATS}
-[execution]
-isolation = "none"
-[traces]
-runs_per_dataset = 0
-[observability]
-sweep = ["b0", "b1"]
-[units]
-count = {MIN_UNITS}
-repeats = {MIN_REPEATS}
-[[datasets]]
-name = "b0"
-scene = "ds2"
-conditions = {{ backlash = 0.0, preload = 0.0, external_force = 0.0 }}
-[[datasets]]
-name = "b1"
-scene = "ds2"
-conditions = {{ backlash = 1e-6, preload = 0.0, external_force = 0.0 }}
-"""
-# the anchor is the known best: no preload (the backlash seen whole), no force, the most cycles (noise averaged)
-SEARCH = """
-name = "synthetic_search"
-campaign = "campaign.toml"
-fault = "backlash"
-scene = "ds2"
-levels = [0.5e-6, 1e-6, 2e-6]
-features = ["backlash_feature"]
-anchors = [{ preload = 0.0, external_force = 0.0, cycles = 8 }]
-[knobs]
-preload = [100.0, 1000.0]
-external_force = [500.0, 2000.0]
-cycles = [1, 8]
-[budget]
-runs = 4000
-candidates = 4
-finalists = 1
-"""
+SEARCH_FILE = SYNTHETIC_SPEC.parent / "synthetic_search.toml"
+SEARCH = SEARCH_FILE.read_text().replace('campaign = "synthetic_search_campaign.toml"',
+                                         f'campaign = "{SEARCH_FILE.parent / "synthetic_search_campaign.toml"}"')
 
 
-def write(tmp_path, search: str = SEARCH, campaign: str = CAMPAIGN):
-    (tmp_path / "campaign.toml").write_text(campaign)
+def write(tmp_path, search: str = SEARCH):
     path = tmp_path / "search.toml"
     path.write_text(search)
     return path
