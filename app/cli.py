@@ -473,11 +473,10 @@ def cmd_procedure_search(args) -> int:
     if args.plan:
         return 0
     if not args.resume:
-        check_outputs(out, SEARCH_FILES, force=args.force)
+        check_outputs(out, SEARCH_FILES)
         if (out / "candidates").exists():
             raise CampaignError(f"{out / 'candidates'}: holds the campaigns of an earlier search; --resume continues "
-                                "it (finished runs kept), a new --out starts another (--force never replaces a "
-                                "campaign's own files)")
+                                "it (finished runs kept, the search's own files rewritten), a new --out starts another")
     announce = Stages()
     path = run_search(spec, out, workers=args.workers, resume=args.resume, announce=announce)
     print(f"wrote {path}\nwrote {path.parent / 'ranking.csv'}")
@@ -649,12 +648,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("spec", type=Path, help="search spec (TOML)")
     p.add_argument("--out", type=Path, help="output directory (default: out/<search name>)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of each campaign (default 2)")
-    p.add_argument("--quick", action="store_true", help="the smallest plan that still ranks: 3 candidates, 1 "
-                                                        "finalist, the floors of units and repeats")
+    p.add_argument("--quick", action="store_true", help="a plan that still ranks: the reference and the anchors (or "
+                                                        "3 candidates), 1 round, 1 finalist, the unit and repeat "
+                                                        "floors")
     p.add_argument("--plan", action="store_true", help="print the plan and the candidates, run nothing")
     p.add_argument("--resume", action="store_true", help="continue an interrupted search in --out (finished runs "
                                                          "kept; the search's own files rewritten)")
-    p.add_argument("--force", action="store_true", help="replace the files of an earlier search in --out")
     p.set_defaults(func=cmd_procedure_search)
 
     add_serve_parser(sub)

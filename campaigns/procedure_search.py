@@ -16,8 +16,9 @@ and a budget of runs. The search:
    screening level by the within-unit detection rule (:func:`campaigns.within_unit.extrapolated_detectable`), with
    bounds from a bootstrap over units (the same resampled units for every candidate, so differences are paired).
    The better half goes on to the next round with twice the repeats, until ``finalists`` remain.
-3. **Finalists.** Each finalist runs the full within-unit campaign at every level, and its verdict with bounds is
-   the within-unit analysis's (:mod:`campaigns.within_unit`), never the screening estimate's.
+3. **Finalists.** Each finalist runs the full within-unit campaign at every level on fresh units (a root seed of its
+   own, :data:`FINAL_STREAM`, shared by the finalists), and its verdict with bounds is the within-unit analysis's
+   (:mod:`campaigns.within_unit`), never the screening estimate's: the runs that picked a candidate do not judge it.
 
 Outputs (``search.nc``, CF): every candidate's knobs, test duration, scores with bounds, the round it reached, the
 finalists' verdicts, the Pareto front of detectability against duration, the rank, the difference to the best
@@ -42,7 +43,7 @@ import xarray as xr
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from scipy.stats import qmc
 
-from campaigns.analysis import SWEEP_QUANTITIES
+from campaigns.analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES
 from campaigns.bench import force_demand_peak
 from campaigns.execution import run_campaign
 from campaigns.spec import SpecError, read_spec
@@ -69,8 +70,14 @@ SCREENING_BOOTSTRAP = 1000
 SCREENING_CONFIDENCE = 0.95
 #: Candidates of a ``--quick`` search (the reference and two others, or the reference and the spec's anchors).
 QUICK_CANDIDATES = 3
-#: The stream of the coarse design (spawned from the campaign's root seed; the runs use other streams).
-DESIGN_STREAM = 7
+#: Spawn-key tag of the coarse design's and the screening bootstrap's streams (from the campaign's root seed; far from
+#: the data-set indices of the runs' streams, like campaigns.analysis's tags).
+DESIGN_STREAM = 1_000_039
+#: Spawn-key tag of the finalists' root seed: their campaigns test fresh units with fresh noise, so the verdict of a
+#: candidate the screening picked does not reuse the runs that picked it (common random numbers across finalists).
+FINAL_STREAM = 1_000_041
+#: Upper bounds of the budget (a typing slip, not a search: 100 candidates of 60 x 3 x 2 runs is 36000 runs).
+MAX_CANDIDATES, MAX_ROUNDS, MAX_UNITS, MAX_REPEATS, MAX_RUNS = 100, 5, 10_000, 100, 10_000_000
 
 
 class _Strict(BaseModel):
@@ -83,12 +90,12 @@ class Budget(_Strict):
     round) that get the full campaign, the ``units`` and the first round's ``repeats`` of every campaign, and ``runs``,
     the most runs the plan may take (the search refuses a plan above it before any run)."""
 
-    runs: int = Field(gt=0)
-    candidates: int = Field(ge=2)
+    runs: int = Field(gt=0, le=MAX_RUNS)
+    candidates: int = Field(ge=2, le=MAX_CANDIDATES)
     finalists: int = Field(default=2, ge=1)
-    rounds: int = Field(default=1, ge=1)
-    units: int = Field(default=MIN_UNITS, ge=MIN_UNITS)
-    repeats: int = Field(default=MIN_REPEATS, ge=MIN_REPEATS)
+    rounds: int = Field(default=1, ge=1, le=MAX_ROUNDS)
+    units: int = Field(default=MIN_UNITS, ge=MIN_UNITS, le=MAX_UNITS)
+    repeats: int = Field(default=MIN_REPEATS, ge=MIN_REPEATS, le=MAX_REPEATS)
 
     @model_validator(mode="after")
     def _finalists_within_candidates(self) -> Budget:
@@ -105,7 +112,7 @@ class SearchSpec(_Strict):
     description: str = ""
     campaign: str
     fault: Literal["backlash", "preload_loss"]
-    scene: str = "ds2"
+    scene: str
     levels: list[float] = Field(min_length=1)
     screening_level: float | None = None
     features: list[str] = Field(min_length=1)
@@ -129,12 +136,11 @@ class SearchSpec(_Strict):
 
     @property
     def requirement(self) -> float:
-        return float(self.campaign_data.get("observability", {}).get("requirement") or 1e-6)
+        return float(self.campaign_data.get("observability", {}).get("requirement") or BACKLASH_REQUIREMENT)
 
     @property
     def requirement_source(self) -> str:
-        return str(self.campaign_data.get("observability", {}).get("requirement_source")
-                   or "Table 9.3: minimum detectable linear backlash 1 µm")
+        return str(self.campaign_data.get("observability", {}).get("requirement_source") or REQUIREMENT_SOURCE)
 
     @property
     def screening(self) -> float:
@@ -163,7 +169,9 @@ def _problems(spec: SearchSpec) -> list[str]:
             continue
         knob = KNOBS[name]
         values = given if isinstance(given, list) else [given]
-        if not knob.choices and (not values or len(values) > 2 or any(isinstance(v, str) for v in values)):
+        if knob.choices and not values:
+            problems.append(f"knobs.{name}: give at least one of {', '.join(knob.choices)}")
+        elif not knob.choices and (not values or len(values) > 2 or any(isinstance(v, str) for v in values)):
             problems.append(f"knobs.{name}: give [low, high] or one number [{knob.unit}], got {given!r}")
         else:  # each value against the knob's own range (speed limits of a pair: below, over the ranges)
             problems += [p for v in values if (p := knob.problem(f"knobs.{name}", v)) is not None]
@@ -183,6 +191,14 @@ def _problems(spec: SearchSpec) -> list[str]:
     if len(spec.anchors) > spec.budget.candidates - 1:
         problems.append(f"budget.candidates: {spec.budget.candidates} cannot hold the reference and the "
                         f"{len(spec.anchors)} anchors")
+    elif len(spec.anchors) < spec.budget.candidates - 1 and not _free_knobs(spec):
+        problems.append(f"knobs: none has a range or a choice, so the {spec.budget.candidates - 1 - len(spec.anchors)}"
+                        " design candidates would all be one procedure; give ranges, or budget.candidates = 1 + the "
+                        "anchors")
+    campaign_condition = spec.campaign_data.get("observability", {}).get("condition", "backlash")
+    if campaign_condition != spec.condition:
+        problems.append(f"campaign: its observability sweep is over {campaign_condition!r}, the search's fault over "
+                        f"{spec.condition!r}: its requirement and units would not apply; name a {spec.fault} campaign")
     if spec.screening <= 0:
         problems.append(f"screening_level: must be a positive growth [{spec.fault_unit}], got {spec.screening:g}")
     problems += [f"reference.{p}" for p in procedure_problems(spec.reference)]
@@ -190,9 +206,10 @@ def _problems(spec: SearchSpec) -> list[str]:
                  for name in spec.reference if name in KNOBS and name not in ("preload", "zero_procedure")]
     if spec.fault == "preload_loss":
         lowest = min(ranges["preload"][1], float(reference_setting(spec)["preload"]))
-        if spec.levels and spec.levels[-1] > lowest:
-            problems.append(f"levels: a loss of {spec.levels[-1]:g} N is more than the lowest preload setting "
-                            f"{lowest:g} N of knobs.preload and the reference")
+        largest = max([*spec.levels, spec.screening])
+        if largest > lowest:
+            problems.append(f"levels, screening_level: a loss of {largest:g} N is more than the lowest preload "
+                            f"setting {lowest:g} N of knobs.preload and the reference")
     campaign_features = spec.campaign_data.get("features", [])
     for feature in spec.features:
         if feature not in campaign_features:
@@ -246,13 +263,13 @@ def load_search(path: str | Path, *, quick: bool = False, catalog=None) -> Searc
     if not problems:
         failing: dict[str, list[str]] = {}  # problem -> the candidates whose campaign has it
         with tempfile.TemporaryDirectory() as scratch:
-            for candidate in design(spec):  # every candidate's campaigns, before any of them runs
+            for stage, candidate in ((s, c) for s in stages(spec) for c in design(spec)):  # before any run
                 try:
-                    write_candidate_spec(spec, candidate, "final", spec.budget.repeats, Path(scratch), catalog)
+                    write_candidate_spec(spec, candidate, stage.name, stage.repeats, Path(scratch), catalog)
                 except SpecError as exc:
                     for problem in exc.problems:
-                        failing.setdefault(problem, []).append(candidate.name)
-                (Path(scratch) / "final.toml").unlink(missing_ok=True)
+                        failing.setdefault(f"{stage.name}: {problem}", []).append(candidate.name)
+                (Path(scratch) / f"{stage.name}.toml").unlink(missing_ok=True)
         problems += [f"campaign of {', '.join(names)}: {problem}" for problem, names in failing.items()]
     if problems:
         raise SpecError(problems)
@@ -279,7 +296,7 @@ def design(spec: SearchSpec) -> list[Candidate]:
     ``budget.candidates`` (each knob's range cut in as many strata, one point in each: every knob is spread over its
     range even with a handful of candidates)."""
     ranges = spec.ranges()
-    free = [k for k, r in ranges.items() if r[0] != "fixed" and not (r[0] == "choices" and len(r[1]) == 1)]
+    free = _free_knobs(spec)
     count = spec.budget.candidates - 1 - len(spec.anchors)
     seed = np.random.SeedSequence(int(spec.campaign_data.get("root_seed", 0)), spawn_key=(DESIGN_STREAM,))
     points = (qmc.LatinHypercube(len(free), seed=np.random.default_rng(seed)).random(count) if free
@@ -299,18 +316,27 @@ def design(spec: SearchSpec) -> list[Candidate]:
                     knobs[name] = int(round(value)) if KNOBS[name].integer else float(f"{value:.4g}")
             else:
                 knobs[name] = r[1][0] if r[0] == "choices" else (int(r[1]) if KNOBS[name].integer else r[1])
-        knobs = _within_speed(knobs)
+        knobs = _within_speed(knobs, ranges["frequency"])
         candidates.append(Candidate(f"p{c:02d}", knobs, knobs))
     return candidates
 
 
-def _within_speed(knobs: dict) -> dict:
+def _free_knobs(spec: SearchSpec) -> list[str]:
+    """The knobs the design varies: a range, or more than one choice."""
+    return [k for k, r in spec.ranges().items() if r[0] == "range" or (r[0] == "choices" and len(r[1]) > 1)]
+
+
+def _within_speed(knobs: dict, frequencies: tuple) -> dict:
     """A design point faster than the bench (Table 9.3) or too slow for the features gets the nearest frequency its
-    amplitude allows (the knobs' box is not cut to the speed limits, so the Latin hypercube spans the box)."""
+    amplitude allows within the spec's frequency range (the knobs' box is not cut to the speed limits, so the Latin
+    hypercube spans the box); where none does, the point stays and the validation of every candidate refuses it."""
     circumference = 2 * math.pi * knobs["amplitude"]
     # 0.1 % inside the limits: the design's 4 significant digits must not round a frequency back over one
-    frequency = min(max(knobs["frequency"], 1.001 * MINIMUM_PEAK_SPEED / circumference),
-                    0.999 * NOMINAL_SPEED / circumference)
+    low = max(1.001 * MINIMUM_PEAK_SPEED / circumference, frequencies[1])
+    high = min(0.999 * NOMINAL_SPEED / circumference, frequencies[-1])
+    if low > high:
+        return knobs
+    frequency = min(max(knobs["frequency"], low), high)
     return {**knobs, "frequency": float(f"{frequency:.4g}")} if frequency != knobs["frequency"] else knobs
 
 
@@ -366,7 +392,15 @@ def candidate_campaign(spec: SearchSpec, candidate: Candidate, stage: str, repea
         "traces": {"runs_per_dataset": 0},
         "datasets": datasets,
     }
+    if stage == "final":
+        overrides["root_seed"] = final_seed(spec)
     return overrides
+
+
+def final_seed(spec: SearchSpec) -> int:
+    """The finalists' root seed, from the campaign's (:data:`FINAL_STREAM`)."""
+    root = int(spec.campaign_data.get("root_seed", 0))
+    return int(np.random.SeedSequence(root, spawn_key=(FINAL_STREAM,)).generate_state(1)[0])
 
 
 def write_candidate_spec(spec: SearchSpec, candidate: Candidate, stage: str, repeats: int, directory: Path,
@@ -395,36 +429,43 @@ def _fault_free(spec: SearchSpec) -> dict:
 
 def plan_runs(spec: SearchSpec, *, smallest: bool = False) -> int:
     """Runs the plan takes: every screening round, then the finalists' campaigns."""
-    return sum(runs for _, runs in _rounds(spec, smallest=smallest))
+    return sum(stage.runs for stage in stages(spec, smallest=smallest))
 
 
-def _rounds(spec: SearchSpec, *, smallest: bool = False) -> list[tuple[str, int]]:
-    """``[(stage, runs)]``: each round's candidates x units x repeats x 2 levels (halving the candidates and doubling
-    the repeats from round to round until the finalists remain), then the finalists' full campaigns."""
+@dataclass(frozen=True)
+class Stage:
+    """One stage of the plan: ``name`` (``round<k>`` or ``final``), how many candidates run it with how many repeats
+    per unit and level, at how many levels, and its runs."""
+
+    name: str
+    candidates: int
+    repeats: int
+    levels: int
+    runs: int
+
+
+def stages(spec: SearchSpec, *, smallest: bool = False) -> list[Stage]:
+    """The plan: each screening round (2 levels; halving the candidates and doubling the repeats from round to round
+    until the last round picks the finalists), then the finalists' full campaigns."""
     budget = spec.budget
     candidates, finalists = (2, 1) if smallest else (budget.candidates, budget.finalists)
     out, alive, repeats = [], candidates, budget.repeats
     while True:
-        out.append((f"round{len(out)}", alive * budget.units * repeats * 2))
+        out.append(Stage(f"round{len(out)}", alive, repeats, 2, alive * budget.units * repeats * 2))
         following = max(finalists, math.ceil(alive / 2))
         if following <= finalists or len(out) == budget.rounds:  # the last round picks the finalists
             break
         alive, repeats = following, repeats * 2
-    out.append(("final", finalists * budget.units * budget.repeats * (len(spec.levels) + 1)))
+    levels = len(spec.levels) + 1
+    out.append(Stage("final", finalists, budget.repeats, levels, finalists * budget.units * budget.repeats * levels))
     return out
 
 
 def describe_plan(spec: SearchSpec) -> str:
-    """The plan in words: the rounds and their runs."""
-    words, alive, repeats = [], spec.budget.candidates, spec.budget.repeats
-    for stage, runs in _rounds(spec):
-        if stage == "final":
-            words.append(f"final: the best {spec.budget.finalists} x {spec.budget.units} units x "
-                         f"{spec.budget.repeats} repeats x {len(spec.levels) + 1} levels = {runs} runs")
-        else:
-            words.append(f"{stage}: {alive} candidates x {spec.budget.units} units x {repeats} repeats x 2 levels "
-                         f"= {runs} runs")
-            alive, repeats = max(spec.budget.finalists, math.ceil(alive / 2)), repeats * 2
+    """The plan in words: the stages and their runs."""
+    words = [f"{s.name}: {'the best ' if s.name == 'final' else ''}{s.candidates}"
+             f"{' candidates' if s.name != 'final' else ''} x {spec.budget.units} units x {s.repeats} repeats x "
+             f"{s.levels} levels = {s.runs} runs" for s in stages(spec)]
     return "; ".join(words) + f"; total {plan_runs(spec)} runs"
 
 
@@ -469,16 +510,6 @@ def _quantile_unit(per_unit: np.ndarray) -> np.ndarray:
     return np.quantile(finite_or_inf, DESIGN_REVIEW_QUANTILE, axis=-1, method="inverted_cdf")
 
 
-@dataclass
-class SearchState:
-    """What the search found so far (filled round by round)."""
-
-    candidates: list[Candidate]
-    scores: dict = field(default_factory=dict)          # feature -> screening_scores of the last round each reached
-    round_reached: dict = field(default_factory=dict)   # candidate -> last round index
-    finals: dict = field(default_factory=dict)          # candidate -> within-unit dataset of its best feature
-
-
 def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: bool = False, progress: bool = True,
                run_function=None, catalog=None, announce: Callable[[str, str], None] | None = None) -> Path:
     """Run the search and write ``search.nc`` (and ``ranking.csv``) in ``out``; returns the search.nc path.
@@ -500,7 +531,7 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
     round0 = {f: {} for f in features}  # feature -> candidate -> round-0 bootstrap replicates (paired differences)
     round_reached = {}
     evidence = {}
-    screening = _rounds(spec)[:-1]
+    screening = [(s.name, s.runs) for s in stages(spec)[:-1]]
     for k, (stage, runs) in enumerate(screening):
         announce(stage, f"{len(alive)} candidates x {spec.budget.units} units x {repeats} repeats x 2 levels "
                         f"({runs} runs)")
@@ -533,7 +564,9 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
         order = np.argsort(best_per_candidate, kind="stable")
         kept = sorted(order[:keep])
         # how sure the screening is of its pick: the share of bootstrap replicates whose best candidate was kept
-        selection_confidence = float(np.isin(np.argmin(best_replicates, axis=1), kept).mean())
+        decided = np.isfinite(best_replicates).any(axis=1)  # a replicate where no candidate reaches picks none
+        selection_confidence = (float(np.isin(np.argmin(best_replicates[decided], axis=1), kept).mean())
+                                if decided.any() else math.nan)
         alive = [alive[i] for i in kept]
         repeats *= 2
     finals = {}
@@ -556,8 +589,16 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
 
 
 def _run_candidate(spec, candidate, stage, repeats, out, *, catalog, **options) -> Path:
+    """Run the candidate's campaign of ``stage``; resumed, a finished one (its results.nc of the same spec hash) is
+    read as it is, so a search resumed under another code version re-runs nothing it has (its files name their
+    versions)."""
     directory = out / "candidates" / candidate.name
     campaign = write_candidate_spec(spec, candidate, stage, repeats, directory, catalog)
+    finished = directory / stage / "results.nc"
+    if options.get("resume") and finished.exists():
+        with xr.open_dataset(finished, engine="netcdf4") as stored:
+            if stored.attrs.get("spec_hash") == campaign.spec_hash():
+                return finished
     return run_campaign(campaign, directory / stage, catalog=catalog, **options)
 
 
@@ -597,15 +638,16 @@ def _toml_value(value) -> str:
 
 
 def _final_figures(analysis: xr.Dataset, features: list[str], condition: str) -> dict:
-    """The finalist's best feature by the within-unit analysis (the smallest upper bound, then lower bound, of the
-    design-review unit's detectable growth) with its bounds, verdict and statement."""
+    """The finalist's best feature by the within-unit analysis (the smallest upper bound, then the smallest lower
+    bound — the last level not detected — of the design-review unit's detectable growth) with its bounds, verdict and
+    statement."""
     stem = SWEEP_QUANTITIES[condition][0].replace(" ", "_")
     bounds = analysis[f"within_unit_minimum_detectable_{stem}_ci"].sel(unit_quantile=DESIGN_REVIEW_QUANTILE)
     rows = []
     for feature in features:
         low, high = (float(v) for v in bounds.sel(feature=feature).values)
         rows.append((high if math.isfinite(high) else math.inf, low, feature))
-    high, low, feature = min(rows, key=lambda row: (row[0], -row[1] if math.isfinite(row[1]) else 0.0))
+    high, low, feature = min(rows, key=lambda row: (row[0], row[1]))
     return {"feature": feature, "low": low, "high": high,
             "verdict": str(analysis["within_unit_requirement_verdict"].sel(feature=feature).item()),
             "statement": str(analysis["within_unit_requirement_statement"].sel(feature=feature).item())}
@@ -623,7 +665,8 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
     estimate = np.array([[scores[f][n][0] for f in features] for n in names], dtype=float)
     low = np.array([[scores[f][n][1] for f in features] for n in names], dtype=float)
     high = np.array([[scores[f][n][2] for f in features] for n in names], dtype=float)
-    note = np.where(np.isinf(estimate), "the design-review unit's feature did not move at the screening level", "")
+    note = np.where(np.isinf(estimate), "no estimate: the design-review unit's feature did not move at the screening "
+                    "level, or it had fewer than 3 ok tests at a level (see the candidate's campaign)", "")
     best_f = np.argmin(np.where(np.isfinite(estimate), estimate, math.inf), axis=1)
     take = np.arange(len(names))
     score, score_low, score_high = estimate[take, best_f], low[take, best_f], high[take, best_f]
@@ -636,7 +679,7 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
     def key(k: int):
         n = names[k]
         if n in final:
-            return (0, final[n]["high"], -final[n]["low"] if math.isfinite(final[n]["low"]) else 0.0, score[k])
+            return (0, final[n]["high"], final[n]["low"], score[k])
         return (1, -round_reached[n], last[k, 0] if math.isfinite(last[k, 0]) else math.inf, durations[k])
     order = sorted(range(len(names)), key=key)
     rank = np.empty(len(names), dtype=np.int32)
@@ -646,8 +689,9 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
     replicate = np.stack([np.min(np.stack([round0[f][n] for f in features]), axis=0) for n in names])
     first = np.min(estimate, axis=1)
     with np.errstate(invalid="ignore"):
-        differences = replicate - replicate[best]
-        difference = first - first[best]
+        # neither reached (inf - inf): a tie, not a loss
+        differences = np.where(np.isinf(replicate) & np.isinf(replicate[best]), 0.0, replicate - replicate[best])
+        difference = np.where(np.isinf(first) & np.isinf(first[best]), 0.0, first - first[best])
     tail = (1.0 - SCREENING_CONFIDENCE) / 2.0
     difference_low = np.quantile(np.where(np.isnan(differences), math.inf, differences), tail, axis=1,
                                  method="inverted_cdf")
@@ -708,6 +752,10 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
                                                         for n in names]),
                                  fault_units | {"long_name": "upper bound of the 95th-percentile unit's detectable "
                                                 "growth (inf: above the largest level)"}),
+            "within_unit_feature": ("candidate", np.array([final[n]["feature"] if n in final else ""
+                                                          for n in names], dtype=object), {
+                "long_name": "the finalist's feature with the smallest bounds in its full campaign (the bounds, "
+                             "verdict and statement are this feature's)"}),
             "within_unit_verdict": ("candidate", np.array([final[n]["verdict"] if n in final else ""
                                                           for n in names], dtype=object), {
                 "long_name": "within-unit verdict of a finalist: met / not met / undetermined / insufficient data"}),
@@ -780,6 +828,13 @@ def _interval(low: float, high: float, unit: str) -> str:
     return f"{low * scale:.3g}-{high * scale:.3g} {shown}"
 
 
+def _signed(low: float, high: float, unit: str) -> str:
+    """A difference's interval with its signs (``inf``: the other never reaches detection)."""
+    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
+    ends = [f"{v * scale:+.3g}" if math.isfinite(v) else ("+inf" if v > 0 else "-inf") for v in (low, high)]
+    return f"{ends[0]} to {ends[1]} {shown}"
+
+
 def search_statement(ds: xr.Dataset) -> str:
     """The search's finding in one paragraph, computed once: the best procedure, its within-unit verdict with its
     bounds, and what it beats (the reference, paired over the same units), with the sample sizes."""
@@ -792,8 +847,8 @@ def search_statement(ds: xr.Dataset) -> str:
             f"procedures is {best} ({'the reference' if int(row['reference']) else _knob_words(ds, best)}; "
             f"{float(row['test_duration']):.3g} s per test): the 95th-percentile unit detects a {fault} of "
             f"{_interval(float(row['within_unit_low']), float(row['within_unit_high']), unit)} with "
-            f"{row['best_feature'].item()} (requirement {requirement}; {ds.attrs['units']} units x "
-            f"{ds.attrs['repeats']} tests per level, {n} finalist(s) with the full sweep"
+            f"{row['within_unit_feature'].item()} (requirement {requirement}; {ds.attrs['units']} units x "
+            f"{ds.attrs['repeats']} tests per level on fresh units, {n} finalist(s) with the full sweep"
             + (f"; the screening kept the best candidate of {float(ds.attrs['selection_confidence']) * 100:.0f} % of "
                "its bootstrap replicates" if "selection_confidence" in ds.attrs else "") + ").")
     reference = [str(c) for c in ds["candidate"].values if int(ds["reference"].sel(candidate=c))]
@@ -803,7 +858,8 @@ def search_statement(ds: xr.Dataset) -> str:
             return head
         runner = str(others["candidate"].values[int(np.argmin(others["rank"].values))])
         return (head + f" The reference (the base scene's procedure) is the best; the next, {runner}, has a "
-                f"screening estimate larger by {_interval(*_difference(ds, runner), unit)}.")
+                f"screening estimate larger by {_signed(*_difference(ds, runner), unit)} (95 % paired bootstrap over "
+                "the same units, round 0).")
     low, high = _difference(ds, reference[0])
     if low > 0:
         verdict = "beats the reference"
@@ -812,8 +868,8 @@ def search_statement(ds: xr.Dataset) -> str:
     else:
         verdict = "is not distinguished from the reference"
     return (head + f" It {verdict} ({reference[0]}, {float(ds['test_duration'].sel(candidate=reference[0])):.3g} s): "
-            f"the reference's screening estimate is larger by {_interval(low, high, unit)} (95 % paired bootstrap "
-            f"over the same units, round 0).")
+            f"the reference's screening estimate minus the best's is {_signed(low, high, unit)} (95 % paired "
+            f"bootstrap over the same units, round 0).")
 
 
 def _difference(ds: xr.Dataset, candidate: str) -> tuple[float, float]:
