@@ -25,6 +25,7 @@ from campaigns.analysis import FALSE_ALARM_RATE, POWER
 from campaigns.procedure_search import (
     describe_plan,
     design,
+    final_seed,
     load_search,
     pareto_front,
     plan_runs,
@@ -130,8 +131,8 @@ def test_the_finalists_figure_is_the_within_unit_analysis(searched):
 
 def test_each_candidates_evidence_runs_again_to_the_same_numbers(searched, tmp_path):
     """The rerun command's spec file, loaded as `twin campaign run` loads it, is the campaign that ran (same hash)
-    and runs to the same features."""
-    _, ds, out = searched
+    and runs to the same features; the finalists' campaigns draw fresh units (their own root seed)."""
+    spec, ds, out = searched
     for candidate in ds["candidate"].values:
         evidence = out / str(ds["evidence"].sel(candidate=candidate).item())
         spec_file = evidence.parent / f"{evidence.name}.toml"
@@ -139,9 +140,22 @@ def test_each_candidates_evidence_runs_again_to_the_same_numbers(searched, tmp_p
             f"twin campaign run candidates/{candidate}/{evidence.name}.toml")
         stored = xr.open_dataset(evidence / "results.nc", engine="netcdf4")
         assert campaigns.load_spec(spec_file, catalog=SYNTHETIC_CATALOG).spec_hash() == stored.attrs["spec_hash"]
+    final = (out / "candidates" / ds.attrs["best"] / "final.toml").read_text()
+    assert f"root_seed = {final_seed(spec)}" in final and final_seed(spec) != 12345  # fresh units for the verdict
     again = campaigns.run_campaign(campaigns.load_spec(spec_file, catalog=SYNTHETIC_CATALOG), tmp_path / "again",
                                    workers=1, progress=False, run_function=synthetic_run)
     np.testing.assert_array_equal(xr.open_dataset(again)["backlash_feature"].values, stored["backlash_feature"].values)
+
+
+def test_a_resumed_search_reads_its_finished_campaigns_and_finds_the_same(searched):
+    spec, ds, out = searched
+    stamps = {p: p.stat().st_mtime_ns for p in out.glob("candidates/*/*/results.nc")}
+    path = run_search(spec, out, workers=1, progress=False, resume=True, run_function=synthetic_run,
+                      catalog=SYNTHETIC_CATALOG)
+    assert {p: p.stat().st_mtime_ns for p in out.glob("candidates/*/*/results.nc")} == stamps  # nothing re-ran
+    with xr.open_dataset(path, engine="netcdf4") as again:
+        assert again.attrs["statement"] == ds.attrs["statement"]
+        xr.testing.assert_identical(again.drop_attrs(), ds.drop_attrs())
 
 
 def test_search_nc_is_cf_and_the_ranking_table_is_in_rank_order(searched):
@@ -202,6 +216,11 @@ def test_pareto_front():
     (('features = ["backlash_feature"]', 'features = ["drag"]'), "'drag' is not a feature of the campaign"),
     (('fault = "backlash"', 'fault = "wear"'), "fault"),
     (('name = "synthetic_search"', 'name = "synthetic_search"\ncolour = "red"'), "colour"),
+    (("cycles = [1, 8]", "cycles = [1, 8]\nzero_procedure = []"), "knobs.zero_procedure: give at least one of"),
+    (("candidates = 4", "candidates = 200"), "budget.candidates"),
+    (("preload = [100.0, 1000.0]\nexternal_force = [500.0, 2000.0]\ncycles = [1, 8]", "cycles = 4"),
+     "knobs: none has a range or a choice"),
+    (('scene = "ds2"\n', ""), "scene"),
 ])
 def test_bad_search_specs_are_one_clear_error_before_any_run(tmp_path, change, message):
     assert change[0] in SEARCH
@@ -211,12 +230,14 @@ def test_bad_search_specs_are_one_clear_error_before_any_run(tmp_path, change, m
     assert not (tmp_path / "out").exists()
 
 
-def test_a_preload_loss_larger_than_the_setting_is_refused(tmp_path):
+def test_a_preload_loss_search_needs_a_preload_campaign_and_losses_within_the_setting(tmp_path):
     search = SEARCH.replace('fault = "backlash"', 'fault = "preload_loss"').replace(
-        "levels = [0.5e-6, 1e-6, 2e-6]", "levels = [100.0, 200.0]").replace(
+        "levels = [0.5e-6, 1e-6, 2e-6]", "levels = [50.0, 100.0]\nscreening_level = 200.0").replace(
         "anchors = [{ preload = 0.0, external_force = 0.0, cycles = 8 }]", "")
-    with pytest.raises(SpecError, match="a loss of 200 N is more than the lowest preload setting"):
+    with pytest.raises(SpecError) as caught:
         load(write(tmp_path, search))
+    assert any("a loss of 200 N is more than the lowest preload setting 0 N" in p for p in caught.value.problems)
+    assert any("campaign: its observability sweep is over 'backlash'" in p for p in caught.value.problems)
 
 
 def test_quick_is_the_smallest_plan_that_still_ranks(tmp_path):
