@@ -40,8 +40,8 @@ FAULT_WORDS = {"backlash": "backlash growth", "preload_loss": "preload loss"}
 #: Display unit of each fault unit (factor from SI, symbol): backlash in µm, preload loss in N, the same in every row
 #: of a column and on the chart, so the candidates compare at a glance.
 FAULT_DISPLAY = {"m": (1e6, "µm"), "N": (1.0, "N")}
-#: The reference procedure in words.
-REFERENCE_WORDS = "the thesis's data set 2 procedure"
+#: The reference procedure in words, when search.nc does not say it (attribute ``reference_procedure``).
+REFERENCE_WORDS = "the base scene's own procedure"
 #: Ratio of the largest to the smallest value above which the chart's value axis is logarithmic.
 LOG_SPAN = 30.0
 #: Shown for a value the file does not resolve (NaN) or a cell that does not apply.
@@ -214,6 +214,7 @@ class _Search:
         self.order = sorted(range(len(ids)), key=lambda i: (ranks[i] if math.isfinite(ranks[i]) else math.inf, ids[i]))
         self.ids = ids
         self.best = str(search.attrs["best"])
+        self.reference_words = str(search.attrs.get("reference_procedure", REFERENCE_WORDS))
 
     def value(self, name: str, i: int):
         return self.ds[name].values[i]
@@ -274,7 +275,7 @@ def build(search, path: Path, generated_at: str) -> Report:
     if reference:
         ref = reference[0]
         summary.append(Paragraph(
-            f"Reference: {s.ids[ref]}, {REFERENCE_WORDS} (marked “reference” in the table), rank "
+            f"Reference: {s.ids[ref]}, {s.reference_words} (marked “reference” in the table), rank "
             f"{plain(s.value('rank', ref))}."))
     summary.append(ranked_table(s, knob_columns))
 
@@ -332,7 +333,7 @@ def ranked_table(s: _Search, knob_columns) -> Table:
                      s.unit, signed=True),
         ))
     caption = (f"The candidate procedures ranked by their screening estimate of the detectable {s.fault} (1 = best); "
-               f"“(reference)”: {REFERENCE_WORDS}. The within-unit bracket (the 95th-percentile unit's detectable "
+               f"“(reference)”: {s.reference_words}. The within-unit bracket (the 95th-percentile unit's detectable "
                "growth between two levels of the finalist's full campaign) and its verdict are given for finalists "
                f"only ({NONE} otherwise). The difference to the best is paired over the same units; {NONE}: not "
                "resolved.")
