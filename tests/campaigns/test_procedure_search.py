@@ -257,7 +257,8 @@ def test_a_candidate_spec_file_with_other_content_is_not_overwritten(tmp_path):
     assert (target / "round0.toml").read_text() == "# mine\n"
 
 
-@pytest.mark.parametrize("name, runs", [("procedure_backlash", 5400), ("procedure_preload_loss", 5400)])
+@pytest.mark.parametrize("name, runs", [("procedure_backlash", 5400), ("procedure_preload_loss", 5400),
+                                        ("procedure_preload_loss_preloaded_zero", 5400)])
 def test_the_shipped_searches_are_valid_and_their_plans_fit_their_budgets(name, runs):
     """Loaded against the bench (its catalog and scenes): the reference and one design point make valid campaigns."""
     spec = load_search(Path(campaigns.__file__).parent / "specs" / f"{name}.toml")
