@@ -25,6 +25,9 @@ RESULT_DETERMINING = ("benchtwin", "numpy", "numba", "scipy")
 MODEL_PACKAGES = ("twin", "sensors")
 #: Files of a package that define the model: its code and its data (parameter sets, scenes, rules).
 MODEL_SUFFIXES = (".py", ".toml")
+#: Folders of a package that hold inputs, not the model: campaign specs (each campaign keys its files by its own
+#: spec hash), so adding a spec beside the shipped ones leaves every campaign resumable.
+INPUT_FOLDERS = ("specs",)
 
 
 def package_versions() -> dict[str, str]:
@@ -46,7 +49,8 @@ def run_function_package(run_function) -> str | None:
 
 @lru_cache(maxsize=8)
 def code_hash(packages: tuple[str, ...]) -> str:
-    """SHA-256 over the model files (:data:`MODEL_SUFFIXES`) of ``packages``, by relative path."""
+    """SHA-256 over the model files (:data:`MODEL_SUFFIXES`) of ``packages``, by relative path, without the
+    :data:`INPUT_FOLDERS`."""
     digest = hashlib.sha256()
     for package in sorted(set(packages)):
         spec = importlib.util.find_spec(package)
@@ -55,7 +59,8 @@ def code_hash(packages: tuple[str, ...]) -> str:
             continue
         roots = [Path(r) for r in spec.submodule_search_locations or []]
         files = [(root, p) for root in roots for p in root.rglob("*")
-                 if p.suffix in MODEL_SUFFIXES and "__pycache__" not in p.parts]
+                 if p.suffix in MODEL_SUFFIXES and "__pycache__" not in p.parts
+                 and not set(p.relative_to(root).parts[:-1]) & set(INPUT_FOLDERS)]
         if not roots and spec.origin:  # a plain module
             files = [(Path(spec.origin).parent, Path(spec.origin))]
         for root, path in sorted(files):

@@ -394,3 +394,23 @@ def test_results_record_versions_and_the_model_code_hash(reference_results):
         assert ds.attrs["model_code_packages"] == "campaigns,sensors,twin"
         record = json.loads(ds.attrs["provenance"])[0]
         assert {"numpy", "numba", "scipy", "benchtwin"} <= set(record)
+
+
+def test_a_new_spec_file_leaves_the_model_code_hash_and_a_new_model_file_changes_it(tmp_path, monkeypatch):
+    """Campaign specs are inputs (keyed by their own spec hash), not the model: adding one beside the shipped specs
+    must not make every campaign unresumable; a changed model file must."""
+    from campaigns.provenance import code_hash
+
+    package = tmp_path / "hashed_package"
+    (package / "specs").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "specs" / "a.toml").write_text("name = 'a'\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    before = code_hash(("hashed_package",))
+    code_hash.cache_clear()
+    (package / "specs" / "b.toml").write_text("name = 'b'\n")
+    assert code_hash(("hashed_package",)) == before
+    code_hash.cache_clear()
+    (package / "parameters.toml").write_text("x = 1\n")
+    assert code_hash(("hashed_package",)) != before
+    code_hash.cache_clear()
