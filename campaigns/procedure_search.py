@@ -39,14 +39,16 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from scipy.stats import qmc
 
-from campaigns.analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES
+from campaigns.analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES, analyze
 from campaigns.bench import force_demand_peak
 from campaigns.execution import run_campaign
-from campaigns.spec import SpecError, read_spec
+from campaigns.spec import SpecError, load_spec, read_spec
+from campaigns.units import display_scale, quantity, quantity_range
 from campaigns.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS, extrapolated_detectable, unit_values
 from twin.scenes import load_scene
 from twin.scenes.procedure import (
@@ -262,8 +264,9 @@ def load_search(path: str | Path, *, quick: bool = False, catalog=None) -> Searc
     problems = _problems(spec)
     if not problems:
         failing: dict[str, list[str]] = {}  # problem -> the candidates whose campaign has it
+        candidates = design(spec)
         with tempfile.TemporaryDirectory() as scratch:
-            for stage, candidate in ((s, c) for s in stages(spec) for c in design(spec)):  # before any run
+            for stage, candidate in ((s, c) for s in stages(spec) for c in candidates):  # before any run
                 try:
                     write_candidate_spec(spec, candidate, stage.name, stage.repeats, Path(scratch), catalog)
                 except SpecError as exc:
@@ -408,8 +411,6 @@ def write_candidate_spec(spec: SearchSpec, candidate: Candidate, stage: str, rep
     """Write the candidate's campaign spec ``<directory>/<stage>.toml`` (it ``extends`` the search's campaign by a
     relative path) and load it as every campaign is loaded: what runs is what the file says, so the one command
     ``twin campaign run <file>`` repeats it. An existing file with other content is refused."""
-    from campaigns.spec import load_spec
-
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{stage}.toml"
     campaign = Path(spec.path).parent / spec.campaign if spec.path else Path(spec.campaign)
@@ -516,13 +517,11 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
 
     Every candidate's campaigns go under ``out/candidates/<name>/`` with their spec files; ``resume`` continues
     them (finished runs kept). ``run_function``/``catalog``: another model (the tests' synthetic one)."""
-    from campaigns.analysis import analyze  # lazy: the analysis stack is only needed for the finalists
-
     out = Path(out)
     announce = announce or (lambda stage, message: None)
     candidates = design(spec)
     alive = list(candidates)
-    repeats = spec.budget.repeats
+    plan = stages(spec)
     features = list(spec.features)
     # feature -> candidate -> (estimate, low, high): of round 0 (every candidate on the same units and repeats, the
     # table's comparable figure) and of the last round the candidate ran (what selected it)
@@ -531,13 +530,12 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
     round0 = {f: {} for f in features}  # feature -> candidate -> round-0 bootstrap replicates (paired differences)
     round_reached = {}
     evidence = {}
-    screening = [(s.name, s.runs) for s in stages(spec)[:-1]]
-    for k, (stage, runs) in enumerate(screening):
-        announce(stage, f"{len(alive)} candidates x {spec.budget.units} units x {repeats} repeats x 2 levels "
-                        f"({runs} runs)")
+    for k, stage in enumerate(plan[:-1]):
+        announce(stage.name, f"{len(alive)} candidates x {spec.budget.units} units x {stage.repeats} repeats x 2 "
+                             f"levels ({stage.runs} runs)")
         values = {f: [] for f in features}
         for candidate in alive:
-            results = _run_candidate(spec, candidate, stage, repeats, out, workers=workers, resume=resume,
+            results = _run_candidate(spec, candidate, stage.name, stage.repeats, out, workers=workers, resume=resume,
                                      progress=progress, run_function=run_function, catalog=catalog)
             evidence[candidate.name] = results.parent
             round_reached[candidate.name] = k
@@ -559,16 +557,13 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
                     round0[f][candidate.name] = found["replicates"][:, c]
             best_per_candidate = np.minimum(best_per_candidate, found["estimate"])
             best_replicates = np.minimum(best_replicates, found["replicates"])
-        last = k == len(screening) - 1  # the last round keeps the finalists, the others the better half
-        keep = min(len(alive), spec.budget.finalists if last else max(spec.budget.finalists, math.ceil(len(alive) / 2)))
-        order = np.argsort(best_per_candidate, kind="stable")
-        kept = sorted(order[:keep])
+        # the next stage's candidates: the better half, or the finalists after the last round (the plan's rule)
+        kept = sorted(np.argsort(best_per_candidate, kind="stable")[:plan[k + 1].candidates])
         # how sure the screening is of its pick: the share of bootstrap replicates whose best candidate was kept
         decided = np.isfinite(best_replicates).any(axis=1)  # a replicate where no candidate reaches picks none
         selection_confidence = (float(np.isin(np.argmin(best_replicates[decided], axis=1), kept).mean())
                                 if decided.any() else math.nan)
         alive = [alive[i] for i in kept]
-        repeats *= 2
     finals = {}
     announce("final", f"{len(alive)} finalists x {spec.budget.units} units x {spec.budget.repeats} repeats x "
                       f"{len(spec.levels) + 1} levels")
@@ -579,9 +574,8 @@ def run_search(spec: SearchSpec, out: str | Path, *, workers: int = 2, resume: b
         analysis = analyze(results)
         with xr.open_dataset(analysis, engine="netcdf4") as handle:
             finals[candidate.name] = handle.load()
-    table = search_dataset(spec, candidates, scores, last_scores, round0, round_reached, finals, evidence, out)
-    table.attrs["selection_confidence"] = selection_confidence
-    table.attrs["statement"] = search_statement(table)
+    table = search_dataset(spec, candidates, scores, last_scores, round0, round_reached, finals, evidence, out,
+                           selection_confidence)
     path = out / "search.nc"
     table.to_netcdf(path, engine="netcdf4")
     ranking_table(table).to_csv(out / "ranking.csv", index=False)
@@ -654,11 +648,13 @@ def _final_figures(analysis: xr.Dataset, features: list[str], condition: str) ->
 
 
 def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, last_scores: dict, round0: dict,
-                   round_reached: dict, finals: dict, evidence: dict, out: Path) -> xr.Dataset:
+                   round_reached: dict, finals: dict, evidence: dict, out: Path,
+                   selection_confidence: float) -> xr.Dataset:
     """``search.nc``: every candidate's knobs, duration, scores, round, verdicts, Pareto front, rank and evidence.
 
     ``scores``/``last_scores``: ``{feature: {candidate: (estimate, low, high)}}`` of round 0 and of the last round
-    each candidate ran; ``round0``: ``{feature: {candidate: bootstrap replicates}}`` of round 0."""
+    each candidate ran; ``round0``: ``{feature: {candidate: bootstrap replicates}}`` of round 0;
+    ``selection_confidence``: the share of the last round's bootstrap replicates whose best candidate was kept."""
     names = [c.name for c in candidates]
     features = list(spec.features)
     unit = spec.fault_unit
@@ -787,6 +783,7 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
         "search_spec": spec.text, "plan": describe_plan(spec),
         "root_seed": int(spec.campaign_data.get("root_seed", 0)), "units": spec.budget.units,
         "repeats": spec.budget.repeats, "screening_level": spec.screening,
+        "selection_confidence": selection_confidence,
         "history": "written by twin procedure search (campaigns.procedure_search)",
     })
     ds.attrs["statement"] = search_statement(ds)
@@ -805,33 +802,24 @@ def pareto_front(score: np.ndarray, duration: np.ndarray) -> np.ndarray:
 
 
 def _knob_words(ds: xr.Dataset, candidate: str) -> str:
+    """The candidate's knobs in words, numbers in their display units (campaigns.units)."""
     words = []
     for name, knob in KNOBS.items():
         value = ds[f"knob_{name}"].sel(candidate=candidate).item()
-        if knob.choices:
-            words.append(f"{name} {value}")
-        else:
-            shown = value * 1e3 if knob.unit == "m" else value
-            unit = "mm" if knob.unit == "m" else ("" if knob.unit == "1" else knob.unit)
-            words.append(f"{name} {shown:g}{' ' + unit if unit else ''}")
+        words.append(f"{name} {value if knob.choices else quantity(value, knob.unit, digits=4)}")
     return ", ".join(words)
 
 
-def _amount(value: float, unit: str) -> str:
-    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
-    return f"{value * scale:.3g} {shown}" if math.isfinite(value) else "not reached"
-
-
 def _interval(low: float, high: float, unit: str) -> str:
-    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
+    """A bracket of detectable growths in its display unit; an infinite upper bound reads "above"."""
     if not math.isfinite(high):
-        return f"above {low * scale:.3g} {shown}" if math.isfinite(low) else "not resolved"
-    return f"{low * scale:.3g}-{high * scale:.3g} {shown}"
+        return f"above {quantity(low, unit)}" if math.isfinite(low) else "not resolved"
+    return quantity_range(low, high, unit, digits=3)
 
 
 def _signed(low: float, high: float, unit: str) -> str:
-    """A difference's interval with its signs (``inf``: the other never reaches detection)."""
-    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
+    """A difference's interval with its signs, in one display unit (``inf``: the other never reaches detection)."""
+    scale, shown = display_scale(unit, [low, high])
     ends = [f"{v * scale:+.3g}" if math.isfinite(v) else ("+inf" if v > 0 else "-inf") for v in (low, high)]
     return f"{ends[0]} to {ends[1]} {shown}"
 
@@ -842,7 +830,7 @@ def search_statement(ds: xr.Dataset) -> str:
     unit, best = ds.attrs["fault_unit"], ds.attrs["best"]
     row = ds.sel(candidate=best)
     fault = "backlash growth" if ds.attrs["fault"] == "backlash" else "preload loss"
-    requirement = _amount(float(ds.attrs["requirement"]), unit)
+    requirement = quantity(float(ds.attrs["requirement"]), unit)
     n = int((ds["finalist"] == 1).sum())
     head = (f"{row['within_unit_verdict'].item() or 'insufficient data'}: the best of {ds.sizes['candidate']} "
             f"procedures is {best} ({'the reference' if int(row['reference']) else _knob_words(ds, best)}; "
@@ -851,7 +839,7 @@ def search_statement(ds: xr.Dataset) -> str:
             f"{row['within_unit_feature'].item()} (requirement {requirement}; {ds.attrs['units']} units x "
             f"{ds.attrs['repeats']} tests per level on fresh units, {n} finalist(s) with the full sweep"
             + (f"; the screening kept the best candidate of {float(ds.attrs['selection_confidence']) * 100:.0f} % of "
-               "its bootstrap replicates" if "selection_confidence" in ds.attrs else "") + ").")
+               "its bootstrap replicates" if math.isfinite(float(ds.attrs["selection_confidence"])) else "") + ").")
     reference = [str(c) for c in ds["candidate"].values if int(ds["reference"].sel(candidate=c))]
     if not reference or reference[0] == best:
         others = ds.where(ds["candidate"] != best, drop=True)
@@ -881,8 +869,6 @@ def _difference(ds: xr.Dataset, candidate: str) -> tuple[float, float]:
 def ranking_table(ds: xr.Dataset):
     """The ranked candidates as a table (``ranking.csv``): knobs with units in the headers, scores in the fault's
     display unit."""
-    import pandas as pd
-
     unit = ds.attrs["fault_unit"]
     scale, shown = (1e6, "um") if unit == "m" else (1.0, unit)
     rows = []
