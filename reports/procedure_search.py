@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from campaigns.analysis import SWEEP_QUANTITIES
 from reports.errors import ReportError
 from reports.model import Callout, Code, Figure, Heading, Paragraph, Report, Section, Table
 from reports.units import display_scale, estimate_with_interval, quantity, quantity_range
@@ -38,8 +39,8 @@ REQUIRED_ATTRIBUTES = ("name", "fault", "fault_unit", "requirement", "statement"
 #: The faults a search minimises, in words.
 FAULT_WORDS = {"backlash": "backlash growth", "preload_loss": "preload loss"}
 #: Display unit of each fault unit (factor from SI, symbol): backlash in µm, preload loss in N, the same in every row
-#: of a column and on the chart, so the candidates compare at a glance.
-FAULT_DISPLAY = {"m": (1e6, "µm"), "N": (1.0, "N")}
+#: of a column and on the chart, so the candidates compare at a glance; the sweeps' own table (campaigns.analysis).
+FAULT_DISPLAY = {unit: (scale, shown) for _, unit, scale, shown in SWEEP_QUANTITIES.values()}
 #: The reference procedure in words, when search.nc does not say it (attribute ``reference_procedure``).
 REFERENCE_WORDS = "the base scene's own procedure"
 #: Ratio of the largest to the smallest value above which the chart's value axis is logarithmic.
