@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from twin.errors import SceneError, did_you_mean
+from twin.features import MOTION_SPEED_THRESHOLD
 
 #: Table 9.3: the bench's linear stroke [m], nominal linear speed [m/s] and maximum load [N].
 STROKE = 0.300
@@ -28,9 +29,9 @@ FORCE_RISE_TIME = 0.05
 #: Rest after the motion [s]: the nominal scene's hold after its sinusoid (Fig. 9.6a, 4.5-5.0 s), so the last
 #: reversal's transient settles inside the record.
 SETTLE_TIME = 0.5
-#: Smallest peak sled speed of a procedure [m/s]: five times the features' motion threshold
-#: (``twin.features.MOTION_SPEED_THRESHOLD``, 1 mm/s), so most of each cycle counts as motion for the hysteresis.
-MINIMUM_PEAK_SPEED = 5.0e-3
+#: Smallest peak sled speed of a procedure [m/s]: five times the features' motion threshold (1 mm/s), so most of each
+#: cycle counts as motion for the hysteresis.
+MINIMUM_PEAK_SPEED = 5 * MOTION_SPEED_THRESHOLD
 
 
 @dataclass(frozen=True)
