@@ -92,6 +92,10 @@ def test_the_cost_estimate_scales_with_the_step_and_stops_at_the_budget(tmp_path
 
 # --- Row 9: Ctrl-C gave 130 lines of tracebacks and a stale lock; row 10: the resume that works ------------
 
+#: Runs of the signalled campaign that finish; the test signals once 3 chunk files exist (the first chunks hold one
+#: run each), and 6 leaves room for runs in flight. Every later run hangs until its timeout.
+FREE_RUNS = 6
+
 _DRIVER = textwrap.dedent("""
     import sys
     sys.path.insert(0, {helpers!r})
@@ -102,8 +106,15 @@ _DRIVER = textwrap.dedent("""
 
     if __name__ == "__main__":
         spec = load(SYNTHETIC_SPEC)
+        # The campaign outlasts the signal by construction, not by the machine's speed: after the first data set's
+        # first FREE_RUNS runs (the chunks the test waits for), every run hangs until its timeout kills it, so the
+        # remaining runs need spec.execution.timeout (5 s) each, minutes in all, however fast the machine.
+        hang = {{(d.name, i): "hang" for d in spec.datasets for i in range(spec.runs_per_dataset)}}
+        for i in range({free_runs}):
+            del hang[(spec.datasets[0].name, i)]
         try:
-            campaigns.run_campaign(spec, {out!r}, workers=2, progress=False, run_function=SyntheticModel(delay=0.3))
+            campaigns.run_campaign(spec, {out!r}, workers=2, progress=False,
+                                   run_function=SyntheticModel(faults=hang, delay=0.3))
         except CampaignInterrupted as stop:
             print(f"stopped: {{stop.signal_name}} {{stop.kept}} of {{stop.total}}", flush=True)
             sys.exit(130)
@@ -116,7 +127,7 @@ def test_a_signal_stops_a_campaign_cleanly(tmp_path, sig):
 
     out = tmp_path / "out"
     script = tmp_path / "driver.py"
-    script.write_text(_DRIVER.format(helpers=str(Path(__file__).parent), out=str(out)))
+    script.write_text(_DRIVER.format(helpers=str(Path(__file__).parent), out=str(out), free_runs=FREE_RUNS))
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     # in its own process group, as a terminal's foreground job: Ctrl-C reaches the driver and its children
     driver = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
