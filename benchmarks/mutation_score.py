@@ -70,7 +70,6 @@ TESTS = {
     "sensors/encoder.py": ["tests/sensors/test_sensor_encoder.py", "tests/sensors/test_sensor_encoder_speed.py",
                            "tests/sensors/test_sensor_encoder_timing.py", "tests/sensors/test_sensor_lanes.py",
                            "tests/sensors/test_sensor_compiled_loop.py"],
-    "sensors/hall.py": ["tests/sensors/test_sensor_force_torque.py", "tests/sensors/test_sensor_compiled_loop.py"],
     "sensors/load_cell.py": ["tests/sensors/test_sensor_force_torque.py"],
     "sensors/parameters.py": ["tests/sensors/test_sensor_parameters.py"],
     "sensors/resolver.py": ["tests/sensors/test_sensor_resolver.py", "tests/sensors/test_sensor_compiled_loop.py"],

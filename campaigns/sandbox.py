@@ -157,11 +157,6 @@ class Sandbox:
         return [record(r, "error", f"run process died (exit code {code})", float("nan"), elapsed) for r in requests]
 
 
-def run_isolated(run_function: RunFunction, request: RunRequest) -> dict:
-    """Execute ``request`` in this thread's :class:`Sandbox` (created on first use)."""
-    return run_group_isolated(run_function, [request])[0]
-
-
 def run_group_isolated(run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
     """Execute ``requests`` together in this thread's :class:`Sandbox` (created on first use)."""
     sandbox = getattr(_local, "sandbox", None)

@@ -8,7 +8,7 @@ pack one lane's parameter vector.
 
 Modules: :mod:`sensors.encoder` (linear and torque-meter encoders),
 :mod:`sensors.analog` (shared force/torque channel), :mod:`sensors.torque_meter`,
-:mod:`sensors.load_cell`, :mod:`sensors.resolver`, :mod:`sensors.hall`,
+:mod:`sensors.load_cell`, :mod:`sensors.resolver`,
 :mod:`sensors.acquisition` (converters, noise, uncertainty convention),
 :mod:`sensors.parameters` (parameters as data), :mod:`sensors.lanes` (the lane
 layout). Conventions: ``docs/sensors.md``.

@@ -27,7 +27,6 @@ from sensors.analog import (
     transducer_voltage,
     with_integration_step,
 )
-from sensors.hall import hall_current_step
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.torque_meter import torque_meter_parameters
 from twin.parameters import load_parameters
@@ -194,18 +193,6 @@ def test_a_channel_stepped_before_its_step_is_set_reads_nan():
     assert math.isnan(analog_read(state, lane, 0, 0.0))
     with pytest.raises(ValueError, match="dt"):
         with_integration_step(p, 0.0)
-
-
-def test_hall_sensor_is_an_exact_first_order_lag():
-    tau = 3.18e-5  # drive.hall_time_constant
-    y, t = 0.0, 0.0
-    for dt in (1e-7, 5e-6, 4e-5, 1e-3):
-        y = hall_current_step(y, 2.0, 2.0, dt, tau)
-        t += dt
-        assert y == pytest.approx(2.0 * (1.0 - math.exp(-t / tau)), rel=1e-12)
-    # steady ramp: lag of tau * di/dt
-    y = hall_current_step(0.0 - 1e3 * tau, 0.0, 1e3 * 1e-4, 1e-4, tau)
-    assert y == pytest.approx(1e3 * (1e-4 - tau), rel=1e-12)
 
 
 def test_noise_sample_adds_to_the_reading_in_volts():

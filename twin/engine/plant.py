@@ -589,13 +589,6 @@ def sensed_current(x, c, lane, current_loop):
 
 
 @numba.njit(**SCALAR)
-def nut_interference(w, c, lane, nut):
-    """Axial interference of nut ``nut`` with its flank, ``|dx_i| - b/2`` [m] (Eq. 9.5), from the work rows:
-    positive when the contact is closed."""
-    return abs(w[W.NUT_DX + nut, lane]) - 0.5 * c[K.BACKLASH, lane]
-
-
-@numba.njit(**SCALAR)
 def held_input_propagators(c, h, lane, cache):
     """Exact one-step propagators of the two linear blocks driven by a held input: the valve spool
     (second order, Table B.12: ``x'' = w^2 (s - x) - 2 zeta w x'``) and the ideal current loop's lag, for lane
