@@ -37,6 +37,9 @@ SUBMITTED_NAME = "submitted.toml"
 SPEC_NAME = "spec.toml"
 #: What a scene or parameter-set name may look like in a submitted spec (no path, no file name).
 _BARE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_-]*$")
+#: Deepest nesting of tables and arrays accepted: the built-in specs nest 4 deep; far deeper is an attack on the
+#: parser and on everything that walks the spec recursively afterwards (validation, the spec hash's JSON).
+MAX_NESTING = 16
 
 
 def builtin_specs() -> list[str]:
@@ -74,10 +77,7 @@ def prepare(data: Path, text: str, *, runs: int | None = None, seed: int | None 
     SpecError
         Listing every problem with its field path; nothing is left in the data directory.
     """
-    try:
-        parsed = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SpecError([f"spec: not valid TOML ({exc})"]) from None
+    parsed = _parsed(text)
     problems = _reach_problems(parsed)
     problems += [f"{name}: must be a whole number >= 0, got {value!r}"
                  for name, value in (("runs", runs), ("seed", seed))
@@ -114,6 +114,29 @@ def load_frozen(campaign_dir: Path) -> CampaignSpec:
 def remove_staging_leftovers(data: Path) -> None:
     """Staging directories of a server killed while validating (never a campaign: those are moved out)."""
     shutil.rmtree(data / "staging", ignore_errors=True)
+
+
+def _parsed(text: str) -> dict:
+    """The TOML document ``text``, refused (one problem) when unreadable or nested beyond :data:`MAX_NESTING`."""
+    too_deep = SpecError([f"spec: tables and arrays nested more than {MAX_NESTING} levels deep (the built-in specs "
+                          "nest 4)"])
+    try:
+        parsed = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError([f"spec: not valid TOML ({exc})"]) from None
+    except ValueError as exc:  # Python's own limits, e.g. an integer of more than 4300 digits (no advice to heed)
+        raise SpecError([f"spec: not readable ({str(exc).partition(';')[0]})"]) from None
+    except RecursionError:  # tomllib reads nested arrays and inline tables recursively: a few hundred levels
+        raise too_deep from None
+    # dotted keys and table headers nest without recursion in the parser: measure the document, iteratively
+    pending = [(parsed, 1)]
+    while pending:
+        value, depth = pending.pop()
+        if depth > MAX_NESTING:
+            raise too_deep
+        children = value.values() if isinstance(value, dict) else value
+        pending += [(child, depth + 1) for child in children if isinstance(child, dict | list)]
+    return parsed
 
 
 def _write(path: Path, text: str) -> None:
