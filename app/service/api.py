@@ -225,10 +225,10 @@ def list_campaigns(request: Request, limit: int = Query(200, ge=1, le=1000)) -> 
                  "application/json": {"schema": SpecSubmission.model_json_schema()}}}},
              responses={**AUTHENTICATED,
                         413: {"description": "spec larger than the limit", **_ERROR},
-                        429: {"description": "the submitter has the service's limit of campaigns queued or running "
-                                             "already (twin serve --max-queued-per-user); nothing queued", **_ERROR},
                         422: {"description": "every validation problem with its field path (the estimated duration "
-                                             "beyond the service's limit too); nothing queued"}})
+                                             "beyond the service's limit too); nothing queued"},
+                        429: {"description": "the submitter has the service's limit of campaigns queued or running "
+                                             "already (twin serve --max-queued-per-user); nothing queued", **_ERROR}})
 async def create_campaign(request: Request, runs: int | None = Query(None, description="runs per data set (override)"),
                           seed: int | None = Query(None, description="root seed (override)")):
     """Submit a spec (role ``submit``): a TOML body, or JSON ``{"spec", "runs", "seed"}``."""
