@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import stat
 from datetime import UTC, datetime
 from pathlib import Path
@@ -49,6 +50,17 @@ NOT_FOUND = {404: {"description": "no such campaign", **_ERROR}}
 
 class PayloadTooLarge(Exception):
     pass
+
+
+class QueueFull(Exception):
+    """The submitter has the service's limit of campaigns queued or running already (429): its message says
+    the limit and how many there are."""
+
+    def __init__(self, who: str, limit: int, active: dict[str, int]):
+        super().__init__(
+            f"{who!r} has {sum(active.values())} campaign(s) queued or running ({active['queued']} queued, "
+            f"{active['running']} running); this service takes at most {limit} per user (twin serve "
+            "--max-queued-per-user): nothing was queued; cancel one or wait until one finishes")
 
 
 class SpecSubmission(BaseModel):
@@ -113,14 +125,21 @@ def cost_problems(spec, settings) -> list[str]:
 def submit(request: Request, text: str, runs: int | None, seed: int | None, who: dict) -> dict:
     """Validate, estimate and queue a spec (blocking: call it in a worker thread); the campaign's record.
 
-    Raises :class:`SpecError`, and then nothing is queued.
+    Raises :class:`SpecError` or :class:`QueueFull`, and then nothing is queued.
     """
     registry = request.app.state.registry
     settings = request.app.state.settings
+    limit = settings.max_queued_per_user
+    active = registry.active_of(who["name"])
+    if sum(active.values()) >= limit:  # before any work; the insert below counts again, atomically
+        raise QueueFull(who["name"], limit, active)
     submission = prepare(registry.data, text, runs=runs, seed=seed, check=lambda spec: cost_problems(spec, settings))
     spec = submission.spec
-    registry.add_campaign(submission.campaign_id, spec.name, spec.spec_hash(),
-                          len(spec.datasets) * spec.runs_per_dataset, submission.overrides, who["name"])
+    if not registry.add_campaign(submission.campaign_id, spec.name, spec.spec_hash(),
+                                 len(spec.datasets) * spec.runs_per_dataset, submission.overrides, who["name"],
+                                 max_active=limit):  # a concurrent submission took the last place
+        shutil.rmtree(registry.campaign_dir(submission.campaign_id), ignore_errors=True)
+        raise QueueFull(who["name"], limit, registry.active_of(who["name"]))
     request.app.state.executor.notify()
     return registry.campaign(submission.campaign_id)
 
@@ -207,7 +226,9 @@ def list_campaigns(request: Request, limit: int = Query(200, ge=1, le=1000)) -> 
              responses={**AUTHENTICATED,
                         413: {"description": "spec larger than the limit", **_ERROR},
                         422: {"description": "every validation problem with its field path (the estimated duration "
-                                             "beyond the service's limit too); nothing queued"}})
+                                             "beyond the service's limit too); nothing queued"},
+                        429: {"description": "the submitter has the service's limit of campaigns queued or running "
+                                             "already (twin serve --max-queued-per-user); nothing queued", **_ERROR}})
 async def create_campaign(request: Request, runs: int | None = Query(None, description="runs per data set (override)"),
                           seed: int | None = Query(None, description="root seed (override)")):
     """Submit a spec (role ``submit``): a TOML body, or JSON ``{"spec", "runs", "seed"}``."""
@@ -231,6 +252,8 @@ async def create_campaign(request: Request, runs: int | None = Query(None, descr
     except SpecError as exc:
         return JSONResponse({"detail": f"invalid campaign spec ({len(exc.problems)} problem(s)); nothing was queued",
                              "errors": error_list(exc.problems)}, status_code=422)
+    except QueueFull as exc:
+        return JSONResponse({"detail": str(exc)}, status_code=429)
     now = datetime.now(UTC).timestamp()
     return JSONResponse(describe(request.app.state.registry, record, now), status_code=201,
                         headers={"Location": f"/api/v1/campaigns/{record['id']}"})

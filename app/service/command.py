@@ -19,6 +19,8 @@ def add_serve_parser(sub) -> None:
     serve.add_argument("--scheduler", help="address of an existing dask scheduler (instead of a local cluster)")
     serve.add_argument("--max-campaign-hours", type=float, default=None,
                        help="refuse a campaign whose estimated duration is longer (default 24 h)")
+    serve.add_argument("--max-queued-per-user", type=int, default=None,
+                       help="campaigns one token may have queued or running at once (default 5)")
     serve.set_defaults(func=cmd_serve)
     serve_sub = serve.add_subparsers(dest="serve_command")
     token = serve_sub.add_parser("token", help="access tokens")
@@ -51,6 +53,10 @@ def cmd_serve(args) -> int:
     limit = {} if args.max_campaign_hours is None else {"max_campaign_hours": args.max_campaign_hours}
     if args.max_campaign_hours is not None and not args.max_campaign_hours > 0:
         raise SystemExit(f"twin serve: error: --max-campaign-hours must be > 0, got {args.max_campaign_hours:g}")
+    if args.max_queued_per_user is not None:
+        if args.max_queued_per_user < 1:
+            raise SystemExit(f"twin serve: error: --max-queued-per-user must be >= 1, got {args.max_queued_per_user}")
+        limit["max_queued_per_user"] = args.max_queued_per_user
     app = create_app(Settings(data=data, workers=args.workers, scheduler=args.scheduler, **limit))
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         logging.getLogger("benchtwin.service").warning(

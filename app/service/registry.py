@@ -28,6 +28,9 @@ REGISTRY_NAME = "registry.sqlite3"
 BUSY_TIMEOUT = 30.0
 STATES = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATES = ("done", "failed", "cancelled")
+#: The states a campaign holds a place in the queue in (what the per-user limit counts).
+ACTIVE_STATES = ("queued", "running")
+_ACTIVE = "(" + ", ".join(f"'{state}'" for state in ACTIVE_STATES) + ")"  # as an SQL list
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS campaigns (
@@ -97,14 +100,28 @@ class Registry:
     # --- campaigns
 
     def add_campaign(self, campaign_id: str, name: str, spec_hash: str, runs_total: int, overrides: dict,
-                     submitted_by: str) -> None:
-        """Record a campaign as queued (its input files are already in place)."""
+                     submitted_by: str, max_active: int | None = None) -> bool:
+        """Record a campaign as queued (its input files are already in place); whether it was.
+
+        ``max_active``: not if ``submitted_by`` has that many campaigns queued or running already. The count
+        and the insert are one statement, so concurrent submissions cannot all pass the count.
+        """
         with self._connect() as db:
-            db.execute(
+            cursor = db.execute(
                 "INSERT INTO campaigns (id, name, state, spec_hash, overrides, submitted_by, submitted_at, runs_total) "
-                "VALUES (?, ?, 'queued', ?, ?, ?, ?, ?)",
-                (campaign_id, name, spec_hash, json.dumps(overrides), submitted_by, time.time(), runs_total),
+                "SELECT ?, ?, 'queued', ?, ?, ?, ?, ? WHERE ? IS NULL OR (SELECT COUNT(*) FROM campaigns "
+                f"WHERE submitted_by = ? AND state IN {_ACTIVE}) < ?",
+                (campaign_id, name, spec_hash, json.dumps(overrides), submitted_by, time.time(), runs_total,
+                 max_active, submitted_by, max_active),
             )
+        return cursor.rowcount == 1
+
+    def active_of(self, submitted_by: str) -> dict[str, int]:
+        """How many campaigns ``submitted_by`` has in each of :data:`ACTIVE_STATES`."""
+        rows = self._connect().execute(
+            f"SELECT state, COUNT(*) AS n FROM campaigns WHERE submitted_by = ? AND state IN {_ACTIVE} "
+            "GROUP BY state", (submitted_by,)).fetchall()
+        return {state: 0 for state in ACTIVE_STATES} | {r["state"]: r["n"] for r in rows}
 
     def campaign(self, campaign_id: str) -> dict | None:
         row = self._connect().execute("SELECT * FROM campaigns WHERE id = ?", (campaign_id,)).fetchone()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +16,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import Match
 
 from app.service import api, web
-from app.service.auth import COOKIE_NAME, TOKEN_PARAMETERS, UNSAFE_METHODS, AuthError, cross_site
+from app.service.auth import COOKIE_NAME, TOKEN_PARAMETERS, TOKEN_PREFIX, UNSAFE_METHODS, AuthError, cross_site
 from app.service.executor import Executor
 from app.service.registry import Registry
 from app.service.submission import remove_staging_leftovers
@@ -25,6 +26,9 @@ MAX_SPEC_BYTES = 256 * 1024
 #: Longest campaign accepted [h] (estimated before it is queued, :mod:`campaigns.budget`): the thesis study
 #: (7000 runs) takes about 1.2 h on 2 workers; a day of the team's queue is the most one campaign may take.
 MAX_CAMPAIGN_HOURS = 24.0
+#: Campaigns one token may have queued or running at once: a baseline and a few design variants of a review
+#: fit; a script submitting in a loop stops there instead of filling the queue for everyone (admins included).
+MAX_QUEUED_PER_USER = 5
 STATIC = Path(__file__).parent / "static"
 
 _log = logging.getLogger("benchtwin.service")
@@ -39,6 +43,7 @@ class Settings:
     scheduler: str | None = None
     max_spec_bytes: int = MAX_SPEC_BYTES
     max_campaign_hours: float = MAX_CAMPAIGN_HOURS
+    max_queued_per_user: int = MAX_QUEUED_PER_USER
     start_executor: bool = True
 
 
@@ -51,6 +56,20 @@ class WithoutQueryString(logging.Filter):
         if isinstance(args, tuple) and len(args) >= 3 and isinstance(args[2], str) and "?" in args[2]:
             record.args = (*args[:2], args[2].split("?", 1)[0] + "?...", *args[3:])
         return True
+
+
+#: What a query parameter's name says when it carries a credential, compared without case, ``_``, ``-`` or ``.``
+#: (``apiKey``, ``API-KEY``, ``x_auth_token``): anywhere in the name, or the whole name.
+_CREDENTIAL_WORDS = (*(re.sub(r"[^a-z]", "", p) for p in TOKEN_PARAMETERS),
+                     "auth", "secret", "password", "passwd", "credential", "session", "jwt")
+_CREDENTIAL_NAMES = ("key", "pass", "pwd", "sig", "signature")
+
+
+def credential_parameter(name: str, value: str) -> bool:
+    """Whether a query parameter looks like it carries a token: by its name, or a value that is one of ours."""
+    word = re.sub(r"[^a-z]", "", name.lower())
+    return (value.startswith(TOKEN_PREFIX) or word in _CREDENTIAL_NAMES
+            or any(part in word for part in _CREDENTIAL_WORDS))
 
 
 def _refusal(request: Request, status: int, message: str):
@@ -116,6 +135,8 @@ def create_app(settings: Settings) -> FastAPI:
             return RedirectResponse(f"/login?next={request.url.path}", status_code=303)
         return web.forbidden(request, str(exc))
 
+    app.add_exception_handler(web.FormRefused, web.form_refused)
+
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException):
         if exc.status_code == 405:  # Starlette names the methods of one route only; a path may have several
@@ -124,7 +145,7 @@ def create_app(settings: Settings) -> FastAPI:
 
     @app.middleware("http")
     async def security_headers(request: Request, call_next):
-        in_url = sorted({k for k in request.query_params if k.lower() in TOKEN_PARAMETERS})
+        in_url = sorted({k for k, v in request.query_params.multi_items() if credential_parameter(k, v)})
         if in_url:
             return _refusal(request, 400, f"a token is never accepted in a URL (query parameter {in_url[0]!r}): "
                                           "URLs end up in logs and browser histories; send it in the header "

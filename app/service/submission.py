@@ -37,6 +37,9 @@ SUBMITTED_NAME = "submitted.toml"
 SPEC_NAME = "spec.toml"
 #: What a scene or parameter-set name may look like in a submitted spec (no path, no file name).
 _BARE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_-]*$")
+#: Deepest nesting of tables and arrays accepted: the built-in specs nest 4 deep; far deeper is an attack on the
+#: parser and on everything that walks the spec recursively afterwards (validation, the spec hash's JSON).
+MAX_NESTING = 16
 
 
 def builtin_specs() -> list[str]:
@@ -74,10 +77,7 @@ def prepare(data: Path, text: str, *, runs: int | None = None, seed: int | None 
     SpecError
         Listing every problem with its field path; nothing is left in the data directory.
     """
-    try:
-        parsed = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SpecError([f"spec: not valid TOML ({exc})"]) from None
+    parsed = _parsed(text)
     problems = _reach_problems(parsed)
     problems += [f"{name}: must be a whole number >= 0, got {value!r}"
                  for name, value in (("runs", runs), ("seed", seed))
@@ -114,6 +114,74 @@ def load_frozen(campaign_dir: Path) -> CampaignSpec:
 def remove_staging_leftovers(data: Path) -> None:
     """Staging directories of a server killed while validating (never a campaign: those are moved out)."""
     shutil.rmtree(data / "staging", ignore_errors=True)
+
+
+def _parsed(text: str) -> dict:
+    """The TOML document ``text``, refused (one problem) when unreadable, too costly to parse, or nested beyond
+    :data:`MAX_NESTING`."""
+    too_deep = SpecError([f"spec: tables and arrays nested more than {MAX_NESTING} levels deep (the built-in specs "
+                          "nest 4)"])
+    _check_shape(text, too_deep)
+    try:
+        parsed = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError([f"spec: not valid TOML ({exc})"]) from None
+    except ValueError as exc:  # Python's own limits, e.g. an integer of more than 4300 digits (no advice to heed)
+        raise SpecError([f"spec: not readable ({str(exc).partition(';')[0]})"]) from None
+    except RecursionError:  # tomllib recurses into nesting: should the scan ever miss one, one line still, no 500
+        raise too_deep from None
+    # a table header, a dotted key and a value may each nest within the bound and all together beyond it: measure
+    pending = [(parsed, 1)]
+    while pending:
+        value, depth = pending.pop()
+        if depth > MAX_NESTING:
+            raise too_deep
+        children = value.values() if isinstance(value, dict) else value
+        pending += [(child, depth + 1) for child in children if isinstance(child, dict | list)]
+    return parsed
+
+
+#: What the scan of a spec stops at: anything but the characters of a bare key and blanks.
+_SPECIAL = re.compile(r"[^A-Za-z0-9_ \t-]")
+#: The rest of a string after its opening quotes. A one-line string ends at its line's end at the latest, so that
+#: whatever a malformed one holds, the scan is back in step with the parser on the next line.
+_STRING_REST = {
+    '"""': re.compile(r'(?:[^"\\]|\\.|"(?!""))*(?:"""|$)', re.DOTALL),
+    "'''": re.compile(r"(?:[^']|'(?!''))*(?:'''|$)"),
+    '"': re.compile(r'(?:[^"\\\n]|\\.)*(?:"|\n|$)'),
+    "'": re.compile(r"[^'\n]*(?:'|\n|$)"),
+}
+
+
+def _check_shape(text: str, too_deep: SpecError) -> None:
+    """Refuse, in one pass over ``text`` before it is parsed, what would make tomllib work too hard: arrays and
+    inline tables nested beyond :data:`MAX_NESTING` (it recurses into each), or a dotted key or table name of more
+    parts (it builds a key part by part, in quadratic time: 10000 parts take seconds, a 256 kB spec of them a
+    quarter of an hour). Strings and comments are skipped as the parser skips them.
+    """
+    depth = parts = 0
+    k = 0
+    while found := _SPECIAL.search(text, k):
+        char, k = found.group(), found.end()
+        if char in "\"'":
+            opener = char * 3 if text.startswith(char * 3, found.start()) else char
+            k = _STRING_REST[opener].match(text, found.start() + len(opener)).end()
+            continue  # a quoted part of a dotted key is a part of the key
+        if char == "#":
+            k = len(text) if (end := text.find("\n", k)) < 0 else end
+        elif char in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                raise too_deep
+        elif char in "]}":
+            depth = max(depth - 1, 0)
+        elif char == ".":
+            parts += 1
+            if parts >= MAX_NESTING:
+                line = text.count("\n", 0, k) + 1
+                raise SpecError([f"spec: line {line}: a dotted key or table name of more than {MAX_NESTING} parts"])
+            continue
+        parts = 0
 
 
 def _write(path: Path, text: str) -> None:

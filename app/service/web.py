@@ -21,6 +21,7 @@ from fastapi.templating import Jinja2Templates
 from app.service.api import (
     FILES,
     PayloadTooLarge,
+    QueueFull,
     builtin_spec_texts,
     caller,
     cancel_campaign_as,
@@ -40,6 +41,12 @@ templates = Jinja2Templates(env=jinja2.Environment(loader=jinja2.FileSystemLoade
                                                    autoescape=True))
 #: Lifetime of the login cookie [s].
 COOKIE_AGE = 12 * 3600
+#: Most fields a form may post: the pages' forms have 3 at most (spec, runs, seed; token, next).
+MAX_FORM_FIELDS = 20
+
+
+class FormRefused(Exception):
+    """A form body refused before it is read as one (413): too large, or too many fields."""
 
 
 def _page(request: Request, name: str, status: int = 200, **context) -> HTMLResponse:
@@ -51,9 +58,24 @@ def forbidden(request: Request, message: str) -> HTMLResponse:
 
 
 async def _form(request: Request) -> dict[str, str]:
-    body = await read_limited(request)
-    fields = parse_qs(body.decode("utf-8", errors="replace"), keep_blank_values=True, max_num_fields=20)
+    """The fields of a posted form (the first value of each); raises :class:`FormRefused`."""
+    try:
+        body = await read_limited(request)
+    except PayloadTooLarge:
+        raise FormRefused(f"The form is larger than the limit of {request.app.state.settings.max_spec_bytes} "
+                          "bytes.") from None
+    try:
+        fields = parse_qs(body.decode("utf-8", errors="replace"), keep_blank_values=True,
+                          max_num_fields=MAX_FORM_FIELDS)
+    except ValueError:  # more fields than max_num_fields
+        raise FormRefused(f"The form has more than {MAX_FORM_FIELDS} fields; this site's forms have 3 at most.") \
+            from None
     return {k: v[0] for k, v in fields.items()}
+
+
+def form_refused(request: Request, exc: FormRefused) -> HTMLResponse:
+    """The page of a refused form (the application's handler of :class:`FormRefused`)."""
+    return _page(request, "message.html.j2", 413, title="Form refused", message=str(exc))
 
 
 def _now() -> float:
@@ -112,12 +134,7 @@ def submit_page(request: Request, example: str = "demo.toml"):
 async def submit_form(request: Request):
     who = await run_in_threadpool(caller, request, "submit")
     examples = sorted(builtin_spec_texts())
-    try:
-        form = await _form(request)
-    except PayloadTooLarge:
-        limit = request.app.state.settings.max_spec_bytes
-        return _page(request, "message.html.j2", 413, who=who, title="Spec too large",
-                     message=f"The spec is larger than the limit of {limit} bytes.")
+    form = await _form(request)
     text, runs, seed = form.get("spec", ""), form.get("runs", "").strip(), form.get("seed", "").strip()
     context = {"who": who, "examples": examples, "example": "", "spec": text, "runs": runs, "seed": seed}
     numbers, problems = {}, []
@@ -134,6 +151,9 @@ async def submit_form(request: Request):
     except SpecError as exc:
         return _page(request, "submit.html.j2", 422, errors=error_list(exc.problems),
                      detail=f"{len(exc.problems)} problem(s)", **context)
+    except QueueFull as exc:  # the spec stays in the form, to submit once a place is free
+        return _page(request, "submit.html.j2", 429, errors=error_list([str(exc)]), detail="queue limit reached",
+                     **context)
     return RedirectResponse(f"/campaigns/{record['id']}", status_code=303)
 
 

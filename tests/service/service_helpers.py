@@ -1,4 +1,5 @@
-"""A real ``twin serve`` in a subprocess on a free loopback port, and what the service tests need around it.
+"""A real ``twin serve`` in a subprocess on a free loopback port, the application in this process for the probes
+that run nothing, and what the service tests need around them.
 
 Budgets are wide on purpose (the CI machine has 2 shared cores; a cold numba compile takes minutes
 under load): a budget only bounds a hung test, no assertion depends on how fast anything is.
@@ -11,10 +12,18 @@ import socket
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import httpx
 import psutil
+
+from app.service.auth import create_token as create_token_record
+from app.service.server import Settings, create_app
+
+with warnings.catch_warnings():  # Starlette asks for httpx2, which the lock does not hold; httpx still works
+    warnings.filterwarnings("ignore", "Using `httpx` with `starlette.testclient` is deprecated")
+    from fastapi.testclient import TestClient
 
 #: Seconds a server gets to answer /health after start (imports, registry) and a campaign to finish.
 START_BUDGET = 600.0
@@ -150,3 +159,24 @@ def chunk_runs(out: Path) -> list[tuple[int, int]]:
             runs += [(int(chunk["dataset_index"]), int(r)) for r in chunk["run"]]
     return runs
 
+
+
+class LocalService:
+    """The application in this process (no executor: what is queued stays queued), for the probes that need no
+    campaign to run; ``client(name, role)`` is a test client with that user's token (created on first use)."""
+
+    def __init__(self, data: Path, **settings):
+        self.app = create_app(Settings(data=data, start_executor=False, **settings))
+        self.registry = self.app.state.registry
+        self.tokens: dict[str, str] = {}
+
+    def client(self, name: str | None = None, role: str = "submit", **headers) -> TestClient:
+        if name is not None:
+            if name not in self.tokens:
+                self.tokens[name] = create_token_record(self.registry, name, role)
+            headers = {"Authorization": f"Bearer {self.tokens[name]}", **headers}
+        return TestClient(self.app, headers=headers, follow_redirects=False)
+
+    def campaign_ids(self) -> list[str]:
+        """Every campaign recorded (any state)."""
+        return [r["id"] for r in self.registry.campaigns(limit=10**6)]

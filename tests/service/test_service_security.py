@@ -103,7 +103,7 @@ def test_the_files_endpoint_serves_only_the_campaigns_own_regular_files(service,
 def test_a_token_in_a_url_is_refused_and_never_logged(service):
     token = service.tokens["reader"]
     anonymous = client(service, None)
-    for name in ("token", "access_token", "Token"):
+    for name in ("token", "access_token", "Token", "apikey"):
         response = anonymous.get("/api/v1/campaigns", params={name: token})
         assert response.status_code == 400 and "never accepted in a URL" in response.json()["detail"]
     response = anonymous.get("/", params={"token": token})
@@ -117,7 +117,7 @@ def test_the_schema_documents_every_answer_and_405_lists_every_method(service):
     schema = client(service, None).get("/api/v1/openapi.json").json()["paths"]
     expected = {
         ("/api/v1/campaigns", "get"): {"400", "401", "403", "422"},
-        ("/api/v1/campaigns", "post"): {"201", "400", "401", "403", "413", "422"},
+        ("/api/v1/campaigns", "post"): {"201", "400", "401", "403", "413", "422", "429"},
         ("/api/v1/campaigns/{campaign_id}", "get"): {"401", "403", "404", "422"},
         ("/api/v1/campaigns/{campaign_id}/cancel", "post"): {"401", "403", "404", "409", "422"},
         ("/api/v1/campaigns/{campaign_id}/files/{name}", "get"): {"401", "403", "404", "422"},
