@@ -1,24 +1,24 @@
 """Known answers of the bristle friction laws (twin.physics.bristle_friction; issue 41, item 3).
 
-A body of mass m on the friction law, integrated here with a fixed-step RK4 (compiled, so that the stick-slip
-cycles of a few seconds cost milliseconds): dragged through a spring at constant speed (stick-slip against the
-closed form for Coulomb static/kinetic friction), pushed by a slow force ramp (breakaway at F_s), shaken below
-breakaway (elastic hold, no drift for the elasto-plastic law; LuGre drifts), moved kinematically (presliding
-hysteresis), slid at constant speed (the Stribeck curve), and the dissipation and energy balance.
+A body of mass m on the friction law, integrated with the fixed-step RK4 of app.studies.friction_laws (compiled,
+so that stick-slip cycles of a few seconds cost milliseconds): dragged through a spring at constant speed
+(stick-slip against the closed form for Coulomb static/kinetic friction), pushed by a slow force ramp (breakaway at
+F_s), shaken below breakaway (elastic hold, no drift for the elasto-plastic law; LuGre drifts), moved kinematically
+(presliding hysteresis), slid at constant speed (the Stribeck curve), and the dissipation and energy balance.
 """
 
 import math
 
-import numba
 import numpy as np
 import pytest
 
+from app.studies import friction_laws as fl
 from twin.parameters import load_parameters
 from twin.physics import bristle_friction as bf
 from twin.physics import pneumatics as pn
 from twin.physics.friction import stribeck_level
 
-LUGRE, ELASTOPLASTIC = 0, 1
+LUGRE, ELASTOPLASTIC = fl.LUGRE, fl.ELASTOPLASTIC
 LAWS = (LUGRE, ELASTOPLASTIC)
 
 # A test body: 1 kg, Coulomb static 10 N / kinetic 6 N; a Stribeck drop within 1/a = 1 mm/s (the slips reach
@@ -31,49 +31,11 @@ SIGMA0, SIGMA1, DAMPING_SPEED, SIGMA2 = 1.0e8, 1.0e4, 1.0e-3, 0.0
 Z_BA = 0.5 * KINETIC / SIGMA0
 
 
-@numba.njit(cache=True)
-def _law(law, v, z):
-    level = stribeck_level(v, STATIC, KINETIC, RATE)
-    if law == LUGRE:
-        rate = bf.lugre_deflection_rate(v, z, level, SIGMA0)
-    else:
-        rate = bf.elastoplastic_deflection_rate(v, z, level, SIGMA0, Z_BA)
-    return bf.bristle_force(v, z, rate, SIGMA0, SIGMA1, DAMPING_SPEED, SIGMA2), rate
+TEST_BODY = fl.law_parameters(MASS, STATIC, KINETIC, RATE, SIGMA0, SIGMA1, DAMPING_SPEED, SIGMA2, Z_BA, 0.0)
 
 
-@numba.njit(cache=True)
-def _rhs(law, t, y, spring, speed, force0, amplitude, omega, ramp):
-    """y = (x, v, z, drive work, dissipated energy). Applied force: a spring k (Vt - x) and/or
-    F0 + A sin(w t) + r t."""
-    x, v, z = y[0], y[1], y[2]
-    friction, rate = _law(law, v, z)
-    extension = speed * t - x
-    applied = spring * extension + force0 + amplitude * math.sin(omega * t) + ramp * t
-    out = np.empty(5)
-    out[0] = v
-    out[1] = (applied - friction) / MASS
-    out[2] = rate
-    out[3] = spring * extension * speed + (force0 + amplitude * math.sin(omega * t) + ramp * t) * v
-    out[4] = friction * v - SIGMA0 * z * rate
-    return out
-
-
-@numba.njit(cache=True)
-def _integrate(law, duration, dt, spring, speed, force0, amplitude, omega, ramp):
-    """RK4 at a fixed step; returns the time and the states at every step."""
-    n = int(round(duration / dt))
-    ys = np.zeros((n + 1, 5))
-    ts = np.arange(n + 1) * dt
-    y = np.zeros(5)
-    for i in range(n):
-        t = ts[i]
-        k1 = _rhs(law, t, y, spring, speed, force0, amplitude, omega, ramp)
-        k2 = _rhs(law, t + dt / 2, y + dt / 2 * k1, spring, speed, force0, amplitude, omega, ramp)
-        k3 = _rhs(law, t + dt / 2, y + dt / 2 * k2, spring, speed, force0, amplitude, omega, ramp)
-        k4 = _rhs(law, t + dt, y + dt * k3, spring, speed, force0, amplitude, omega, ramp)
-        y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        ys[i + 1] = y
-    return ts, ys
+def _integrate(law, duration, dt, spring, speed, force0, amplitude, frequency, ramp):
+    return fl.integrate(law, TEST_BODY, duration, dt, fl.drive(spring, speed, force0, amplitude, frequency, ramp))
 
 
 # --------------------------------------------------------------------------- #
@@ -137,9 +99,8 @@ def test_breakaway_at_the_static_force(law):
 def test_elastoplastic_holds_a_force_below_breakaway_without_drift_and_lugre_drifts():
     """Dupont et al. (2002), Sec. II: an oscillating force below breakaway makes LuGre drift, not the elasto-plastic
     law, which is elastic below z_ba (here 3 N): 0.5 N + 2 N sin(2 pi 20 t) for 1 s."""
-    omega = 2.0 * math.pi * 20.0
-    _, ep = _integrate(ELASTOPLASTIC, 1.0, 1.0e-5, 0.0, 0.0, 0.5, 2.0, omega, 0.0)
-    _, lugre = _integrate(LUGRE, 1.0, 1.0e-5, 0.0, 0.0, 0.5, 2.0, omega, 0.0)
+    _, ep = _integrate(ELASTOPLASTIC, 1.0, 1.0e-5, 0.0, 0.0, 0.5, 2.0, 20.0, 0.0)
+    _, lugre = _integrate(LUGRE, 1.0, 1.0e-5, 0.0, 0.0, 0.5, 2.0, 20.0, 0.0)
     cycle = int(round(1.0 / 20.0 / 1.0e-5))
     ep_drift = ep[-1, 0] - ep[-1 - cycle, 0]
     lugre_drift = lugre[-1, 0] - lugre[-1 - cycle, 0]
@@ -148,27 +109,8 @@ def test_elastoplastic_holds_a_force_below_breakaway_without_drift_and_lugre_dri
     assert np.max(np.abs(ep[:, 0])) < 2.5 / SIGMA0 + 1.0e-9   # a spring sigma_0 under at most 2.5 N
 
 
-@numba.njit(cache=True)
 def _kinematic_loop(law, amplitude, frequency, cycles, dt):
-    """Friction force against an imposed position ``X sin(2 pi f t)`` (z integrated by RK4)."""
-    n = int(round(cycles / frequency / dt))
-    w = 2.0 * math.pi * frequency
-    xs, fs = np.empty(n), np.empty(n)
-    z = 0.0
-    for i in range(n):
-        t = i * dt
-
-        def speed(s):
-            return amplitude * w * math.cos(w * s)
-
-        k1 = _law(law, speed(t), z)[1]
-        k2 = _law(law, speed(t + dt / 2), z + dt / 2 * k1)[1]
-        k3 = _law(law, speed(t + dt / 2), z + dt / 2 * k2)[1]
-        k4 = _law(law, speed(t + dt), z + dt * k3)[1]
-        z += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        xs[i] = amplitude * math.sin(w * (t + dt))
-        fs[i] = _law(law, speed(t + dt), z)[0]
-    return xs, fs
+    return fl.kinematic_loop(law, TEST_BODY, amplitude, frequency, cycles, dt)
 
 
 def _loop_area(x, f):
