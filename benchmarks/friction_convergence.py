@@ -62,7 +62,7 @@ def run(out: Path, quick: bool) -> None:
         smallest = min(fc.SEAL_THRESHOLDS)
         jobs += [((name, 0, smallest, fc.GUIDE_THRESHOLDS[0]),
                   fc.stable_step(smallest, fc.GUIDE_THRESHOLDS[0], params) / 2.0, "half step")
-                 for name in ("ds2", "ds4")]
+                 for name in ("ds2", "ds4")]   # last: the sweeps first when the time runs out (resumed by the csv)
     path = out / CSV_NAME
     done = {(r["dataset"], int(r["seed"]), r["seal_threshold"], r["guide_threshold"], r["check"])
             for r in _read(path)} if path.exists() else set()

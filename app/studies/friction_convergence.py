@@ -118,13 +118,15 @@ def run_point(dataset: str, seed: int, seal_threshold: float, guide_threshold: f
 def study_plan(datasets: Iterable[str] = DATASETS, seeds: Iterable[int] = SEEDS,
                seal_thresholds: Iterable[float] = SEAL_THRESHOLDS,
                guide_thresholds: Iterable[float] = GUIDE_THRESHOLDS) -> list[tuple[str, int, float, float]]:
-    """The seal sweep at the default guides, then the guide sweep at the default seal (no duplicate of the
-    shared default point)."""
+    """The seal sweep of every data set at the default guides, then the guide sweep at the default seal (no
+    duplicate of the shared default point): the order in which a study interrupted by its time budget is complete."""
     seal_default = twin.load_parameters().value("pneumatics.friction_velocity_threshold")
     guide_default = engine_model.LINEAR_VELOCITY_THRESHOLD
-    combos = [(s, guide_default) for s in seal_thresholds]
-    combos += [(seal_default, g) for g in guide_thresholds if g != guide_default]
-    return [(name, seed, s, g) for name in datasets for s, g in combos for seed in seeds]
+    datasets, seeds = list(datasets), list(seeds)
+    seal = [(name, seed, s, guide_default) for name in datasets for s in seal_thresholds for seed in seeds]
+    guides = [(name, seed, seal_default, g) for name in datasets for g in guide_thresholds if g != guide_default
+              for seed in seeds]
+    return seal + guides
 
 
 def as_rows(points: Iterable[Point]) -> list[dict]:
