@@ -34,8 +34,14 @@ def stribeck_friction(v, static, dynamic, stribeck_rate, viscous, v_threshold):
     float
         Friction force/torque, opposing ``v`` (positive for ``v > 0``).
     """
-    coulomb = dynamic + (static - dynamic) * elementary.exp(-stribeck_rate * abs(v))
-    return coulomb * elementary.tanh(v / v_threshold) + viscous * v
+    return stribeck_level(v, static, dynamic, stribeck_rate) * elementary.tanh(v / v_threshold) + viscous * v
+
+
+@numba.njit(**SCALAR)
+def stribeck_level(v, static, dynamic, stribeck_rate):
+    """Steady sliding friction level ``F_d + (F_s - F_d) exp(-a |v|)`` of Eq. 7.63 [N or N m] (the Coulomb and
+    Stribeck part, without its sign): shared with the bristle laws of :mod:`twin.physics.bristle_friction`."""
+    return dynamic + (static - dynamic) * elementary.exp(-stribeck_rate * abs(v))
 
 
 @numba.njit(**SCALAR)

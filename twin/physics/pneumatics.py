@@ -46,6 +46,7 @@ import numba
 
 from numerics.jit import SCALAR
 from twin.errors import ParameterError
+from twin.physics.bristle_friction import dissipation_bound_holds
 from twin.physics.friction import stribeck_friction
 
 __all__ = [
@@ -654,16 +655,16 @@ _POSITIVE = (
     "reference_temperature", "nominal_flow_rate", "valve_critical_frequency",
     "valve_damping_ratio", "bore_diameter", "stroke", "dead_volume_1", "dead_volume_2",
     "piston_mass", "friction_velocity_threshold", "damper_stiffness", "damper_travel",
-    "end_stop_stiffness", "load_cell_stiffness",
+    "end_stop_stiffness", "load_cell_stiffness", "friction_presliding_stiffness", "friction_bristle_damping_speed",
 )
 _NON_NEGATIVE = (
     "valve_leakage_fraction", "valve_hysteresis", "rod_diameter", "friction_static",
     "friction_dynamic", "friction_stribeck_coefficient", "friction_viscous", "piston_damping",
-    "damper_damping", "load_cell_damping",
+    "damper_damping", "load_cell_damping", "friction_bristle_damping",
 )
 _OTHER = (
     "polytropic_exponent", "critical_pressure_ratio", "laminar_ratio", "valve_mid_voltage",
-    "valve_command_min", "valve_command_max",
+    "valve_command_min", "valve_command_max", "friction_elastic_fraction",
 )
 REQUIRED_KEYS = _POSITIVE + _NON_NEGATIVE + _OTHER
 
@@ -731,6 +732,11 @@ def validate_pneumatics(params):
           lambda mid, lo, hi: lo < mid < hi, "mid voltage must lie inside the command range")
     check(("friction_dynamic", "friction_static"), lambda fd, fs: fd <= fs,
           "dynamic friction must not exceed static friction")
+    check(("friction_elastic_fraction",), lambda f: 0.0 <= f < 1.0,
+          "the elastic share of the bristle deflection must lie in [0, 1)")
+    check(("friction_bristle_damping", "friction_bristle_damping_speed", "friction_dynamic"),
+          dissipation_bound_holds, "bristle damping too large for the law to dissipate at every speed: "
+          "sigma_1 v_d / sqrt(2 e) must not exceed 4 F_d (twin.physics.bristle_friction)")
     check(("damper_travel", "stroke"), lambda s, stroke: 2.0 * s < stroke,
           "the two damper travels must fit in the stroke")
     if problems:
