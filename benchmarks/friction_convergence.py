@@ -9,7 +9,7 @@ the seeds and the paired shift from the default, and writes the chart OUT/fricti
 
     python benchmarks/friction_convergence.py --out DIR            # 88 runs, ~10-20 min of CPU
     python benchmarks/friction_convergence.py --out DIR --replot   # table and chart from DIR's csv
-    python benchmarks/friction_convergence.py --out DIR --quick    # ds4, seed 0, 5 and 1 mm/s, 1 s: the pipeline
+    python benchmarks/friction_convergence.py --quick              # ds4, seed 0, 5 and 1 mm/s, 1 s: the pipeline
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import tempfile
 from dataclasses import fields
 from pathlib import Path
 
@@ -152,11 +153,17 @@ def chart(rows: list[dict], path: Path) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", required=True, help="folder of the csv and the chart (created)")
+    parser.add_argument("--out", help="folder of the csv and the chart (created; with --quick: a temporary folder "
+                                      "unless given)")
     parser.add_argument("--replot", action="store_true", help="table and chart from the csv only")
     parser.add_argument("--quick", action="store_true", help="ds4, seed 0, 5 and 1 mm/s, 1 s")
     args = parser.parse_args()
-    out = Path(args.out)
+    if args.out is None and not args.quick:
+        parser.error("--out is required (the folder of the csv and the chart), except with --quick")
+    out = Path(args.out) if args.out is not None else Path(tempfile.mkdtemp(prefix="friction_convergence_"))
+    if not args.replot and (out / CSV_NAME).exists():
+        parser.error(f"{out / CSV_NAME} exists: --replot reads it, or give another --out (runs are appended as "
+                     "they finish, and two studies must not share one file)")
     out.mkdir(parents=True, exist_ok=True)
     header("friction regularisation convergence on the free-nut data sets", args.quick)
     if not args.replot:
