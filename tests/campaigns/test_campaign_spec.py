@@ -167,8 +167,8 @@ def test_shipped_specs_validate_structurally():
 def test_a_campaign_name_is_bounded_as_data_set_names_are(tmp_path, name, expected):
     """Issue 39: ``out/<name>`` stays inside out/ (no separator, no dot) and a name fits a file name; the rule is
     the data sets' (one home, campaigns.spec.check_name)."""
-    for field, text, append in (("name", f"name = {json.dumps(name)}\n", False),
-                                ("datasets[4].name", f"[[datasets]]\nname = {json.dumps(name)}\nscene = \"ds2\"\n", True)):
+    dataset = f'[[datasets]]\nname = {json.dumps(name)}\nscene = "ds2"\n'
+    for field, text, append in (("name", f"name = {json.dumps(name)}\n", False), ("datasets[4].name", dataset, True)):
         with pytest.raises(SpecError) as info:
             load(write_spec(tmp_path, text, append=append))
         found = [p for p in info.value.problems if p.startswith(f"{field}:")]
