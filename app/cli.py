@@ -288,16 +288,13 @@ def cmd_campaign_analyze(args) -> int:
 
 def _results_and_analysis(path: Path):
     """A campaign's results and, when it is beside them, its analysis (None otherwise)."""
-    import xarray as xr
-
-    from campaigns.storage import read_results
+    from campaigns.storage import read_analysis, read_results
 
     results = read_results(path)
     analysis_path = path.with_name("analysis.nc")
     if not analysis_path.is_file():
         return results, None
-    with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
-        analysis = handle.load()
+    analysis = read_analysis(analysis_path, path)
     return results, analysis if analysis.attrs.get("source_spec_hash") == results.attrs.get("spec_hash") else None
 
 
@@ -423,18 +420,15 @@ def cmd_measure_diagnose(args) -> int:
 
 
 def cmd_export(args) -> int:
-    import xarray as xr
-
     from campaigns.export import export, file_names, tables
     from campaigns.files import check_outputs
-    from campaigns.storage import read_results
+    from campaigns.storage import read_analysis, read_results
 
     results = read_results(args.results)
     analysis_path = args.analysis or args.results.with_name("analysis.nc")
     analysis = None
     if analysis_path.is_file():
-        with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
-            analysis = handle.load()
+        analysis = read_analysis(analysis_path, args.results)
         if analysis.attrs.get("source_spec_hash") != results.attrs.get("spec_hash"):
             raise InputError("export", [f"{analysis_path}: the analysis of another campaign (its source_spec_hash "
                                         "differs from the results' spec_hash); re-run `twin campaign analyze`"])
