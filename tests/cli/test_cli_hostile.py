@@ -3,6 +3,8 @@ and leaves nothing half-written."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from app.cli import main
@@ -35,3 +37,28 @@ def test_a_token_name_with_a_newline_or_out_of_bounds_is_one_line(tmp_path, caps
     assert name not in err or name == ""  # shown quoted (the newline as \n), a long one by its length
     assert main(["serve", "token", "list", "--data", str(tmp_path)]) == 0
     assert capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize("name, words", [
+    ("../../../tmp/x", ("name: '../../../tmp/x' holds '.' '/'",)),
+    ("x" * 1_000_000, ("name: a name of 1000000 characters; at most 100",)),
+])
+def test_a_campaign_name_cannot_leave_out_or_overflow_a_file_name(tmp_path, capsys, monkeypatch, name, words):
+    """Issue 39: ``name = "../../../tmp/x"`` wrote outside out/, a 1 MB name ended in ENAMETOOLONG: the spec is
+    refused before any work, in the spec's one message (SpecError), without echoing the name."""
+    import json
+
+    import campaigns
+
+    spec = tmp_path / "spec.toml"
+    demo = Path(campaigns.__file__).parent / "specs" / "demo.toml"
+    spec.write_text(f'extends = "{demo}"\nname = {json.dumps(name)}\n')
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    assert main(["campaign", "run", str(spec), "--runs", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err) < 1000 and err.startswith("twin: error: invalid campaign spec"), err
+    for word in words:
+        assert word in err
+    assert not list(work.iterdir()) and not (tmp_path / "tmp").exists()  # nothing written anywhere
