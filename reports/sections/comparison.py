@@ -44,7 +44,7 @@ def build(b: Builder):
         yield Paragraph(f"{failures[0].upper()}{failures[1:]}. A shift with fewer than {MIN_RUNS} runs (pairs) ok on "
                         "a side has no interval: it could not be made (–).")
     rows = [(s.dataset, _feature(b, s.feature), describe_shift(s.mean, s.unit), describe_shift(s.sd, s.unit),
-             f"{s.n_b} / {s.n_a}", "yes" if s.mean.resolved else "no") for s in c.shifts]
+             f"{s.n_b} / {s.n_a}", "yes" if s.mean.resolved else "no" if s.made else "not made") for s in c.shifts]
     yield b.table(f"Each feature's distribution, {c.name_b} against {c.name_a}, per data set.",
                   ("Data set", "Feature", "Mean shift", "Standard-deviation shift", f"Runs {c.name_b} / {c.name_a}",
                    "Mean shift resolved"), rows, [not s.mean.resolved for s in c.shifts])
