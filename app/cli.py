@@ -288,33 +288,46 @@ def cmd_campaign_analyze(args) -> int:
 
 def _results_and_analysis(path: Path):
     """A campaign's results and, when it is beside them, its analysis (None otherwise)."""
-    import xarray as xr
-
-    from campaigns.storage import read_results
+    from campaigns.storage import read_analysis, read_results
 
     results = read_results(path)
     analysis_path = path.with_name("analysis.nc")
     if not analysis_path.is_file():
         return results, None
-    with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
-        analysis = handle.load()
+    analysis = read_analysis(analysis_path, path)
     return results, analysis if analysis.attrs.get("source_spec_hash") == results.attrs.get("spec_hash") else None
 
 
+def _nominal_text(parameters: str, target: str) -> str | None:
+    """A parameter's nominal value in the parameter set ``parameters`` as a spec states it (SI, with its unit), or
+    None when the set or the parameter is unknown (a spec difference then reads "the parameter set's nominal")."""
+    try:
+        parameter = twin.load_parameters(parameters)[target]
+    except (InputError, KeyError, OSError):
+        return None
+    unit = "" if parameter.unit in ("", "1") else f" {parameter.unit}"
+    return f"{parameter.value:g}{unit} (nominal)"
+
+
 def cmd_campaign_compare(args) -> int:
-    from campaigns.design_comparison import compare, describe_shift
+    from campaigns.design_comparison import MIN_RUNS, compare, describe_shift, failure_text
 
     candidate, candidate_analysis = _results_and_analysis(args.a)
     baseline, baseline_analysis = _results_and_analysis(args.b)
-    found = compare(baseline, candidate, baseline_analysis, candidate_analysis)
+    found = compare(baseline, candidate, baseline_analysis, candidate_analysis, nominal=_nominal_text)
     print(f"{found.name_b} ({args.a}) against {found.name_a} ({args.b}): differences {found.name_b} - {found.name_a}")
     print(f"pairing: {'paired' if found.paired else 'unpaired'}: {found.pairing}")
-    if found.design_changes:
-        print(f"design changes (resolved distributions that differ): {', '.join(found.design_changes)}")
+    print(f"design changes ({found.name_a} → {found.name_b}):" + (
+        "" if found.spec_changes else " none: the two specs differ in name and description only"))
+    for change in found.spec_changes:
+        print(f"  {change}")
+    if failures := failure_text(found, detail=True):
+        print(failures)
     for shift in found.shifts:
         print(f"  {shift.dataset} {shift.feature}: mean shift {describe_shift(shift.mean, shift.unit)}; sd shift "
               f"{describe_shift(shift.sd, shift.unit)}; n = {shift.n_b}/{shift.n_a}"
-              + (" (resolved)" if shift.mean.resolved else ""))
+              + (" (resolved)" if shift.mean.resolved else "" if shift.made else
+                 f" (could not be made: fewer than {MIN_RUNS} runs ok)"))
     if not found.verdicts:
         print("verdicts: not compared (an analysis.nc is missing beside the results; `twin campaign analyze` both)")
     for change in found.verdicts:
@@ -423,18 +436,15 @@ def cmd_measure_diagnose(args) -> int:
 
 
 def cmd_export(args) -> int:
-    import xarray as xr
-
     from campaigns.export import export, file_names, tables
     from campaigns.files import check_outputs
-    from campaigns.storage import read_results
+    from campaigns.storage import read_analysis, read_results
 
     results = read_results(args.results)
     analysis_path = args.analysis or args.results.with_name("analysis.nc")
     analysis = None
     if analysis_path.is_file():
-        with xr.open_dataset(analysis_path, engine="netcdf4") as handle:
-            analysis = handle.load()
+        analysis = read_analysis(analysis_path, args.results)
         if analysis.attrs.get("source_spec_hash") != results.attrs.get("spec_hash"):
             raise InputError("export", [f"{analysis_path}: the analysis of another campaign (its source_spec_hash "
                                         "differs from the results' spec_hash); re-run `twin campaign analyze`"])

@@ -20,6 +20,15 @@ in the design alone and the comparison is *paired*; otherwise it is *unpaired* a
   pairs resampled together when paired);
 * a shift is *resolved* when its interval excludes 0.
 
+**What changed.** The two specs as stored in the results (``spec_json``) are compared field by field
+(:func:`spec_changes`): each difference is named with both values (``datasets[ds2].parameters.sensors.
+torque_meter_encoder_pulses_per_turn: 2000 (nominal) → 5000``), data sets by name and uncertainty rows by target; a
+value one spec leaves out is the parameter set's nominal where there is one. Names and descriptions are not compared.
+
+**Runs that failed.** A run that did not end ok (timeout, diverged, ...) has no feature: per data set and side the
+comparison counts them, and a shift with fewer than ``MIN_RUNS`` runs (pairs) has no interval: it *could not be made*,
+and the sentence says so instead of counting it among the shifts that are not resolved.
+
 **Verdicts.** Each requirement verdict of A's and B's analyses (``analysis.nc`` beside the results) side by side with
 their statements, and whether it changed; the design-limit verdicts (loop margins) likewise.
 
@@ -29,8 +38,10 @@ relative to A's spread, else says no difference is resolved.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -77,6 +88,11 @@ class FeatureShift:
     mean: Shift
     sd: Shift
 
+    @property
+    def made(self) -> bool:
+        """Whether the comparison could be made (enough runs ok on both sides for an interval)."""
+        return math.isfinite(self.mean.lower)
+
 
 @dataclass(frozen=True)
 class VerdictChange:
@@ -101,20 +117,102 @@ class Comparison:
     shifts: list[FeatureShift]
     verdicts: list[VerdictChange] = field(default_factory=list)
     sentence: str = ""
+    #: Every difference of the two specs, with both values (:func:`spec_changes`).
+    spec_changes: list[str] = field(default_factory=list)
+    #: Runs compared per data set, and per side the runs that did not end ok, by data set and by status.
+    runs: int = 0
+    failed_a: dict[str, int] = field(default_factory=dict)
+    failed_b: dict[str, int] = field(default_factory=dict)
+    statuses_a: dict[str, int] = field(default_factory=dict)
+    statuses_b: dict[str, int] = field(default_factory=dict)
 
 
 def _spec(results: xr.Dataset) -> dict:
     return json.loads(results.attrs.get("spec_json", "{}"))
 
 
+#: Spec fields that name or describe, not what a campaign does.
+_NOT_COMPARED = ("name", "description")
+#: What identifies an entry of a list of tables: a data set by its name, an uncertainty row by its target.
+_KEYS = ("name", "target")
+
+
+def _value(value) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return json.dumps(value, sort_keys=True)
+    return repr(value) if isinstance(value, str) else str(value)
+
+
+def _keyed(items: list) -> dict | None:
+    """A list of tables as ``{"[key]": table}`` when each has a name or a target, else None (a plain list)."""
+    for key in _KEYS:
+        if items and all(isinstance(i, dict) and key in i for i in items):
+            return {f"[{i[key]}]": i for i in items}
+    return None
+
+
+def spec_changes(spec_a: dict, spec_b: dict, names: tuple[str, str] = ("A", "B"),
+                 nominal: Callable[[str, str], str | None] | None = None) -> list[str]:
+    """Every difference of two canonical specs (the ``spec`` of :meth:`CampaignSpec.canonical`), one line each
+    (module docstring); ``names`` say whose a data set or row only one has. A value one spec leaves out reads
+    ``not set``; in a data set's ``parameters``, ``nominal(parameter_set, target)`` (the parameter set's value as
+    text, or None when unknown), else ``the parameter set's nominal``. (The results hold no nominal values, and
+    this module may not load the twin to read them: the reports import it.)"""
+    out: list[str] = []
+    sets = (spec_a.get("base", {}).get("parameters"), spec_b.get("base", {}).get("parameters"))
+
+    def absent(path: str, side: int) -> str:
+        parameter = path.partition(".parameters.")[2] if path.startswith("datasets[") else ""
+        if not parameter:
+            return "not set"
+        found = nominal(sets[side], parameter) if nominal is not None and isinstance(sets[side], str) else None
+        return found or "the parameter set's nominal"
+
+    def walk(a, b, path: str) -> None:
+        if isinstance(a, dict) or isinstance(b, dict):
+            a, b = (x if isinstance(x, dict) else {} for x in (a, b))
+            for key in sorted(set(a) | set(b)):
+                if key not in _NOT_COMPARED:
+                    walk(a.get(key), b.get(key), f"{path}.{key}" if path else key)
+        elif isinstance(a, list) and isinstance(b, list) and (ka := _keyed(a)) is not None \
+                and (kb := _keyed(b)) is not None:
+            for key in list(ka) + [k for k in kb if k not in ka]:
+                if key not in kb or key not in ka:
+                    out.append(f"{path}{key}: only in {names[0] if key in ka else names[1]}")
+                else:
+                    walk(ka[key], kb[key], f"{path}{key}")
+        elif a != b:
+            old = _value(a) if a is not None else absent(path, 0)
+            new = _value(b) if b is not None else absent(path, 1)
+            out.append(f"{path}: {old} → {new}")
+
+    walk(spec_a, spec_b, "")
+    return out
+
+
+def _fixed_changes(spec_a: dict, spec_b: dict) -> list[str]:
+    """Parameters a data set fixes differently in the two specs (by name of data set)."""
+    by_name = [{d.get("name"): d.get("parameters") or {} for d in s.get("datasets", [])} for s in (spec_a, spec_b)]
+    return sorted({t for name in set(by_name[0]) & set(by_name[1])
+                   for t in set(by_name[0][name]) | set(by_name[1][name])
+                   if by_name[0][name].get(t) != by_name[1][name].get(t)})
+
+
 def pairing(a: xr.Dataset, b: xr.Dataset) -> tuple[bool, str, list[str]]:
-    """Whether run i of A and of B share their draws (module docstring): ``(paired, why, design changes)``."""
+    """Whether run i of A and of B share their draws (module docstring): ``(paired, why, design changes)``: the
+    tolerances whose resolved distributions differ, and the parameters a data set fixes differently."""
     spec_a, spec_b = _spec(a), _spec(b)
     seed_a, seed_b = spec_a.get("spec", {}).get("root_seed"), spec_b.get("spec", {}).get("root_seed")
     names_a, names_b = [str(d) for d in a["dataset"].values], [str(d) for d in b["dataset"].values]
     resolved_a = {r["target"]: r for r in spec_a.get("resolved", [])}
     resolved_b = {r["target"]: r for r in spec_b.get("resolved", [])}
-    changed = sorted(t for t in set(resolved_a) | set(resolved_b) if resolved_a.get(t) != resolved_b.get(t))
+    redrawn = sorted(t for t in set(resolved_a) | set(resolved_b) if resolved_a.get(t) != resolved_b.get(t))
+    fixed = _fixed_changes(spec_a.get("spec", {}), spec_b.get("spec", {}))
+    changed = sorted(set(redrawn) | set(fixed))
     if seed_a != seed_b:
         return False, f"different root seeds ({seed_a} and {seed_b}): run i of A and of B draw independently", changed
     if names_a != names_b:
@@ -133,8 +231,9 @@ def pairing(a: xr.Dataset, b: xr.Dataset) -> tuple[bool, str, list[str]]:
         return False, (f"the same seed, but {len(different)} unchanged tolerance(s) drew other values "
                        f"({', '.join(different[:3])}{' ...' if len(different) > 3 else ''}): a changed row before "
                        "them consumed the draw stream differently"), changed
+    fixed_text = f", {len(fixed)} parameter(s) a data set fixes otherwise" if fixed else ""
     return True, (f"same root seed {seed_a}, same data sets; {len(shared)} tolerances bit-identical run by run, "
-                  f"{len(changed)} changed by the design" + note), changed
+                  f"{len(redrawn)} drawn from another distribution{fixed_text}" + note), changed
 
 
 def _mean_shift(a: np.ndarray, b: np.ndarray, paired: bool) -> Shift:
@@ -191,10 +290,12 @@ def describe_shift(shift: Shift, unit: str) -> str:
 
 
 def compare(a: xr.Dataset, b: xr.Dataset, analysis_a: xr.Dataset | None = None,
-            analysis_b: xr.Dataset | None = None) -> Comparison:
+            analysis_b: xr.Dataset | None = None, *, nominal: Callable[[str, str], str | None] | None = None
+            ) -> Comparison:
     """Campaign ``b`` (the candidate design) against campaign ``a`` (the baseline): every difference is ``b - a``
     (module docstring). ``twin campaign compare A B`` and ``twin report A --against B`` both read "A against B":
-    they pass B as the baseline."""
+    they pass B as the baseline. ``nominal`` reads a parameter's nominal for the spec differences
+    (:func:`spec_changes`)."""
     name_a = str(_spec(a).get("spec", {}).get("name", "A"))
     name_b = str(_spec(b).get("spec", {}).get("name", "B"))
     paired, why, changed = pairing(a, b)
@@ -221,25 +322,74 @@ def compare(a: xr.Dataset, b: xr.Dataset, analysis_a: xr.Dataset | None = None,
                 float(xa.std(ddof=1)) if len(xa) > 1 else math.nan, float(xb.std(ddof=1)) if len(xb) > 1 else math.nan,
                 _mean_shift(xa, xb, paired), _sd_shift(xa, xb, paired, rng)))
     verdicts = _verdicts(analysis_a, analysis_b)
-    comparison = Comparison(name_a, name_b, paired, why, changed, shifts, verdicts)
-    return Comparison(name_a, name_b, paired, why, changed, shifts, verdicts, sentence(comparison))
+    specs = (_spec(a).get("spec", {}), _spec(b).get("spec", {}))
+    comparison = Comparison(name_a, name_b, paired, why, changed, shifts, verdicts,
+                            spec_changes=spec_changes(*specs, (name_a, name_b), nominal),
+                            runs=runs, **_failures(a, datasets, runs, "a"), **_failures(b, datasets, runs, "b"))
+    return dataclasses.replace(comparison, sentence=sentence(comparison))
+
+
+def _failures(results: xr.Dataset, datasets: list[str], runs: int, side: str) -> dict:
+    """``failed_<side>`` (runs not ok per data set) and ``statuses_<side>`` (how many of each status) of the runs
+    compared."""
+    status = results["status"].sel(dataset=datasets).isel(run=slice(0, runs)).values.astype(str)
+    failed = status != "ok"
+    kinds, counts = np.unique(status[failed], return_counts=True)
+    return {f"failed_{side}": {d: int(n) for d, n in zip(datasets, failed.sum(axis=1), strict=True)},
+            f"statuses_{side}": {str(k): int(n) for k, n in zip(kinds, counts, strict=True)}}
+
+
+def failure_text(c: Comparison, *, detail: bool = False) -> str:
+    """``runs that did not end ok: 24 of 56 in B, none in A``, with ``detail`` by status and data set (``24 of 56 in
+    B (timeout 24; ds3 8 of 8, ...)``), or ``""`` when every run compared of both ended ok."""
+    total = c.runs * len(c.failed_a)
+    parts = []
+    for name, failed, statuses in ((c.name_b, c.failed_b, c.statuses_b), (c.name_a, c.failed_a, c.statuses_a)):
+        n = sum(failed.values())
+        kinds = ", ".join(f"{k} {v}" for k, v in sorted(statuses.items()))
+        where = ", ".join(f"{d} {k} of {c.runs}" for d, k in failed.items() if k)
+        parts.append(f"none in {name}" if n == 0 else f"{n} of {total} in {name}"
+                     + (f" ({kinds}; {where})" if detail else ""))
+    if all(p.startswith("none") for p in parts):
+        return ""
+    return "runs that did not end ok: " + ("; " if detail else ", ").join(parts)
+
+
+def unmade_text(c: Comparison) -> str:
+    """Which comparisons could not be made, or ``""``."""
+    unmade = [s for s in c.shifts if not s.made]
+    if not unmade:
+        return ""
+    datasets = list(dict.fromkeys(s.dataset for s in unmade))
+    entirely = [d for d in datasets if all(not s.made for s in c.shifts if s.dataset == d)]
+    where = ", ".join(datasets) if entirely == datasets else ", ".join(
+        f"{s.dataset} {s.feature}" for s in unmade[:6]) + (" ..." if len(unmade) > 6 else "")
+    both = "pairs ok in both" if c.paired else "runs ok on a side"
+    return (f"{len(unmade)} of {len(c.shifts)} comparisons could not be made (fewer than {MIN_RUNS} {both} with "
+            f"a finite feature: {where})")
 
 
 def sentence(c: Comparison) -> str:
-    """The one sentence of page 1 (module docstring)."""
+    """The one sentence of page 1 (module docstring): the verdicts that changed, else the largest resolved shift,
+    else that none is resolved among the comparisons made; then which could not be made and the runs that failed."""
     how = "paired run by run" if c.paired else "unpaired"
+    notes = "".join(f"; {text}" for text in (unmade_text(c), failure_text(c)) if text)
     changed = [v for v in c.verdicts if v.changed]
     if changed:
         items = "; ".join(f"{v.what}: {v.verdict_a} in {c.name_a}, {v.verdict_b} in {c.name_b}" for v in changed[:3])
         more = f" (and {len(changed) - 3} more)" if len(changed) > 3 else ""
-        return f"{c.name_b} against {c.name_a} ({how}): {len(changed)} verdict(s) change: {items}{more}."
-    resolved = [s for s in c.shifts if s.mean.resolved and s.sd_a > 0]
+        return f"{c.name_b} against {c.name_a} ({how}): {len(changed)} verdict(s) change: {items}{more}{notes}."
+    made = [s for s in c.shifts if s.made]
+    resolved = [s for s in made if s.mean.resolved and s.sd_a > 0]
     same = f"every verdict the same ({len(c.verdicts)} compared)" if c.verdicts else "no analyses to compare verdicts"
+    if not made:
+        return f"{c.name_b} against {c.name_a} ({how}): {same}{notes}."  # notes: no comparison could be made
+    among = f" among the {len(made)} comparisons made" if len(made) < len(c.shifts) else ""
     if not resolved:
-        return (f"{c.name_b} against {c.name_a} ({how}): {same}; no shift of any feature's mean is resolved "
-                f"({CONFIDENCE * 100:g} % intervals include 0).")
+        return (f"{c.name_b} against {c.name_a} ({how}): {same}; no shift of any feature's mean is resolved{among} "
+                f"({CONFIDENCE * 100:g} % intervals include 0){notes}.")
     top = max(resolved, key=lambda s: abs(s.mean.estimate) / s.sd_a)
     return (f"{c.name_b} against {c.name_a} ({how}): {same}; the largest resolved change is {top.feature} in "
             f"{top.dataset}, {describe_shift(top.mean, top.unit)} in its mean, "
             f"{abs(top.mean.estimate) / top.sd_a:.2g} of {c.name_a}'s spread there "
-            f"({sum(s.mean.resolved for s in c.shifts)} of {len(c.shifts)} mean shifts resolved).")
+            f"({sum(s.mean.resolved for s in made)} of {len(made)} mean shifts resolved){notes}.")

@@ -45,7 +45,7 @@ from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
-from distributed import Client, LocalCluster, as_completed
+from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 from distributed.comm.core import CommClosedError
 from distributed.scheduler import KilledWorker
 from tqdm.auto import tqdm
@@ -150,8 +150,36 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
     )
 
 
+class _QuietStop:
+    """Silences logging from the moment a stop (Ctrl-C, SIGTERM: ``KeyboardInterrupt`` in the driver) unwinds the
+    cluster's context until the client and the cluster are closed (:func:`_run`).
+
+    Closing them with runs in flight cancels tasks and ends workers mid-run, and dask and its event loop log that at
+    ERROR with tracebacks (a comm closed, a heartbeat failed, a task destroyed while pending), timing-dependent, before
+    the runner's one line: they tell the user nothing, who asked for the stop. Only the signal path is silenced (a
+    failure keeps its logs), and only for the seconds of the close; the client is closed before the cluster
+    (:func:`_client`), so no client waits on a scheduler already gone.
+    """
+
+    def __init__(self):
+        self._previous: int | None = None
+
+    def on_exit(self, exc_type, exc, tb) -> bool:
+        if exc_type is not None and issubclass(exc_type, (KeyboardInterrupt, CampaignInterrupted)) \
+                and self._previous is None:
+            self._previous = logging.root.manager.disable
+            logging.disable(logging.CRITICAL)
+        return False  # the stop goes on unwinding
+
+    def restore(self) -> None:
+        if self._previous is not None:
+            logging.disable(self._previous)
+            self._previous = None
+
+
 @contextlib.contextmanager
 def _client(workers: int, scheduler: str | None):
+    """A client of ``scheduler``, or of a local cluster of ``workers`` processes; on exit the client closes first."""
     if scheduler is not None:
         with Client(scheduler) as client:
             yield client
@@ -160,7 +188,20 @@ def _client(workers: int, scheduler: str | None):
     with LocalCluster(
         n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
     ) as cluster, Client(cluster) as client:
+        client.register_plugin(QuietWorkerClose())  # this campaign's own workers only, never a shared scheduler's
         yield client
+
+
+class QuietWorkerClose(WorkerPlugin):
+    """A local cluster's worker process logs nothing once it starts closing (the campaign is done or stopped): what
+    a worker closing under in-flight runs logs (its comm to the scheduler closed, its tasks cancelled) is no run's
+    record and reached the terminal, with tracebacks, before the runner's one line. A run's failures are records
+    (:mod:`campaigns.runs`), an infrastructure failure is retried and recorded (module docstring)."""
+
+    name = "benchtwin-quiet-close"
+
+    def teardown(self, worker) -> None:  # called as the worker's close begins
+        logging.disable(logging.CRITICAL)
 
 
 def run_campaign(
@@ -324,6 +365,8 @@ def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, b
         # One cluster for the runs, the margins and the fidelity audit: started when first needed, closed at the end.
         with contextlib.ExitStack() as cluster:
             client = None
+            quiet = _QuietStop()
+            cluster.callback(quiet.restore)  # last: once the client and the cluster are closed
             if pending:
                 slots = 1 if scheduler else workers
                 announce("cluster start",
@@ -331,6 +374,7 @@ def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, b
                          "(about 10-20 s)")
                 with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
                     client = cluster.enter_context(_client(workers, scheduler))
+                cluster.push(quiet.on_exit)  # first: a stop silences the close that follows
                 expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
                             else "see the bar")
                 announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")

@@ -34,6 +34,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from campaigns.files import CampaignError, atomic_write
+
 FORMATS = ("csv", "xlsx", "mat")
 
 
@@ -156,36 +158,63 @@ def _matlab_name(header: str, taken: set[str]) -> str:
 
 
 def export(frames: dict[str, pd.DataFrame], fmt: str, out_dir: Path, *, campaign: str = "") -> list[Path]:
-    """Write the tables in ``fmt`` into ``out_dir`` (created); returns the files written."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    if fmt == "csv":
-        paths = []
-        for name, frame in frames.items():
-            path = out_dir / f"{name}.csv"
-            frame.to_csv(path, index=False)
-            paths.append(path)
-        return paths
-    path = out_dir / f"campaign.{fmt}"
-    if fmt == "xlsx":
-        with pd.ExcelWriter(path, engine="openpyxl") as writer:
-            for name, frame in frames.items():
-                frame.to_excel(writer, sheet_name=name[:31], index=False)
-        return [path]
-    if fmt == "mat":
-        from scipy.io import savemat  # lazy: only the MATLAB export needs scipy.io
+    """Write the tables in ``fmt`` into ``out_dir`` (created); returns the files written.
 
-        content = {"campaign": campaign}
+    Each file is written to a temporary file beside it and moved onto its name when complete
+    (:func:`campaigns.files.atomic_write`): a full disk or a refused directory leaves every earlier file as it was
+    (an earlier export is not destroyed by a ``--force`` one that fails), never a truncated table under its name.
+
+    Raises
+    ------
+    CampaignError
+        Naming the directory or the file that could not be written, and the files already written before it.
+    """
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}; one of {', '.join(FORMATS)}")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CampaignError(f"cannot create the directory {out_dir}: {exc.strerror or exc}; choose another --out") \
+            from exc
+    if fmt == "csv":
+        writers = {out_dir / f"{name}.csv": (lambda tmp, frame=frame: frame.to_csv(tmp, index=False))
+                   for name, frame in frames.items()}
+    elif fmt == "xlsx":
+        writers = {out_dir / "campaign.xlsx": lambda tmp: _write_xlsx(frames, tmp)}
+    else:
+        writers = {out_dir / "campaign.mat": lambda tmp: _write_mat(frames, tmp, campaign)}
+    written: list[Path] = []
+    for path, write in writers.items():
+        try:
+            atomic_write(path, write)
+        except CampaignError as exc:
+            if written:
+                raise CampaignError(f"{exc} (written before it: {', '.join(p.name for p in written)})") from exc
+            raise
+        written.append(path)
+    return written
+
+
+def _write_xlsx(frames: dict[str, pd.DataFrame], path: Path) -> None:
+    with pd.ExcelWriter(path, engine="openpyxl") as writer:
         for name, frame in frames.items():
-            taken: set[str] = set()
-            struct = {}
-            headers = []
-            for column in frame.columns:
-                field = _matlab_name(str(column), taken)
-                values = frame[column].to_numpy()
-                struct[field] = values.astype(object) if values.dtype.kind in "OUS" else values.astype(float)
-                headers.append(str(column))
-            struct["columns"] = np.array(headers, dtype=object)
-            content[name] = struct
-        savemat(path, content, long_field_names=True, do_compression=True, oned_as="column")
-        return [path]
-    raise ValueError(f"unknown format {fmt!r}; one of {', '.join(FORMATS)}")
+            frame.to_excel(writer, sheet_name=name[:31], index=False)
+
+
+def _write_mat(frames: dict[str, pd.DataFrame], path: Path, campaign: str) -> None:
+    from scipy.io import savemat  # lazy: only the MATLAB export needs scipy.io
+
+    content = {"campaign": campaign}
+    for name, frame in frames.items():
+        taken: set[str] = set()
+        struct = {}
+        headers = []
+        for column in frame.columns:
+            field = _matlab_name(str(column), taken)
+            values = frame[column].to_numpy()
+            struct[field] = values.astype(object) if values.dtype.kind in "OUS" else values.astype(float)
+            headers.append(str(column))
+        struct["columns"] = np.array(headers, dtype=object)
+        content[name] = struct
+    # appendmat=False: the temporary file's name is not to get ".mat" appended
+    savemat(path, content, appendmat=False, long_field_names=True, do_compression=True, oned_as="column")

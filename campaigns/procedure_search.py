@@ -47,7 +47,7 @@ from scipy.stats import qmc
 from campaigns.analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES, analyze
 from campaigns.bench import force_demand_peak
 from campaigns.execution import run_campaign
-from campaigns.spec import SpecError, load_spec, read_spec
+from campaigns.spec import SearchName, SpecError, load_spec, read_spec
 from campaigns.units import display_scale, quantity, quantity_range
 from campaigns.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS, extrapolated_detectable, unit_values
 from twin.scenes import load_scene
@@ -110,7 +110,7 @@ class SearchSpec(_Strict):
     """A procedure search (TOML). Knob ranges: ``[low, high]`` for a number or a count, a single number to fix it,
     a list of choices (or one) for a choice knob; knobs not given keep the thesis's value (``KNOBS[k].default``)."""
 
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
+    name: SearchName
     description: str = ""
     campaign: str
     fault: Literal["backlash", "preload_loss"]

@@ -187,5 +187,8 @@ def serve(read_fd: int, write_fd: int) -> None:
             records.send(f"cannot load the request in the run process: {type(exc).__name__}: {exc}")
             continue
         warm_up(run_function, group[0])
-        records.send("started")
-        records.send(execute_group(run_function, group))
+        try:
+            records.send("started")
+            records.send(execute_group(run_function, group))
+        except OSError:  # BrokenPipeError: the worker ended this sandbox (a stopped campaign), no traceback
+            return

@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import string
 import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
@@ -105,6 +106,36 @@ class SpecError(InputError):
 
     def __init__(self, problems: list[str]):
         super().__init__("campaign spec", problems)
+
+
+#: Longest campaign, data-set or search name. A campaign's name is its default output directory (``out/<name>``) and
+#: appears in file names; a file-system name holds 255 bytes, and a procedure search's candidate campaigns are named
+#: ``<search>-<candidate>-<stage>`` (:data:`SEARCH_NAME_MAX_LENGTH`).
+NAME_MAX_LENGTH = 100
+#: A procedure search's name leaves room for its candidates' ``-p12-round3`` (13 characters up to ``-p999-round99``).
+SEARCH_NAME_MAX_LENGTH = NAME_MAX_LENGTH - 20
+_NAME_CHARACTERS = frozenset(string.ascii_letters + string.digits + "_-")
+
+
+def check_name(name: str, max_length: int = NAME_MAX_LENGTH) -> str:
+    """The one rule of names (campaigns, data sets, searches): 1 to ``max_length`` ASCII letters, digits, ``_`` or
+    ``-``. No path separator and no dot, so ``../../tmp/x`` cannot lead ``out/<name>`` elsewhere; no space, quote or
+    control character, so a name reads the same in a shell, a file name and a page."""
+    if not name:
+        raise ValueError("a name must not be empty (letters, digits, _ and -)")
+    if len(name) > max_length:
+        raise ValueError(f"a name of {len(name)} characters; at most {max_length} (letters, digits, _ and -)")
+    bad = sorted(set(name) - _NAME_CHARACTERS)
+    if bad:
+        raise ValueError(f"{name!r} holds {' '.join(repr(c) for c in bad[:5])}: a name is letters, digits, _ and - "
+                         "only (it names the output directory out/<name> and files)")
+    return name
+
+
+#: A campaign's or a data set's name (:func:`check_name`).
+Name = Annotated[str, AfterValidator(check_name)]
+#: A procedure search's name (:mod:`campaigns.procedure_search`): the same rule, shorter.
+SearchName = Annotated[str, AfterValidator(lambda name: check_name(name, SEARCH_NAME_MAX_LENGTH))]
 
 
 class _Strict(BaseModel):
@@ -252,7 +283,7 @@ class Dataset(_Strict):
     ``conditions`` apply after it (a preload loss is the condition ``preload`` below the procedure's setting).
     """
 
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_\-]+$")
+    name: Name
     scene: str | None = None
     description: str = ""
     conditions: dict[ConditionName, ConditionValue] = {}
@@ -447,7 +478,7 @@ class Uncertainty(_Strict):
 class CampaignSpec(_Strict):
     """A validated Monte Carlo campaign. Build it with :func:`load_spec`."""
 
-    name: str = Field(min_length=1)
+    name: Name
     description: str = ""
     root_seed: int = Field(ge=0)
     runs_per_dataset: _bounded(int, "runs_per_dataset")

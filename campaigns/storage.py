@@ -308,14 +308,8 @@ def read_results(path: str | Path) -> xr.Dataset:
     if path.is_dir():
         hint = f" ({path / RESULTS_NAME})" if (path / RESULTS_NAME).is_file() else ""
         raise CampaignError(f"{path} is a directory; give the campaign's results.nc{hint}")
-    try:
-        with xr.open_dataset(path, engine="netcdf4") as handle:
-            ds = handle.load()
-    except Exception as exc:  # noqa: BLE001 - netCDF4/HDF5 raise OSError, RuntimeError, ValueError... for a bad file
-        first = str(exc).splitlines()[0] if str(exc) else ""
-        raise CampaignError(
-            f"{path}: cannot be read as a netCDF file ({type(exc).__name__}: {first}); is it complete? A results.nc "
-            "cut short is rebuilt from its chunk files by `twin campaign run SPEC --out DIR --resume`") from None
+    ds = _load_netcdf(path, "A results.nc cut short is rebuilt from its chunk files by "
+                            "`twin campaign run SPEC --out DIR --resume`")
     problems = [] if "spec_json" in ds.attrs else ["no spec_json attribute"]
     problems += [f"no {v!r} variable" for v in RESULTS_VARIABLES if v not in ds.variables]
     problems += [f"no {d!r} dimension" for d in ("dataset", "run") if d not in ds.dims]
@@ -323,6 +317,27 @@ def read_results(path: str | Path) -> xr.Dataset:
         raise CampaignError(f"{path} is not a campaign's results.nc ({'; '.join(problems)}); give the results.nc "
                             "that `twin campaign run` wrote")
     return ds
+
+
+def read_analysis(path: str | Path, results_path: str | Path) -> xr.Dataset:
+    """The ``analysis.nc`` of the campaign whose results are ``results_path``, loaded.
+
+    Raises
+    ------
+    CampaignError
+        If it cannot be read (truncated, not netCDF): naming the file and the command that writes it again.
+    """
+    return _load_netcdf(Path(path), f"`twin campaign analyze {results_path} --force` writes it again")
+
+
+def _load_netcdf(path: Path, remedy: str) -> xr.Dataset:
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as handle:
+            return handle.load()
+    except Exception as exc:  # noqa: BLE001 - netCDF4/HDF5 raise OSError, RuntimeError, ValueError... for a bad file
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        raise CampaignError(f"{path}: cannot be read as a netCDF file ({type(exc).__name__}: {first}); is it "
+                            f"complete? {remedy}") from None
 
 
 def _checksum(arrays: dict) -> str:

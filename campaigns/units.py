@@ -50,6 +50,15 @@ def registry():
     return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
 
 
+#: Longest unit text read (a unit is a few symbols; a longer text is refused before the parser sees it).
+MAX_UNIT_LENGTH = 60
+
+
+def _shown(text: str) -> str:
+    """``text`` as an error message shows it: quoted, cut at :data:`MAX_UNIT_LENGTH` characters."""
+    return repr(text) if len(text) <= MAX_UNIT_LENGTH else f"{text[:MAX_UNIT_LENGTH]!r}... ({len(text)} characters)"
+
+
 @functools.cache
 def conversion(unit: str, si_unit: str) -> tuple[float, float]:
     """``(scale, offset)`` with ``si = value * scale + offset`` from ``unit`` to ``si_unit``.
@@ -59,25 +68,37 @@ def conversion(unit: str, si_unit: str) -> tuple[float, float]:
     Raises
     ------
     ValueError
-        Naming the unit that is not understood, or both units when they do not convert (different dimensions).
+        Naming the unit that is not understood, or both units when they do not convert (different dimensions),
+        and nothing else whatever the text: pint's parser is Python's tokenizer and evaluator, which raise
+        ``TokenError`` (``deg)``), ``AssertionError`` (``m*``), ``ZeroDivisionError`` (``1/0``) and more.
     """
     import pint  # lazy: start-up cost (the registry is built on first use)
 
     ureg = registry()
     parsed = {}
     for text in (unit, si_unit):
+        if not isinstance(text, str) or len(text) > MAX_UNIT_LENGTH:
+            what = _shown(text) if isinstance(text, str) else f"of type {type(text).__name__}"
+            raise ValueError(f"unknown unit {what}: a unit is a text of at most {MAX_UNIT_LENGTH} characters; "
+                             f"e.g. {EXAMPLES}")
         try:
             parsed[text] = ureg.parse_units(normalise(text)) if text.strip() not in ("", "1") else ureg.dimensionless
-        except (pint.errors.PintError, ValueError, TypeError, AttributeError, SyntaxError) as exc:
-            raise ValueError(f"unknown unit {text!r} ({type(exc).__name__}); e.g. {EXAMPLES}") from None
+        except Exception as exc:  # noqa: BLE001 - any failure of the parser on the user's text is that text's fault
+            raise ValueError(f"unknown unit {_shown(text)} ({type(exc).__name__}); e.g. {EXAMPLES}") from None
     try:
         zero = ureg.Quantity(0.0, parsed[unit]).to(parsed[si_unit]).magnitude
         one = ureg.Quantity(1.0, parsed[unit]).to(parsed[si_unit]).magnitude
     except pint.errors.DimensionalityError:
-        raise ValueError(f"unit {unit!r} does not convert to {si_unit!r} (the target's SI unit): "
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} (the target's SI unit): "
                          f"{ureg.Quantity(1.0, parsed[unit]).dimensionality} is not "
                          f"{ureg.Quantity(1.0, parsed[si_unit]).dimensionality}") from None
-    return float(one - zero), float(zero)
+    except Exception as exc:  # noqa: BLE001 - e.g. OverflowError of a power too large
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} ({type(exc).__name__})") from None
+    scale, offset = float(one - zero), float(zero)
+    if not (math.isfinite(scale) and math.isfinite(offset) and scale != 0.0):
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)}: its scale {scale:g} is not a "
+                         "finite, non-zero number")
+    return scale, offset
 
 
 def known_unit(unit: str) -> bool:

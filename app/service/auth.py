@@ -40,11 +40,19 @@ def token_hash(token: str) -> str:
 
 
 def create_token(registry: Registry, name: str, role: str) -> str:
-    """Create a token named ``name`` with ``role``; return it (the only time it exists in clear)."""
+    """Create a token named ``name`` with ``role``; return it (the only time it exists in clear).
+
+    Raises
+    ------
+    ValueError
+        One line naming what is wrong: the role, the name (empty, too long, not printable) or a name already taken.
+    """
     if role not in ROLES:
         raise ValueError(f"role must be one of {', '.join(ROLES)}, got {role!r}")
     if not name or not name.isprintable() or len(name) > 100:
-        raise ValueError("the token name must be 1-100 printable characters")
+        shown = repr(name) if len(name) <= 100 else f"of {len(name)} characters"
+        raise ValueError(f"token name {shown}: a token name is 1-100 printable characters (no newline, tab or "
+                         "other control character)")
     token = TOKEN_PREFIX + secrets.token_urlsafe(32)
     registry.add_token(name, role, token_hash(token))
     return token

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 from pathlib import Path
 
 ROLES = ("read", "submit", "admin")
@@ -76,7 +77,11 @@ def _registry(args):
 def cmd_token_create(args) -> int:
     from app.service.auth import create_token
 
-    token = create_token(_registry(args), args.name, args.role)
+    try:
+        token = create_token(_registry(args), args.name, args.role)
+    except ValueError as exc:  # a bad or taken name: the user's to fix, one line
+        print(f"twin serve token create: error: {exc}", file=sys.stderr)
+        return 2
     print(f"token {args.name!r} ({args.role}); shown once, only its hash is stored:")
     print(token)
     return 0

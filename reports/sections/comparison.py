@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from campaigns.design_comparison import CONFIDENCE, describe_shift
+from campaigns.design_comparison import CONFIDENCE, MIN_RUNS, describe_shift, failure_text
 from reports.builder import VERDICT_TONES, Builder
 from reports.model import Callout, Paragraph
 from reports.sections.executive import feature_words, plain_name
@@ -38,8 +38,13 @@ def build(b: Builder):
         + f"Every difference is {c.name_b} − {c.name_a}, with its {CONFIDENCE * 100:g} % interval: the mean shift "
           "by Student's t (of the paired differences, or Welch's when unpaired), the shift of the standard deviation "
           "by a percentile bootstrap; a shift is resolved when its interval excludes 0 (campaigns.design_comparison).")
+    yield Paragraph(f"Every difference of the two specs ({c.name_a} → {c.name_b}): " + "; ".join(c.spec_changes) + "."
+                    if c.spec_changes else "The two specs differ in their name and description only.")
+    if failures := failure_text(c, detail=True):
+        yield Paragraph(f"{failures[0].upper()}{failures[1:]}. A shift with fewer than {MIN_RUNS} runs (pairs) ok on "
+                        "a side has no interval: it could not be made (–).")
     rows = [(s.dataset, _feature(b, s.feature), describe_shift(s.mean, s.unit), describe_shift(s.sd, s.unit),
-             f"{s.n_b} / {s.n_a}", "yes" if s.mean.resolved else "no") for s in c.shifts]
+             f"{s.n_b} / {s.n_a}", "yes" if s.mean.resolved else "no" if s.made else "not made") for s in c.shifts]
     yield b.table(f"Each feature's distribution, {c.name_b} against {c.name_a}, per data set.",
                   ("Data set", "Feature", "Mean shift", "Standard-deviation shift", f"Runs {c.name_b} / {c.name_a}",
                    "Mean shift resolved"), rows, [not s.mean.resolved for s in c.shifts])

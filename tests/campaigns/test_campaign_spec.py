@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -154,3 +155,27 @@ def test_shipped_specs_validate_structurally():
         assert spec.observability.sweep == ["ds4", "ds6", "ds7", "ds2"]
     assert campaigns.spec.validate_spec(
         campaigns.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("../../../tmp/x", "'../../../tmp/x' holds '.' '/': a name is letters, digits, _ and - only"),
+    ("x" * 1_000_000, "a name of 1000000 characters; at most 100"),
+    ("", "a name must not be empty"),
+    ("two words", "holds ' '"),
+    ("line\nbreak", "holds '\\n'"),
+])
+def test_a_campaign_name_is_bounded_as_data_set_names_are(tmp_path, name, expected):
+    """Issue 39: ``out/<name>`` stays inside out/ (no separator, no dot) and a name fits a file name; the rule is
+    the data sets' (one home, campaigns.spec.check_name)."""
+    dataset = f'[[datasets]]\nname = {json.dumps(name)}\nscene = "ds2"\n'
+    for field, text, append in (("name", f"name = {json.dumps(name)}\n", False), ("datasets[4].name", dataset, True)):
+        with pytest.raises(SpecError) as info:
+            load(write_spec(tmp_path, text, append=append))
+        found = [p for p in info.value.problems if p.startswith(f"{field}:")]
+        assert found and expected in found[0], info.value.problems
+        assert all(len(p) < 300 for p in info.value.problems)  # a 1 MB name is not echoed
+
+
+def test_the_name_rule_allows_what_the_shipped_specs_use(tmp_path):
+    assert load(write_spec(tmp_path, 'name = "thesis_backlash-v2_"\n')).name == "thesis_backlash-v2_"
+    assert load(write_spec(tmp_path, f'name = "{"n" * 100}"\n')).name == "n" * 100

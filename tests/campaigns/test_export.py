@@ -3,7 +3,10 @@ under the one write rule (never over a campaign's own files, nothing existing wi
 
 from __future__ import annotations
 
+import errno
+import os
 import shutil
+from pathlib import Path
 
 import numpy as np
 import openpyxl
@@ -13,6 +16,7 @@ import scipy.io
 import xarray as xr
 
 import campaigns
+import campaigns.files
 from app.cli import main
 
 
@@ -80,3 +84,81 @@ def test_export_keeps_the_write_rule(analysed, tmp_path, capsys):
     finally:
         (analysed.parent / "spec.json").unlink()
         shutil.rmtree(analysed.parent / "chunks")
+
+
+def _one_line(capsys, argv: list[str], *words: str) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for word in words:
+        assert word in err, err
+    return err
+
+
+def _fail_midway(monkeypatch, errno_code: int, *, on_call: int = 1):
+    """``DataFrame.to_csv`` writes half its text, then the disk refuses (as a full disk does), on call ``on_call``."""
+    original = pd.DataFrame.to_csv
+    calls = []
+
+    def to_csv(self, path, **kwargs):
+        calls.append(path)
+        if len(calls) < on_call:
+            return original(self, path, **kwargs)
+        text = original(self, None, **kwargs)
+        with open(path, "w") as f:
+            f.write(text[: len(text) // 2])
+        raise OSError(errno_code, os.strerror(errno_code), str(path))
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", to_csv)
+
+
+def test_a_full_disk_leaves_the_previous_export_whole(analysed, tmp_path, capsys, monkeypatch):
+    """Issue 39: the export wrote in place; a full disk left a truncated runs.csv under its name, and a failing
+    --force export destroyed the previous one."""
+    out = tmp_path / "csv"
+    assert main(["export", str(analysed), "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    capsys.readouterr()
+    _fail_midway(monkeypatch, errno.ENOSPC)
+    _one_line(capsys, ["export", str(analysed), "--out", str(out), "--force"],
+              f"cannot write {out / 'runs.csv'}", "the disk is full", "Nothing was replaced")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # every file as it was, no temporary left
+
+
+def test_a_failure_after_some_tables_names_those_written_and_leaves_no_truncated_one(analysed, tmp_path, capsys,
+                                                                                   monkeypatch):
+    _fail_midway(monkeypatch, errno.ENOSPC, on_call=2)
+    out = tmp_path / "csv"
+    _one_line(capsys, ["export", str(analysed), "--out", str(out)], f"cannot write {out / 'features.csv'}",
+              "(written before it: runs.csv)")
+    assert sorted(p.name for p in out.iterdir()) == ["runs.csv"]
+    assert len(pd.read_csv(out / "runs.csv")) > 0  # whole
+
+
+@pytest.mark.parametrize("fmt", ["csv", "xlsx", "mat"])
+def test_a_read_only_directory_is_one_line(analysed, tmp_path, capsys, monkeypatch, fmt):
+    """Tests run as root, where chmod does not stop writes: the refusal is simulated where the OS gives it."""
+    def refused(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    out = tmp_path / "ro"
+    out.mkdir()
+    monkeypatch.setattr(campaigns.files.tempfile, "mkstemp", refused)
+    _one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(out)],
+              "cannot write", "Permission denied")
+    assert not list(out.iterdir())
+    monkeypatch.setattr(Path, "mkdir", refused)
+    _one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(tmp_path / "new")],
+              f"cannot create the directory {tmp_path / 'new'}: Permission denied")
+
+
+def test_a_truncated_analysis_beside_good_results_is_one_line_naming_the_remedy(analysed, tmp_path, capsys):
+    campaign = tmp_path / "campaign"
+    campaign.mkdir()
+    shutil.copy(analysed, campaign / "results.nc")
+    whole = (analysed.parent / "analysis.nc").read_bytes()
+    (campaign / "analysis.nc").write_bytes(whole[: len(whole) // 2])
+    _one_line(capsys, ["export", str(campaign / "results.nc"), "--out", str(tmp_path / "csv")],
+              f"{campaign / 'analysis.nc'}: cannot be read as a netCDF file", "is it complete?",
+              f"`twin campaign analyze {campaign / 'results.nc'} --force` writes it again")
+    assert not (tmp_path / "csv").exists()  # before any work

@@ -180,3 +180,4 @@ def test_a_comparison_report_has_its_sentence_on_page_one_and_its_section(campai
     assert "the backlash feature f_b (Eq. 9.12), ideal sensors" in section  # the features in page 1's words
     assert "the backlash feature f_b (Eq. 9.12): minimum detectable fault size against the requirement" in section
     assert not re.search(r"\de-\d|0\.000\d", section)  # no exponent, no 0.000x: the prefix that shows the value
+    assert "The two specs differ in their name and description only." in section  # the same spec, runs shifted
