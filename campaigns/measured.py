@@ -26,6 +26,11 @@ the acquisition would have sampled it:
 * the instants run to the end of the file or, when the mapping names the test's ``scene``, to the end of that
   procedure (a shorter file is refused: its features would be averages over another span).
 
+Before any feature is computed, what a bench cannot produce is refused naming the channel and the likely unit
+(:func:`bench_problems`: positions within the 300 mm stroke of Table 9.3, the sled and the screw-equivalent position
+agreeing within the backlash, the torque within the torque meter's range): a wrong unit would otherwise give a
+confident wrong diagnosis. A CSV file is read in chunks, its mapped columns only (:func:`_read_csv`).
+
 The result is a netCDF file (``twin measure import``) with the mapped signals on the acquisition grid in SI units and
 every feature, which :mod:`campaigns.diagnosis` places against a campaign.
 """
