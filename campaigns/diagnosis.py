@@ -188,15 +188,41 @@ def fault_size(feature: str, value: float, feature_unit: str, placements: dict[s
         statement = (f"consistent with a healthy bench: {measured} lies within the {CONFIDENCE * 100:g} % prediction "
                      f"interval of the fault-free data set {reference} (percentile "
                      f"{placements[reference].percentile * 100:.0f} %, {placements[reference].n} runs); {bound}")
-    elif upper_name:
-        statement = (f"{quantity} between {level(lower_name)} and {level(upper_name)}"
-                     + (f" (estimate {printed * scale:.3g} {shown})" if math.isfinite(printed) else "")
-                     + f": {measured} lies beyond the {CONFIDENCE * 100:g} % prediction intervals of both levels")
     else:
-        statement = (f"{quantity} above {level(lower_name)}: {measured} lies beyond the {CONFIDENCE * 100:g} % "
-                     f"prediction interval of every sweep level up to the largest, {level(order[-1])}; the sweep does "
-                     "not bound it from above")
+        between = (f"{quantity} between {level(lower_name)} and {level(upper_name)}" if upper_name
+                   else f"{quantity} above {level(lower_name)}")
+        statement = (between + (f" (estimate {printed * scale:.3g} {shown})" if math.isfinite(printed) else "")
+                     + f": {measured} " + _bounds_in_words(placements, levels, judged, lower_name, upper_name,
+                                                           bool(small), level))
     return FaultSize(quantity, unit, lower, upper, lower_name, upper_name, printed, healthy, statement)
+
+
+def _bounds_in_words(placements: dict[str, Placement], levels: dict[str, float], judged: list[str], lower_name: str,
+                     upper_name: str, excluded_below: bool, level) -> str:
+    """What the data sets say about the bounds of a fault size that is not healthy, each claim as the placements have
+    it: the lower bound's level excluded (or the side of the fault-free data set's interval the test lies on), the
+    levels between the bounds it is consistent with, the upper bound's level excluded or no level too large (a level
+    the test is consistent with is never called too small)."""
+    interval = f"{CONFIDENCE * 100:g} % prediction interval"
+    reference = placements[lower_name]
+    if excluded_below:
+        text = f"lies {reference.side()} the {interval} of {level(lower_name)}"
+    elif reference.judged:
+        text = f"lies {reference.side()} the {interval} of the fault-free data set {level(lower_name)}"
+    else:
+        text = f"is not judged against the fault-free data set {level(lower_name)} ({reference.n} runs)"
+    ceiling = levels[upper_name] if upper_name else math.inf
+    consistent = [n for n in judged if levels[lower_name] < levels[n] < ceiling and placements[n].consistent]
+    if consistent:
+        text += f", within that of {', '.join(level(n) for n in consistent)}"
+    if upper_name:
+        return text + f" and {placements[upper_name].side()} that of {level(upper_name)}"
+    if lower_name == judged[-1]:
+        return text + ", the sweep's largest level: the sweep does not bound it from above"
+    if consistent:
+        return text + ("; no sweep level's interval lies wholly on the other side of it, so the sweep does not bound "
+                       "it from above")
+    return text + f"; the sweep's largest level is {level(judged[-1])}: it does not bound it from above"
 
 
 def diagnose(test: xr.Dataset, results: xr.Dataset, *, confidence: float = CONFIDENCE) -> Diagnosis:

@@ -26,26 +26,34 @@ the acquisition would have sampled it:
 * the instants run to the end of the file or, when the mapping names the test's ``scene``, to the end of that
   procedure (a shorter file is refused: its features would be averages over another span).
 
+Before any feature is computed, what a bench cannot produce is refused naming the channel and the likely unit
+(:func:`bench_problems`: positions within the 300 mm stroke of Table 9.3, the sled and the screw-equivalent position
+agreeing within the backlash, the torque within the torque meter's range): a wrong unit would otherwise give a
+confident wrong diagnosis. A CSV file is read in chunks, its mapped columns only (:func:`_read_csv`).
+
 The result is a netCDF file (``twin measure import``) with the mapped signals on the acquisition grid in SI units and
 every feature, which :mod:`campaigns.diagnosis` places against a campaign.
 """
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 
-from campaigns.units import conversion
+from campaigns.units import conversion, quantity
 from twin.errors import InputError, did_you_mean
 from twin.features import FEATURES, MOTION_SPEED_THRESHOLD, N_ACCUMULATORS, accumulate, finish
 from twin.layout import SIGNAL_META, Signal
+from twin.scenes.procedure import STROKE
+from twin.scenes.profiles import profile_values
 
 #: Signals a measured test may map, with their SI unit and long name (the twin's names, ``twin.layout``).
 SIGNALS = {signal.name.lower(): SIGNAL_META[signal] for signal in Signal}
@@ -58,6 +66,23 @@ SPACING_TOLERANCE = 0.01
 #: Mapping fields.
 TEST_FIELDS = ("name", "scene", "parameters", "time", "time_unit", "start")
 CHANNEL_FIELDS = ("column", "unit", "gain", "offset", "zero")
+#: The largest backlash a scene may state (``twin.scenes.CONDITIONS["backlash"]``: 0 ... 1 mm) [m].
+LARGEST_BACKLASH = 1e-3
+#: How far the sled position may move from the screw-equivalent position over a test (both zeroed at the start) [m]:
+#: the backlash (at most LARGEST_BACKLASH) plus the drive chain's elastic deflection at the 12 kN of Table 9.3 (the
+#: thrust bearing's 400 N/µm of Table B.9 alone gives 30 µm; shaft and nut contacts a few times that), the lead error
+#: (7.3e-5 of the 300 mm stroke, 22 µm) and the encoders' errors (µm). Twice the largest backlash covers them all; a
+#: wrong unit (a factor 1000, 57 or 10 between the two channels) exceeds it on any motion longer than a few mm.
+ALLOWED_DISAGREEMENT = 2 * LARGEST_BACKLASH
+#: Common units of a signal's dimension, for the "is the unit µm?" hint of a reading out of a bench's range.
+COMMON_UNITS = {"m": ("m", "cm", "mm", "µm", "nm", "in"), "rad": ("rad", "mrad", "deg", "arcmin", "arcsec", "turn"),
+                "N m": ("N m", "N cm", "N mm", "mN m", "kN m")}
+#: Rows of a CSV file read at a time (a 10 s test at 1 kHz is 10 001 rows; long logs are read in chunks of this).
+CSV_CHUNK_ROWS = 100_000
+#: Delimiters a CSV file may use (a spreadsheet's export: comma; semicolon where the comma is the decimal sign).
+CSV_DELIMITERS = ",;\t|"
+#: Bytes read to tell the delimiter and the header.
+CSV_SAMPLE_BYTES = 64 * 1024
 
 
 class MeasuredError(InputError):
@@ -208,15 +233,12 @@ def _read_columns(path: Path, mapping: Mapping) -> tuple[dict[str, np.ndarray], 
                 columns = {n: np.asarray(ds[n].values, dtype=float) for n in wanted if n in ds.variables}
                 units = {n: str(ds[n].attrs["units"]) for n in wanted if n in ds.variables and "units" in ds[n].attrs}
         else:
-            frame = pd.read_csv(path, sep=None, engine="python", comment="#")
-            names = [str(c) for c in frame.columns]
-            columns = {}
-            for n in wanted:
-                if n in frame.columns:
-                    values = pd.to_numeric(frame[n], errors="coerce").to_numpy(dtype=float)
-                    columns[n] = values
+            names, columns = _read_csv(path, wanted)
     except (OSError, ValueError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise MeasuredError(f"measured file {path}", [f"{path}: cannot be read as CSV or netCDF: {exc}"]) from None
+        if isinstance(exc, MeasuredError):
+            raise
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeasuredError(f"measured file {path}", [f"{path}: cannot be read as CSV or netCDF: {first}"]) from None
     problems = []
     for n in dict.fromkeys(wanted):
         if n not in columns:
@@ -232,6 +254,59 @@ def _read_columns(path: Path, mapping: Mapping) -> tuple[dict[str, np.ndarray], 
     return columns, units
 
 
+def _csv_layout(path: Path) -> tuple[str, list[str]]:
+    """The delimiter and the column names of a CSV file, from its first lines (``#`` lines are comments; a UTF-8 byte
+    order mark, as Excel's "CSV UTF-8" writes, is dropped)."""
+    with path.open(encoding="utf-8-sig", newline="") as handle:
+        sample = handle.read(CSV_SAMPLE_BYTES)
+    lines = sample.splitlines()
+    if len(sample) == CSV_SAMPLE_BYTES:
+        lines = lines[:-1]  # the last line may be cut
+    lines = [line for line in lines if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise MeasuredError(f"measured file {path}", [
+            f"{path.name}: the file is empty (no header line naming the columns, no samples)"])
+    try:
+        delimiter = csv.Sniffer().sniff("\n".join(lines[:50]), delimiters=CSV_DELIMITERS).delimiter
+    except csv.Error:  # a single column, or rows the sniffer cannot tell apart: the CSV default
+        delimiter = ","
+    return delimiter, [name.strip() for name in next(csv.reader([lines[0]], delimiter=delimiter))]
+
+
+def _read_csv(path: Path, wanted: list[str]) -> tuple[list[str], dict[str, np.ndarray]]:
+    """The column names of a CSV file and its wanted columns (those it has) as float arrays: read in chunks of
+    CSV_CHUNK_ROWS rows and only the wanted columns kept, so the memory is that of the float arrays, not of the text
+    (benchmarks/measured_import_memory.py). A sample that is not a number becomes NaN (reported by the caller); a
+    column whose numbers have a comma as the decimal sign is refused, naming it (one line for them all)."""
+    delimiter, names = _csv_layout(path)
+    present = [n for n in dict.fromkeys(wanted) if n in names]
+    if not present:
+        return names, {}
+    parts: dict[str, list[np.ndarray]] = {n: [] for n in present}
+    comma_decimals: dict[str, str] = {}
+    chunks = pd.read_csv(path, sep=delimiter, encoding="utf-8-sig", comment="#",
+                         usecols=lambda column: str(column).strip() in present,
+                         skipinitialspace=True, chunksize=CSV_CHUNK_ROWS)
+    with chunks:
+        for chunk in chunks:
+            chunk.columns = [str(c).strip() for c in chunk.columns]
+            for n in present:
+                column = chunk[n]
+                if not pd.api.types.is_numeric_dtype(column):
+                    text = column.dropna().astype(str).str.strip()
+                    comma = text[text.str.fullmatch(r"[-+]?\d*,\d+([eE][-+]?\d+)?")]
+                    if len(comma) and n not in comma_decimals:
+                        comma_decimals[n] = comma.iloc[0]
+                    column = pd.to_numeric(column, errors="coerce")
+                parts[n].append(column.to_numpy(dtype=float))
+    if comma_decimals:
+        named = ", ".join(f"{n!r} ({example!r})" for n, example in comma_decimals.items())
+        raise MeasuredError(f"measured file {path}", [
+            f"{path.name}: column(s) {named} write numbers with a comma as the decimal sign; save the file with a "
+            "point as the decimal sign (a spreadsheet's CSV export in an English locale)"])
+    return names, {n: np.concatenate(chunk) if chunk else np.empty(0) for n, chunk in parts.items()}
+
+
 def acquisition_grid(time: np.ndarray, period: float, start: float, end: float | None) -> tuple[np.ndarray, np.ndarray]:
     """The acquisition instants ``t_k = k period`` from ``start`` (relative times) and, for each, the index of the
     file's last sample at or before it (a zero-order hold). ``end`` (relative) caps the span; by default it is the
@@ -242,6 +317,84 @@ def acquisition_grid(time: np.ndarray, period: float, start: float, end: float |
     # a time stamp written with a few digits may fall a hair after its instant: 1e-6 T of slack
     index = np.searchsorted(time, start + instants + 1e-6 * period, side="right") - 1
     return instants, index
+
+
+def torque_limit(params) -> float:
+    """The largest torque the bench's torque meter reads [N m]: the nominal torque of its larger range (Table B.5),
+    where its ±10 V output and the ±10 V acquisition end."""
+    return max(params.value("sensors.torque_meter_full_scale_range1"),
+               params.value("sensors.torque_meter_full_scale_range2"))
+
+
+def unit_hint(signal: str, channel: Channel, factor: float) -> str:
+    """``is the unit µm rather than 'mm'?`` when readings ``factor`` times what they should be are what a common unit
+    of the signal's dimension read as the channel's unit gives; else a word to check the unit and gain."""
+    si_unit = SIGNALS[signal][0]
+    scale = conversion(channel.unit, si_unit)[0]
+    if math.isfinite(factor) and factor > 0:
+        for candidate in COMMON_UNITS.get(si_unit, ()):
+            if abs(math.log(factor * conversion(candidate, si_unit)[0] / scale)) < math.log(1.2):
+                return f"is the unit {candidate} rather than {channel.unit!r}?"
+    return f"check its unit ({channel.unit}) and gain ({channel.gain:g})"
+
+
+def _times(factor: float) -> str:
+    return f"{factor:.0f}×" if factor >= 100 else f"{factor:.2g}×"
+
+
+def bench_problems(calibrated: dict[str, np.ndarray], channels: dict[str, Channel], *, lead: float,
+                   torque_limit: float, demand: np.ndarray | None = None) -> list[str]:
+    """What a bench cannot have produced, each naming the channel and the likely cause (a wrong unit or gain).
+
+    ``calibrated``: each mapped signal in SI at the acquisition instants (before zeroing); ``channels``: their
+    mapping, with the unit used (the file's own for a netCDF variable the mapping gives none); ``demand``: the scene's
+    position demand there, when the mapping names the scene. Checked: the sled position and the screw-equivalent
+    position (``lead / 2 pi`` times the screw angle) each span at most the bench's stroke (Table 9.3,
+    ``twin.scenes.procedure.STROKE``); they agree, both zeroed at the start, within ALLOWED_DISAGREEMENT (the
+    backlash and the chain's deflection), which bounds the backlash features too (means and differences of means of
+    that disagreement); the torque reads within the torque meter's range. Of two positions that disagree, the one
+    farther from the demand's span is named (both, without a scene)."""
+    sled = calibrated["linear_encoder_position"]
+    screw = lead / (2.0 * math.pi) * calibrated["screw_angle_measured"]
+    what = {"linear_encoder_position": "the sled position",
+            "screw_angle_measured": "the screw-equivalent position (lead / 2π × screw_angle_measured)"}
+    spans = {"linear_encoder_position": float(np.ptp(sled)), "screw_angle_measured": float(np.ptp(screw))}
+    problems = []
+    for signal, span in spans.items():
+        other = next(s for s in spans if s != signal)
+        if span > STROKE:
+            factor = span / spans[other] if spans[other] > 0 else math.nan
+            problems.append(
+                f"channels.{signal}: {what[signal]} spans {quantity(span, 'm', 4)}, more than the bench's "
+                f"{quantity(STROKE, 'm')} stroke (Table 9.3)"
+                + (f"; values {_times(factor)} {what[other]} ({quantity(spans[other], 'm', 4)})"
+                   if math.isfinite(factor) else "")
+                + f": {unit_hint(signal, channels[signal], factor)}")
+    gap = float(np.max(np.abs((sled - sled[0]) - (screw - screw[0]))))
+    if not problems and gap > ALLOWED_DISAGREEMENT:
+        ratio = spans["linear_encoder_position"] / spans["screw_angle_measured"] if spans["screw_angle_measured"] \
+            else math.inf
+        suspects = list(spans)
+        if demand is not None and np.ptp(demand) > 0:
+            reference = float(np.ptp(demand))
+            suspects = [max(spans, key=lambda s: abs(math.log(max(spans[s], 1e-300) / reference)))]
+        hints = {s: unit_hint(s, channels[s], ratio if s == "linear_encoder_position" else 1.0 / ratio)
+                 for s in suspects}
+        hint = next(iter(hints.values())) if len(hints) == 1 else "; or ".join(f"{s}: {h}" for s, h in hints.items())
+        problems.append(
+            f"channels.{suspects[0]}: {what['linear_encoder_position']} spans "
+            f"{quantity(spans['linear_encoder_position'], 'm', 4)} and {what['screw_angle_measured']} "
+            f"{quantity(spans['screw_angle_measured'], 'm', 4)}; they part by up to {quantity(gap, 'm', 3)}, more "
+            f"than a bench's backlash and deflection allow ({quantity(ALLOWED_DISAGREEMENT, 'm')})"
+            + (f" (the scene's demand spans {quantity(float(np.ptp(demand)), 'm', 4)})" if demand is not None else "")
+            + f"; {hint}")
+    if "torque_measured" in calibrated:
+        peak = float(np.max(np.abs(calibrated["torque_measured"])))
+        if peak > torque_limit:
+            problems.append(f"channels.torque_measured: readings up to {quantity(peak, 'N m', 4)}, beyond the "
+                            f"torque meter's {quantity(torque_limit, 'N m')} full scale (Table B.5): "
+                            f"{unit_hint('torque_measured', channels['torque_measured'], math.nan)}")
+    return problems
 
 
 def measured_features(sled: np.ndarray, screw_angle: np.ndarray, torque: np.ndarray | None, *, lead: float,
@@ -297,6 +450,8 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
     scale, offset = conversion(mapping.time_unit, "s")
     time = columns[mapping.time] * scale + offset
     problems = []
+    if len(time) == 0:
+        raise MeasuredError(f"measured file {path}", [f"{path.name}: no samples under the header line"])
     if len(time) < 2 or not (np.diff(time) > 0).all():
         problems.append(f"{path.name}: the time column {mapping.time!r} must increase from sample to sample")
     if problems:
@@ -320,6 +475,8 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
         raise MeasuredError(f"measured file {path}", problems)
     instants, index = acquisition_grid(time, period, start, end)
     data_vars = {}
+    calibrated: dict[str, np.ndarray] = {}
+    used: dict[str, Channel] = {}
     for signal, channel in mapping.channels.items():
         si_unit, long_name = SIGNALS[signal]
         unit = channel.unit or units.get(channel.column)
@@ -332,6 +489,7 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
             raise MeasuredError(f"mapping for {path.name}", [f"channels.{signal}.unit: {exc}"]) from None
         values = (channel.gain * columns[channel.column] + channel.offset) * c_scale + c_offset
         held = values[index]
+        calibrated[signal], used[signal] = held, replace(channel, unit=unit)
         if channel.zero == "start":
             held = held - held[0]
         data_vars[signal] = ("time", held, {
@@ -339,6 +497,10 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
             "source_column": channel.column,
             "calibration": f"({channel.gain:g} * raw + {channel.offset:g}) {unit} -> {si_unit}"
                            + ("; zeroed at the procedure's start" if channel.zero == "start" else "")})
+    problems = bench_problems(calibrated, used, lead=lead, torque_limit=torque_limit(params),
+                              demand=None if scene is None else profile_values(scene.position_table(), instants))
+    if problems:
+        raise MeasuredError(f"measured file {path}", problems)
     features = measured_features(
         data_vars["linear_encoder_position"][1], data_vars["screw_angle_measured"][1],
         data_vars["torque_measured"][1] if "torque_measured" in data_vars else None, lead=lead, period=period)
@@ -346,7 +508,10 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
         declared = FEATURES[name]
         data_vars[name] = ((), value, {"units": declared.unit, "long_name": declared.long_name + " (measured test)",
                                        "description": declared.description, "role": "feature"})
-    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:  # in blocks: a long log is not held twice
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
     return xr.Dataset(
         data_vars,
         coords={"time": ("time", instants, {"units": "s", "long_name": "acquisition instant from the start of the "
@@ -355,7 +520,7 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
             "title": f"Measured test {mapping.name or path.stem}",
             "measured_test": mapping.name or path.stem,
             "source_file": path.name,
-            "source_sha256": digest,
+            "source_sha256": digest.hexdigest(),
             "mapping": mapping.text,
             "scene": mapping.scene or "",
             "parameter_set": params.name,

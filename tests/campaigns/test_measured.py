@@ -191,3 +191,26 @@ def test_the_import_command_writes_the_measured_test_under_the_write_rule(measur
     assert main(argv) == 2 and "already exists; pass --force" in capsys.readouterr().err
     assert main(["measure", "diagnose", str(measured_campaign.csv), "--campaign", str(measured_campaign.results)]) == 2
     assert "cannot be read as a netCDF file" in capsys.readouterr().err  # a CSV is imported first, and it says so
+
+
+def test_a_level_the_test_is_consistent_with_is_never_called_exceeded():
+    """Issue 39's case: consistent with the largest level (ds2, 80 µm, in the issue; b16 here) and above the one
+    below it. The statement said "beyond the 95 % prediction interval of every sweep level up to the largest": it
+    names the level the test lies within, and no upper bound, as each data set's placement has it."""
+    results = _sweep_results({"b0": 1.0, "b4": 3.0, "b8": 5.0, "b16": 9.0}, sd=0.2)
+    found = diagnose(_test(9.1), results)
+    by_name = {p.dataset: p for p in found.placements["backlash_feature"]}
+    assert by_name["b16"].consistent and by_name["b8"].side() == "above"
+    fault = found.fault["backlash_feature"]
+    assert (fault.lower_name, fault.upper_name, fault.upper) == ("b8", "", math.inf)
+    assert found.verdict == ("backlash above 8 µm (b8): backlash_feature = 9.1 µm lies above the 95 % prediction "
+                             "interval of 8 µm (b8), within that of 16 µm (b16); no sweep level's interval lies wholly "
+                             "on the other side of it, so the sweep does not bound it from above")
+    assert "every sweep level" not in found.verdict
+    # every level the statement places, it places where the per-data-set lines do (describe)
+    for verdict, value in ((found.verdict, 9.1), (diagnose(_test(7.0), results).verdict, 7.0),
+                           (diagnose(_test(30.0), results).verdict, 30.0)):
+        placed = {p.dataset: p.side() for p in diagnose(_test(value), results).placements["backlash_feature"]}
+        for side, name in re.findall(r"(above|below|within) (?:the 95 % prediction interval|that) of [\d.]+ µm "
+                                     r"\((\w+)\)", verdict):
+            assert placed[name] == {"within": "inside"}.get(side, side), (verdict, name)
