@@ -16,22 +16,21 @@ import twin
 from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
-from twin.scenes import SCENE_PREFIX, split_targets
+from twin.scenes import split_targets
 from twin.simulation import DEFAULT_INTEGRATOR, solver_label
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
-    """``name=number``; a scene condition may also be a word (``scene.zero_procedure=preloaded``),
-    which the scene then checks against its allowed values."""
+    """``name=number`` in SI; else the text as it stands: a value with its unit (``scene.backlash="20 um"``,
+    ``reducer.backlash="3 mrad"``), which the parameter set or the scene converts to its SI unit, or a scene
+    condition's word (``scene.zero_procedure=preloaded``), which the scene checks against its allowed values."""
     name, sep, value = text.partition("=")
-    if not sep or not name:
+    if not sep or not name.strip() or not value.strip():
         raise argparse.ArgumentTypeError(f"--set expects name=value, got {text!r}")
     try:
         return name.strip(), float(value)
     except ValueError:
-        if name.strip().startswith(SCENE_PREFIX) and value.strip():
-            return name.strip(), value.strip()
-        raise argparse.ArgumentTypeError(f"--set {name}: value {value!r} is not a number") from None
+        return name.strip(), value.strip()
 
 
 def _parse_fidelity(text: str) -> str | dict[str, str]:
@@ -99,6 +98,24 @@ def _check_bounds(**values) -> None:
         raise InputError("command line", problems)
 
 
+def _what_the_feature_is(ds) -> str:
+    """One line under the printed Eq. 9.12 feature: what the number is, so that 30 um for an 80 um backlash reads
+    right (a mean of a position difference, whose reading on a flank depends on the zero procedure: twin.features)."""
+    import json
+
+    b = json.loads(ds.attrs["scene_conditions"])["backlash"] * 1e6
+    if b == 0:
+        return ("(the mean over the test of |nut - screw equivalent position|; the scene has no backlash: it reads "
+                "the elastic deflection between the screw and the nut and, measured, the encoders' errors)")
+    on_a_flank = {"thesis": f"zeroed with the nuts centred in the gap, a nut held on a flank reads b/2 = {b / 2:g} um "
+                            "and one crossing the gap less",
+                  "preloaded": f"zeroed where the preloaded nuts rest, a nut that stays there reads 0 um and one "
+                               f"pushed across the gap up to b = {b:g} um"}.get(
+        ds.attrs["zero_procedure"], f"zero procedure {ds.attrs['zero_procedure']}")
+    return (f"(the mean over the test of |nut - screw equivalent position|, not the gap; the scene's backlash b is "
+            f"{b:g} um; {on_a_flank})")
+
+
 def cmd_simulate(args) -> int:
     from campaigns.files import check_output, write_netcdf
 
@@ -136,6 +153,8 @@ def cmd_simulate(args) -> int:
             print(
                 f"{label}: measured {float(ds[name]) * 1e6:.4f} um, "
                 f"true signals {float(ds[name + '_true']) * 1e6:.4f} um")
+            if name == "backlash_feature":
+                print(f"  {_what_the_feature_is(ds)}")
     print(f"fidelity: {ds.attrs['fidelity']} ({ds.attrs['integrated_states']} integrated states)")
     print(f"integrator: {solver_label(ds.attrs['integrator'], ds.attrs['dt'])}")
     if args.out:
@@ -519,6 +538,7 @@ def cmd_chapter5(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {twin.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("scenes", help="list the built-in scenes (test procedures)")
@@ -528,8 +548,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="built-in scene name (see `twin scenes`) or a scene TOML file")
     p.add_argument("--params", default="bench", help="parameter set name or directory/file (default: bench)")
     p.add_argument("--set", action="append", type=_parse_assignment, metavar="NAME=VALUE",
-                   help="override a parameter (e.g. motor.inertia=1.6e-4) or a scene condition (scene.backlash=2e-5, "
-                        "scene.zero_procedure=preloaded, scene.cylinder=detached)")
+                   help="override a parameter (e.g. motor.inertia=1.6e-4, reducer.backlash='3 mrad') or a scene "
+                        "condition (scene.backlash=2e-5 or '20 um', scene.zero_procedure=preloaded, "
+                        "scene.cylinder=detached); a number alone is in SI units")
     p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=sorted(INTEGRATORS),
                    help="default rk4 at 62.5 us; auto (opt-in): imex_euler where the nuts stay held on a flank, "
                         "else rk4 at the 125 us drive period where that is stable, else at 62.5 us (twin.simulate, "

@@ -30,3 +30,8 @@ def __getattr__(name: str):
     if name not in _EXPORTS:
         raise AttributeError(f"module 'campaigns' has no attribute {name!r}")
     return getattr(importlib.import_module(_EXPORTS[name]), name)
+
+
+def __dir__() -> list[str]:
+    """The module's own names and the lazy ones (``dir(campaigns)``, tab completion)."""
+    return sorted({*globals(), *_EXPORTS})

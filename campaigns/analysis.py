@@ -34,7 +34,7 @@ import xarray as xr
 from scipy import stats
 
 from campaigns import sensitivity
-from campaigns.files import atomic_write
+from campaigns.files import CONVENTIONS, atomic_write
 from campaigns.margins_analysis import control_robustness
 
 #: Table 9.3: minimum detectable linear backlash [m].
@@ -1020,7 +1020,7 @@ def analysis_dataset(
         within_unit_settings = found.attrs
         analysis = analysis.merge(found.drop_attrs(deep=False), combine_attrs="override")
     analysis.attrs = {
-        "Conventions": "CF-1.8",
+        "Conventions": CONVENTIONS,
         "title": f"Analysis of {results.attrs.get('title', 'a BenchTwin campaign')}",
         "source_spec_hash": results.attrs.get("spec_hash", ""),
         "selection": "statistics use runs with status 'ok' and a finite feature; see n_used, n_excluded, n_status",

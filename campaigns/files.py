@@ -211,33 +211,17 @@ def cf_encoding(ds) -> dict:
     return encoding
 
 
-#: The reference instant of a run's ``time`` axis on disk (CF 4.4 requires one): it stands for the start of the
-#: simulated test procedure (t = 0), not a date. Readers that want seconds open the file with
-#: ``decode_times=False`` (or subtract the first instant).
-TIME_EPOCH = "1970-01-01 00:00:00"
-
-
-def _cf_time(ds):
-    """A run's ``time`` coordinate (seconds since the start of its test procedure) as a CF time: CF tools take a
-    coordinate named ``time`` for the time axis, which needs a reference instant and ``standard_name = "time"``.
-    (A campaign's ``trace_time`` keeps plain seconds: no tool takes it for a calendar axis.)"""
-    if "time" not in ds.coords or ds["time"].attrs.get("units") != "s":
-        return ds
-    return ds.assign_coords(time=ds["time"].copy().assign_attrs(
-        units=f"s since {TIME_EPOCH}", standard_name="time", calendar="proleptic_gregorian", axis="T",
-        units_metadata="leap_seconds: none",
-        long_name="time since the start of the test procedure",
-        comment=f"the reference instant {TIME_EPOCH} stands for the start of the simulated test procedure "
-                "(t = 0), not a date"))
-
-
 def write_netcdf(ds, path: str | Path, *, title: str, history: str) -> Path:
-    """Write ``ds`` atomically as a CF-clean netCDF4 file (:func:`cf_encoding`, a run's ``time`` as a CF time) with
-    ``Conventions``, ``title`` and a ``history`` line (appended to the dataset's own history, CF 2.6.2)."""
+    """Write ``ds`` atomically as a CF-clean netCDF4 file (:func:`cf_encoding`) with ``Conventions``, ``title`` and a
+    ``history`` line (appended to the dataset's own history, CF 2.6.2).
+
+    A run's ``time`` stays what :func:`twin.simulate` makes it, seconds since the start of the test procedure in
+    units ``s``: no reference date, so a reader plots the signals against seconds, not against 1970 dates
+    (``docs/campaigns.md``, "The data files in other tools")."""
     from datetime import UTC, datetime
 
     path = Path(path)
-    ds = _cf_time(ds.copy())
+    ds = ds.copy()
     stamp = datetime.now(UTC).isoformat(timespec="seconds")
     previous = str(ds.attrs.get("history", "")).strip()
     ds.attrs.update(Conventions=CONVENTIONS, title=ds.attrs.get("title") or title,

@@ -47,6 +47,7 @@ from scipy.stats import qmc
 from campaigns.analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES, analyze
 from campaigns.bench import force_demand_peak
 from campaigns.execution import run_campaign
+from campaigns.files import CONVENTIONS
 from campaigns.spec import SearchName, SpecError, load_spec, read_spec
 from campaigns.units import display_scale, quantity, quantity_range
 from campaigns.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS, extrapolated_detectable, unit_values
@@ -774,7 +775,7 @@ def search_dataset(spec: SearchSpec, candidates: list[Candidate], scores: dict, 
                 "feature": ("feature", np.array(features, dtype=object))},
     )
     ds.attrs.update({
-        "Conventions": "CF-1.8", "title": f"test-procedure search {spec.name}", "name": spec.name,
+        "Conventions": CONVENTIONS, "title": f"test-procedure search {spec.name}", "name": spec.name,
         "description": spec.description, "fault": spec.fault, "fault_unit": unit,
         "requirement": spec.requirement, "requirement_source": spec.requirement_source,
         "knobs": json.dumps(list(KNOBS)), "best": names[best],

@@ -33,6 +33,24 @@ __all__ = list(_EXPORTS)
 
 
 def __getattr__(name: str):
+    if name == "__version__":
+        return _version()
     if name not in _EXPORTS:
         raise AttributeError(f"module 'twin' has no attribute {name!r}")
     return getattr(importlib.import_module(_EXPORTS[name]), name)
+
+
+def __dir__() -> list[str]:
+    """The module's own names and the lazy ones (``dir(twin)``, tab completion)."""
+    return sorted({*globals(), *_EXPORTS, "__version__"})
+
+
+def _version() -> str:
+    """The installed BenchTwin's version (``twin.__version__``, ``twin --version``): the package metadata's, which
+    ``pyproject.toml`` sets; ``"unknown (not installed)"`` for a source tree run without installing it."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("benchtwin")
+    except metadata.PackageNotFoundError:
+        return "unknown (not installed)"

@@ -20,13 +20,18 @@ from twin.features import N_ACCUMULATORS
 
 @dataclass(frozen=True)
 class Entry:
-    """A state, constant or signal: identifier (``{n}``: the instance number), SI unit, meaning, and for a constant
-    the parameter(s) it copies (one per instance; empty when it is derived by :func:`twin.engine.model.build_model`)."""
+    """A state, constant or signal: identifier (``{n}``: the instance number), SI unit, meaning (one per instance
+    where there are several, so each has its own ``long_name``), and for a constant the parameter(s) it copies (one
+    per instance; empty when it is derived by :func:`twin.engine.model.build_model`)."""
 
     name: str
     unit: str
-    description: str
+    description: str | tuple[str, ...]
     parameter: str | tuple[str, ...] = ""
+
+    def meaning(self, n: int) -> str:
+        """The description of instance ``n`` (0-based)."""
+        return self.description if isinstance(self.description, str) else self.description[n]
 
 
 @dataclass(frozen=True)
@@ -40,7 +45,7 @@ class Component:
     instances: int = 1
 
 
-def _e(name: str, unit: str, description: str, parameter: str | tuple[str, ...] = "") -> Entry:
+def _e(name: str, unit: str, description: str | tuple[str, ...], parameter: str | tuple[str, ...] = "") -> Entry:
     return Entry(name, unit, description, parameter)
 
 
@@ -115,17 +120,22 @@ COMPONENTS: tuple[Component, ...] = (
         _e("SCREW_TWIST", "rad", "torsion of the screw shaft between the coupling and the master nut"),
     )),
     Component("nut", instances=2, states=(
-        _e("NUT{n}_POSITION", "m", "nut translation x_n (Eq. 9.8; nut 1 the master, the sled)"),
-        _e("NUT{n}_SPEED", "m/s", "nut speed"),
-        _e("NUT{n}_ANGLE", "rad", "nut roll angle on the guides theta_n"),
-        _e("NUT{n}_ANGULAR_SPEED", "rad/s", "nut roll speed"),
+        _e("NUT{n}_POSITION", "m", ("master nut (nut 1, the sled) translation x_n1 (Eq. 9.8)",
+                                    "slave nut (nut 2) translation x_n2 (Eq. 9.8)")),
+        _e("NUT{n}_SPEED", "m/s", ("master nut (nut 1) speed", "slave nut (nut 2) speed")),
+        _e("NUT{n}_ANGLE", "rad", ("master nut (nut 1) roll angle on the guides theta_n1",
+                                   "slave nut (nut 2) roll angle on the guides theta_n2")),
+        _e("NUT{n}_ANGULAR_SPEED", "rad/s", ("master nut (nut 1) roll speed", "slave nut (nut 2) roll speed")),
     ), constants=(
-        _e("NUT{n}_MASS", "kg", "translating mass of the nut (the master carries the sled)",
+        _e("NUT{n}_MASS", "kg", ("translating mass of the master nut (nut 1) and the sled it carries",
+                                 "translating mass of the slave nut (nut 2)"),
            ("sled.master_mass", "sled.slave_mass")),
-        _e("NUT{n}_GUIDE_FRICTION_SHARE", "1", "share of the guide friction law the nut carries (1 for the master)"),
+        _e("NUT{n}_GUIDE_FRICTION_SHARE", "1", ("share of the guide friction law the master nut carries (1)",
+                                               "share of the guide friction law the slave nut carries")),
     ), signals=(
-        _e("NUT{n}_POSITION", "m", "nut position (nut 1 the master, the sled)"),
-        _e("NUT{n}_CONTACT_FORCE", "N", "axial contact force of the screw on the nut"),
+        _e("NUT{n}_POSITION", "m", ("master nut (nut 1, the sled) position", "slave nut (nut 2) position")),
+        _e("NUT{n}_CONTACT_FORCE", "N", ("axial contact force of the screw on the master nut (nut 1)",
+                                         "axial contact force of the screw on the slave nut (nut 2)")),
     )),
     Component("guides", constants=(
         _e("J_NUT", "kg m2", "nut rotational inertia", "sled.nut_rotational_inertia"),
@@ -325,11 +335,9 @@ N_CONSTANTS = len(K)
 N_SIGNALS = len(Signal)
 
 #: Unit and meaning of every state, constant and signal (``{layout member: (unit, description)}``).
-STATE_META = {S[entry.name.format(n=n + 1)]: (entry.unit, entry.description) for entry, n in _expanded("states")}
-CONSTANT_META = {K[entry.name.format(n=n + 1)]: (entry.unit, entry.description)
-                 for entry, n in _expanded("constants")}
-SIGNAL_META = {Signal[entry.name.format(n=n + 1)]: (entry.unit, entry.description)
-               for entry, n in _expanded("signals")}
+STATE_META = {S[entry.name.format(n=n + 1)]: (entry.unit, entry.meaning(n)) for entry, n in _expanded("states")}
+CONSTANT_META = {K[entry.name.format(n=n + 1)]: (entry.unit, entry.meaning(n)) for entry, n in _expanded("constants")}
+SIGNAL_META = {Signal[entry.name.format(n=n + 1)]: (entry.unit, entry.meaning(n)) for entry, n in _expanded("signals")}
 
 #: The model constants that are a parameter's value as it stands (``{K member: parameter name}``): the plain part of
 #: the parameter -> model mapping, derived from the declarations. The others are computed by

@@ -35,6 +35,9 @@ DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproduc
 #: Lanes of a group (:func:`simulate_batch`): a multiple of the vector width (4 doubles with AVX2, 8 with AVX-512)
 #: that fills two registers; the results do not depend on it.
 DEFAULT_LANES = 8
+#: A run's time axis: seconds from the start of the test procedure, a plain quantity (no reference date: a CF time
+#: unit, "s since <date>", would have every netCDF reader turn the test's 10 s into dates of 1970).
+TIME_ATTRS = {"units": "s", "long_name": "time since the start of the test procedure"}
 
 
 def solver_label(integrator: str, dt: float) -> str:
@@ -391,7 +394,7 @@ def _package(done: _Simulated) -> xr.Dataset:
         "long_name": "integrated states at t_reached (SI units, layout twin.layout.S)"})
     return xr.Dataset(
         data_vars,
-        coords={"time": ("time", time_axis, {"units": "s", "long_name": "time"}),
+        coords={"time": ("time", time_axis, TIME_ATTRS),
                 "state": ("state", [S(j).name.lower() for j in model.active])},
         attrs={
             "status": STATUS_TEXT[status],

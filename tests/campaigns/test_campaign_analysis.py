@@ -21,6 +21,7 @@ from campaigns.analysis import (
     requirement_verdict,
 )
 from campaigns.execution import build_request
+from campaigns.files import CONVENTIONS
 from campaigns.runs import execute
 from campaigns.sampling import sample
 from campaigns.testing import synthetic_run
@@ -152,7 +153,7 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
         assert np.isnan(a["detection_probability"]).all() and (a["data_sufficient"] == 1).all()
     path = campaigns.analyze(reference_results, tmp_path / "analysis.nc", n_boot=200, min_detection_runs=40)
     with xr.open_dataset(path) as a:
-        assert a.attrs["Conventions"] == "CF-1.8"
+        assert a.attrs["Conventions"] == CONVENTIONS  # the one CF version of every data file
         assert (a["n_excluded"] == 0).all() and (a["n_used"] == 40).all()
         top = a["prcc"].sel(dataset="ds2", feature="backlash_feature").to_pandas().abs().idxmax()
         assert top == "synthetic.gain"

@@ -22,6 +22,7 @@ from scipy import stats
 
 import campaigns
 from campaigns.analysis import FALSE_ALARM_RATE, POWER
+from campaigns.files import CONVENTIONS
 from campaigns.procedure_search import (
     describe_plan,
     design,
@@ -160,7 +161,7 @@ def test_a_resumed_search_reads_its_finished_campaigns_and_finds_the_same(search
 
 def test_search_nc_is_cf_and_the_ranking_table_is_in_rank_order(searched):
     _, ds, out = searched
-    assert ds.attrs["Conventions"] == "CF-1.8" and ds["score"].attrs["units"] == "m"
+    assert ds.attrs["Conventions"] == CONVENTIONS and ds["score"].attrs["units"] == "m"
     assert ds["knob_preload"].attrs["units"] == "N" and ds["test_duration"].attrs["units"] == "s"
     table = pd.read_csv(out / "ranking.csv")
     assert table["rank"].tolist() == sorted(table["rank"]) and table["candidate"].iloc[0] == ds.attrs["best"]

@@ -26,6 +26,7 @@ from campaigns.analysis import (
     min_runs_for_quantile_bound,
     quantile_bound_rank,
 )
+from campaigns.files import CONVENTIONS
 
 # --- the detection threshold's floor ------------------------------------------------------------------------------
 
@@ -198,7 +199,7 @@ def test_coordinates_are_labels_without_fill_values_and_the_file_says_what_it_is
             variable = nc[name]
             assert variable.dtype == np.dtype("S1") and len(variable.dimensions) == 2, name  # CF 6.1 labels
             assert "_FillValue" not in variable.ncattrs(), name
-        assert nc.Conventions == "CF-1.8" and nc.title.startswith("Analysis of test campaign")
+        assert nc.Conventions == CONVENTIONS and nc.title.startswith("Analysis of test campaign")
         lines = nc.history.splitlines()
         assert lines[0] == "made by a test" and lines[1].endswith(": campaigns.analysis.analyze(results.nc)")
         assert nc.min_detection_runs == 59 and nc.first_order_min_runs == sensitivity.MIN_RUNS

@@ -10,7 +10,7 @@ from twin.engine.codes import CONTACT
 from twin.engine.model import build_model, contact_force
 from twin.errors import OptionError, SimulationFailed
 from twin.fidelity import resolve_fidelity
-from twin.layout import K, S
+from twin.layout import SIGNAL_META, STATE_META, K, S
 from twin.physics.ball_screw import contact_geometry, helix_angle, stiffness_at
 from twin.physics.groove import groove_radius
 from twin.physics.hertz import FORMULA_ISO, FORMULA_THESIS, ball_groove_stiffness, equivalent_modulus
@@ -33,6 +33,26 @@ def test_dataset_signals_with_units(short_nominal):
         assert ds[name].attrs["units"], name
     assert ds.backlash_feature_true.ndim == 0 and ds.backlash_feature_true.attrs["units"] == "m"
     assert np.all(np.isfinite(ds.to_array()))
+
+
+def test_every_signal_and_state_has_its_own_long_name(short_nominal):
+    """Issue 39: nut 2's position and contact force carried nut 1's long_name. Every variable of a run says what
+    it is in words of its own, and so does every entry of the layouts, whichever signals a run produces."""
+    long_names = [short_nominal[name].attrs["long_name"] for name in short_nominal.data_vars]
+    assert sorted({n for n in long_names if long_names.count(n) > 1}) == []
+    for meta in (SIGNAL_META, STATE_META):
+        descriptions = [description for _, description in meta.values()]
+        assert sorted({d for d in descriptions if descriptions.count(d) > 1}) == []
+    assert "slave nut" in short_nominal.nut2_position.attrs["long_name"]
+    assert "slave nut" in short_nominal.nut2_contact_force.attrs["long_name"]
+
+
+def test_time_is_seconds_from_the_start_of_the_test(short_nominal):
+    """A plain elapsed time, no reference date: written to netCDF and read back, it stays seconds (a "since" unit
+    has every netCDF reader turn it into dates; tests/campaigns/test_campaign_cf.py reads a file back)."""
+    time = short_nominal.time
+    assert time.attrs == {"units": "s", "long_name": "time since the start of the test procedure"}
+    assert time.dtype == np.float64 and float(time[0]) == 0.0
 
 
 def test_bad_options_listed_before_running():

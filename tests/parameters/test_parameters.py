@@ -50,3 +50,34 @@ def test_table_9_5_rows_are_tagged(bench):
     tagged = [p for p in bench._parameters.values() if p.table_9_5]
     groups = {p.table_9_5.split("/")[0].strip() for p in tagged}
     assert {"Motor", "Reducer"} <= groups
+
+
+def test_repr_is_short_and_names_the_set(bench):
+    """A parameter set at the prompt: its name, its count and a few values, never all 200 (to_frame has them)."""
+    text = repr(bench)
+    assert text.startswith("ParameterSet('bench', ") and f"{len(bench)} parameters" in text
+    first = bench[bench.names[0]]
+    assert f"{first.name}={first.value:g} {first.unit}" in text
+    assert text.count("=") == 3 and "to_frame()" in text and "\n" not in text
+
+
+def test_table_as_a_data_frame(bench):
+    frame = bench.to_frame()
+    assert list(frame.columns) == ["value", "unit", "source"] and frame.index.name == "name"
+    assert len(frame) == len(bench) and frame.index.is_unique
+    assert frame.loc["motor.inertia", "value"] == bench.value("motor.inertia")
+    assert frame.loc["motor.inertia", "unit"] == bench["motor.inertia"].unit
+    assumed = next(bench[name] for name in bench if bench[name].is_assumption)
+    assert frame.loc[assumed.name, "source"] == f"ASSUMPTION: {assumed.assumption}"
+
+
+def test_packages_list_their_lazy_names_and_the_version():
+    """``dir(twin)`` and ``dir(campaigns)`` show the names imported on first use (tab completion finds them), and
+    ``twin.__version__`` is the installed package's."""
+    from importlib import metadata
+
+    import campaigns
+
+    assert set(twin.__all__) <= set(dir(twin)) and "__version__" in dir(twin)
+    assert set(campaigns.__all__) <= set(dir(campaigns))
+    assert twin.__version__ == metadata.version("benchtwin")

@@ -18,6 +18,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from twin.errors import ParameterError, did_you_mean
+from twin.units import value_in
 
 BUILTIN_DIR = Path(__file__).parent
 #: A value more than this many times its nominal, or less than its inverse, is flagged as implausible (a warning
@@ -26,6 +27,8 @@ BUILTIN_DIR = Path(__file__).parent
 #: the size of the slips that do happen: a unit prefix (mm as m: 1000), an exponent typed wrong (1.65 for 1.65e-4:
 #: 1e4), a percentage typed as a fraction (100).
 PLAUSIBLE_FACTOR = 100.0
+#: Values a :class:`ParameterSet`'s repr shows (the rest: :meth:`ParameterSet.to_frame`).
+_REPR_VALUES = 3
 _ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5", "table_9_5_extension"}
 
 
@@ -58,6 +61,22 @@ class Parameter:
         if self.max is not None:
             parts.append(f"<= {self.max:g}")
         return " and ".join(parts) if parts else "any finite number"
+
+    def resolved(self, value: float | str) -> float | str:
+        """``value`` in this parameter's unit: a number as it stands, a text with a unit (``"3 mrad"``,
+        ``"1.65e-4 kg m^2"``) converted (:func:`twin.units.value_in`).
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter and the text, or both units when they do not convert.
+        """
+        if not isinstance(value, str):
+            return value
+        try:
+            return value_in(value, self.unit)
+        except ValueError as exc:
+            raise ValueError(f"{self.name}: {exc}") from None
 
     def check(self, value: float) -> str | None:
         """Return a problem description if ``value`` is not allowed, else None."""
@@ -122,8 +141,11 @@ class ParameterSet(Mapping[str, Parameter]):
         """Plain ``{name: value}`` dictionary (SI units)."""
         return {n: p.value for n, p in self._parameters.items()}
 
-    def with_values(self, overrides: Mapping[str, float]) -> ParameterSet:
+    def with_values(self, overrides: Mapping[str, float | str]) -> ParameterSet:
         """Return a copy with some values replaced; every override is validated.
+
+        A value is a number in the parameter's SI unit or a text with its unit (``{"reducer.backlash": "3 mrad"}``),
+        converted to that unit (:meth:`Parameter.resolved`).
 
         Raises
         ------
@@ -136,6 +158,11 @@ class ParameterSet(Mapping[str, Parameter]):
             if name not in self._parameters:
                 problems.append(_unknown(name, self._parameters))
                 continue
+            try:
+                value = self._parameters[name].resolved(value)
+            except ValueError as exc:
+                problems.append(str(exc))
+                continue
             problem = self._parameters[name].check(value)
             if problem:
                 problems.append(problem)
@@ -145,11 +172,20 @@ class ParameterSet(Mapping[str, Parameter]):
             raise ParameterError(problems)
         return ParameterSet(self.name, updated)
 
-    def implausible(self, overrides: Mapping[str, float]) -> list[str]:
+    def implausible(self, overrides: Mapping[str, float | str]) -> list[str]:
         """Warnings for override values far from their nominal (:meth:`Parameter.implausible`): said before any run,
-        the run still goes ahead (an extreme value may be meant). Unknown names are :meth:`with_values`' business."""
-        return [w for name, value in overrides.items() if name in self._parameters
-                and (w := self._parameters[name].implausible(value)) is not None]
+        the run still goes ahead (an extreme value may be meant). Unknown names and values that do not convert are
+        :meth:`with_values`' business."""
+        warnings = []
+        for name, value in overrides.items():
+            if name in self._parameters:
+                try:
+                    warning = self._parameters[name].implausible(self._parameters[name].resolved(value))
+                except ValueError:
+                    continue
+                if warning is not None:
+                    warnings.append(warning)
+        return warnings
 
     def table(self) -> list[dict]:
         """Rows (name, value, unit, source/assumption) for documentation and reports."""
@@ -162,6 +198,20 @@ class ParameterSet(Mapping[str, Parameter]):
             }
             for p in self._parameters.values()
         ]
+
+    def to_frame(self):
+        """The parameters as a pandas DataFrame indexed by name: ``value`` (SI), ``unit`` and ``source`` (the
+        datasheet or equation, or ``ASSUMPTION: ...``), the rows of :meth:`table`."""
+        import pandas as pd  # lazy: start-up cost (``import twin`` does not load pandas)
+
+        frame = pd.DataFrame(self.table()).rename(columns={"provenance": "source"})
+        return frame.set_index("name")
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{p.name}={p.value:g} {p.unit}" for p in list(self._parameters.values())[:_REPR_VALUES])
+        more = len(self) - _REPR_VALUES
+        return (f"ParameterSet({self.name!r}, {len(self)} parameters: {shown}"
+                f"{f', ... {more} more; .to_frame() for all' if more > 0 else ''})")
 
 
 def _unknown(name: str, known: Mapping[str, Parameter]) -> str:

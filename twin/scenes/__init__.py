@@ -26,6 +26,7 @@ from twin.layout import OUTPUT_NAMES
 from twin.scenes.procedure import apply_procedure
 from twin.scenes.profiles import compile_profile
 from twin.tomlfiles import read_inheriting
+from twin.units import value_in
 
 LIBRARY = Path(__file__).parent / "library"
 
@@ -184,8 +185,26 @@ class Scene:
         return self.conditions[name]
 
     def with_conditions(self, overrides: Mapping[str, Any]) -> Scene:
-        """Copy with some conditions replaced (validated; all problems reported at once)."""
-        return replace(self, conditions={**self.conditions, **overrides})
+        """Copy with some conditions replaced (validated; all problems reported at once). A numeric condition may be
+        given as a text with its unit (``{"backlash": "20 um"}``), converted to the condition's SI unit
+        (:func:`twin.units.value_in`)."""
+        converted, problems = {}, []
+        for name, value in overrides.items():
+            condition = CONDITIONS.get(name)
+            if isinstance(value, str) and condition is not None and condition.numeric:
+                try:
+                    value = value_in(value, condition.unit)
+                except ValueError as exc:
+                    problems.append(f"conditions.{name}: {exc}")
+                    continue
+            converted[name] = value
+        try:
+            scene = replace(self, conditions={**self.conditions, **converted})
+        except SceneError as exc:
+            problems += exc.problems
+        if problems:
+            raise SceneError(problems)
+        return scene
 
     def with_procedure(self, knobs: Mapping[str, Any]) -> Scene:
         """Copy with the demand profiles, duration, preload and zero procedure of a test procedure's knobs
