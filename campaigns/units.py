@@ -10,11 +10,18 @@ Spellings engineers write that pint alone does not read are normalised first (:f
 
 from __future__ import annotations
 
-import functools
 import math
-import re
 
 import numpy as np
+
+# The one parser of units (numerics.units), re-exported: a spec row's and a measured channel's unit are read as a
+# --set value's is.
+from numerics.units import EXAMPLES as EXAMPLES
+from numerics.units import MAX_UNIT_LENGTH as MAX_UNIT_LENGTH
+from numerics.units import conversion as conversion
+from numerics.units import known_unit as known_unit
+from numerics.units import normalise as normalise
+from numerics.units import registry as registry
 
 #: A datasheet "± range" read as a Gaussian is taken to hold ±3 sigma.
 #: Datasheets quote tolerance bands that practically every unit meets; ±3 sigma
@@ -22,93 +29,6 @@ import numpy as np
 #: limits (and the one that keeps the sampled values inside the band almost
 #: always). This is the only place the factor is defined.
 HALF_RANGE_SIGMAS = 3.0
-
-#: Examples of spec units, for error messages (any unit pint reads is accepted).
-EXAMPLES = "m, mm, um, µm, rad, deg, arcmin, K, degC, Pa, bar, N, kN, N m, kg m^2, 1, %, 1/K, %/K"
-
-_SUPERSCRIPTS = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
-_PRODUCT_SIGNS = re.compile(r"\s*[·⋅×]\s*")
-_SUPERSCRIPT_RUN = re.compile(r"([⁻]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)")
-# a unit symbol directly followed by digits ("m2", "m3"): an exponent, as in "kg/m3"
-_TRAILING_EXPONENT = re.compile(r"(?<=[A-Za-zµΩ])(\d+)(?![\d.])")
-
-
-def normalise(text: str) -> str:
-    """A unit as pint reads it: ``·`` ``⋅`` ``×`` as products, superscripts and trailing digits as powers, ``^``
-    as ``**``, ``Ω`` as ``ohm``."""
-    text = _PRODUCT_SIGNS.sub("*", text.strip())
-    text = _SUPERSCRIPT_RUN.sub(lambda m: "**" + m.group(1).translate(_SUPERSCRIPTS), text)
-    text = _TRAILING_EXPONENT.sub(r"**\1", text)
-    return text.replace("^", "**").replace("Ω", "ohm")
-
-
-@functools.cache
-def registry():
-    """The one pint registry (lazy: pint costs about 0.3 s to import and build; only unit conversions need it)."""
-    import pint  # lazy: start-up cost, see above
-
-    return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
-
-
-#: Longest unit text read (a unit is a few symbols; a longer text is refused before the parser sees it).
-MAX_UNIT_LENGTH = 60
-
-
-def _shown(text: str) -> str:
-    """``text`` as an error message shows it: quoted, cut at :data:`MAX_UNIT_LENGTH` characters."""
-    return repr(text) if len(text) <= MAX_UNIT_LENGTH else f"{text[:MAX_UNIT_LENGTH]!r}... ({len(text)} characters)"
-
-
-@functools.cache
-def conversion(unit: str, si_unit: str) -> tuple[float, float]:
-    """``(scale, offset)`` with ``si = value * scale + offset`` from ``unit`` to ``si_unit``.
-
-    Offsets (``degC`` to ``K``) apply to absolute values only, never to half ranges or sigmas.
-
-    Raises
-    ------
-    ValueError
-        Naming the unit that is not understood, or both units when they do not convert (different dimensions),
-        and nothing else whatever the text: pint's parser is Python's tokenizer and evaluator, which raise
-        ``TokenError`` (``deg)``), ``AssertionError`` (``m*``), ``ZeroDivisionError`` (``1/0``) and more.
-    """
-    import pint  # lazy: start-up cost (the registry is built on first use)
-
-    ureg = registry()
-    parsed = {}
-    for text in (unit, si_unit):
-        if not isinstance(text, str) or len(text) > MAX_UNIT_LENGTH:
-            what = _shown(text) if isinstance(text, str) else f"of type {type(text).__name__}"
-            raise ValueError(f"unknown unit {what}: a unit is a text of at most {MAX_UNIT_LENGTH} characters; "
-                             f"e.g. {EXAMPLES}")
-        try:
-            parsed[text] = ureg.parse_units(normalise(text)) if text.strip() not in ("", "1") else ureg.dimensionless
-        except Exception as exc:  # noqa: BLE001 - any failure of the parser on the user's text is that text's fault
-            raise ValueError(f"unknown unit {_shown(text)} ({type(exc).__name__}); e.g. {EXAMPLES}") from None
-    try:
-        zero = ureg.Quantity(0.0, parsed[unit]).to(parsed[si_unit]).magnitude
-        one = ureg.Quantity(1.0, parsed[unit]).to(parsed[si_unit]).magnitude
-    except pint.errors.DimensionalityError:
-        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} (the target's SI unit): "
-                         f"{ureg.Quantity(1.0, parsed[unit]).dimensionality} is not "
-                         f"{ureg.Quantity(1.0, parsed[si_unit]).dimensionality}") from None
-    except Exception as exc:  # noqa: BLE001 - e.g. OverflowError of a power too large
-        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} ({type(exc).__name__})") from None
-    scale, offset = float(one - zero), float(zero)
-    if not (math.isfinite(scale) and math.isfinite(offset) and scale != 0.0):
-        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)}: its scale {scale:g} is not a "
-                         "finite, non-zero number")
-    return scale, offset
-
-
-def known_unit(unit: str) -> bool:
-    """Whether pint reads ``unit`` (after :func:`normalise`)."""
-    try:
-        conversion(unit, unit)
-    except ValueError:
-        return False
-    return True
-
 
 # --- Display: how a value stored in SI reads (the report, the CLI and the comparison's and diagnosis's sentences) ---
 

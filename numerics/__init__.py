@@ -2,8 +2,9 @@
 
 :mod:`numerics.elementary` (branch-free exp, expm1, log, tanh, sin, cos, x^0.26: the same bits whether a loop is
 vectorised or not, on any x86-64 CPU), :mod:`numerics.linalg` (small dense linear algebra in a fixed operation
-order), :mod:`numerics.jit` (the compile options of scalar physics functions and of lane kernels) and
-:mod:`numerics.compiled_cache` (numba's on-disk cache keyed on the sources). The bottom layer: it imports nothing
+order), :mod:`numerics.jit` (the compile options of scalar physics functions and of lane kernels),
+:mod:`numerics.compiled_cache` (numba's on-disk cache keyed on the sources) and :mod:`numerics.units` (the one
+parser of units and of values written with one; pint, loaded on first use). The bottom layer: it imports nothing
 of the project; ``sensors`` and ``twin`` build on it.
 """
 

@@ -1,13 +1,14 @@
-"""One parser of values with units (twin.units): ``--set scene.backlash="20 um"``, ``with_values({"reducer.backlash":
+"""One parser of values with units (numerics.units):
+``--set scene.backlash="20 um"``, ``with_values({"reducer.backlash":
 "3 mrad"})`` and ``with_conditions({"backlash": "20 um"})`` convert to the SI unit the parameter file or the
 condition table declares; a wrong dimension is one problem naming the parameter and both units."""
 
 import pytest
 
 import twin
+from numerics.units import known_unit, value_in
 from twin.errors import ParameterError, SceneError
 from twin.scenes import CONDITIONS
-from twin.units import known_unit, value_in
 
 
 @pytest.mark.parametrize(("text", "si_unit", "expected"), [

@@ -17,8 +17,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from types import MappingProxyType
 
+from numerics.units import value_in
 from twin.errors import ParameterError, did_you_mean
-from twin.units import value_in
 
 BUILTIN_DIR = Path(__file__).parent
 #: A value more than this many times its nominal, or less than its inverse, is flagged as implausible (a warning
@@ -64,7 +64,7 @@ class Parameter:
 
     def resolved(self, value: float | str) -> float | str:
         """``value`` in this parameter's unit: a number as it stands, a text with a unit (``"3 mrad"``,
-        ``"1.65e-4 kg m^2"``) converted (:func:`twin.units.value_in`).
+        ``"1.65e-4 kg m^2"``) converted (:func:`numerics.units.value_in`).
 
         Raises
         ------

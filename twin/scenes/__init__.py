@@ -21,12 +21,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from numerics.units import value_in
 from twin.errors import SceneError, did_you_mean
 from twin.layout import OUTPUT_NAMES
 from twin.scenes.procedure import apply_procedure
 from twin.scenes.profiles import compile_profile
 from twin.tomlfiles import read_inheriting
-from twin.units import value_in
 
 LIBRARY = Path(__file__).parent / "library"
 
@@ -187,7 +187,7 @@ class Scene:
     def with_conditions(self, overrides: Mapping[str, Any]) -> Scene:
         """Copy with some conditions replaced (validated; all problems reported at once). A numeric condition may be
         given as a text with its unit (``{"backlash": "20 um"}``), converted to the condition's SI unit
-        (:func:`twin.units.value_in`)."""
+        (:func:`numerics.units.value_in`)."""
         converted, problems = {}, []
         for name, value in overrides.items():
             condition = CONDITIONS.get(name)

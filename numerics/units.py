@@ -7,13 +7,15 @@ is stored in, as ``si = value * scale + offset``; :func:`value_in` reads a numbe
 write that pint alone does not read are normalised first (:func:`normalise`): ``kg·m²``, ``kg m2``, ``kg*m^2``,
 ``kg*m**2`` and ``kg m^2`` are the same unit.
 
-A module of the twin's bottom layer, so that the twin and the campaign runner (:mod:`campaigns.units`) share it.
+A module of the bottom layer, so that the twin, the campaign runner (:mod:`campaigns.units` re-exports it) and the
+analysis, which may not import the twin, share one parser.
 """
 
 from __future__ import annotations
 
 import decimal
 import functools
+import math
 import re
 
 #: Examples of units, for error messages (any unit pint reads is accepted).
@@ -45,16 +47,13 @@ def registry():
     return pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
 
 
-def _parsed(text: str):
-    ureg = registry()
-    if text.strip() in ("", "1"):
-        return ureg.dimensionless
-    try:
-        return ureg.parse_units(normalise(text))
-    except Exception as exc:  # pint's expression parser raises whatever Python's tokenizer and its grammar raise on
-        # text that is no unit (TokenError for "deg)", AssertionError for "m*", ZeroDivisionError for "1/0",
-        # UndefinedUnitError, ...): every one is the same user error, told in one line
-        raise ValueError(f"unknown unit {text!r} ({type(exc).__name__}); e.g. {EXAMPLES}") from None
+#: Longest unit text read (a unit is a few symbols; a longer text is refused before the parser sees it).
+MAX_UNIT_LENGTH = 60
+
+
+def _shown(text: str) -> str:
+    """``text`` as an error message shows it: quoted, cut at :data:`MAX_UNIT_LENGTH` characters."""
+    return repr(text) if len(text) <= MAX_UNIT_LENGTH else f"{text[:MAX_UNIT_LENGTH]!r}... ({len(text)} characters)"
 
 
 @functools.cache
@@ -66,20 +65,37 @@ def conversion(unit: str, si_unit: str) -> tuple[float, float]:
     Raises
     ------
     ValueError
-        Naming the unit that is not understood, or both units and their dimensions when they do not convert.
+        Naming the unit that is not understood, or both units when they do not convert (different dimensions),
+        and nothing else whatever the text: pint's parser is Python's tokenizer and evaluator, which raise
+        ``TokenError`` (``deg)``), ``AssertionError`` (``m*``), ``ZeroDivisionError`` (``1/0``) and more.
     """
     import pint  # lazy: start-up cost (the registry is built on first use)
 
     ureg = registry()
-    source, target = _parsed(unit), _parsed(si_unit)
+    parsed = {}
+    for text in (unit, si_unit):
+        if not isinstance(text, str) or len(text) > MAX_UNIT_LENGTH:
+            what = _shown(text) if isinstance(text, str) else f"of type {type(text).__name__}"
+            raise ValueError(f"unknown unit {what}: a unit is a text of at most {MAX_UNIT_LENGTH} characters; "
+                             f"e.g. {EXAMPLES}")
+        try:
+            parsed[text] = ureg.parse_units(normalise(text)) if text.strip() not in ("", "1") else ureg.dimensionless
+        except Exception as exc:  # noqa: BLE001 - any failure of the parser on the user's text is that text's fault
+            raise ValueError(f"unknown unit {_shown(text)} ({type(exc).__name__}); e.g. {EXAMPLES}") from None
     try:
-        zero = ureg.Quantity(0.0, source).to(target).magnitude
-        one = ureg.Quantity(1.0, source).to(target).magnitude
+        zero = ureg.Quantity(0.0, parsed[unit]).to(parsed[si_unit]).magnitude
+        one = ureg.Quantity(1.0, parsed[unit]).to(parsed[si_unit]).magnitude
     except pint.errors.DimensionalityError:
-        raise ValueError(f"unit {unit!r} does not convert to {si_unit!r} (the target's SI unit): "
-                         f"{ureg.Quantity(1.0, source).dimensionality} is not "
-                         f"{ureg.Quantity(1.0, target).dimensionality}") from None
-    return float(one - zero), float(zero)
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} (the target's SI unit): "
+                         f"{ureg.Quantity(1.0, parsed[unit]).dimensionality} is not "
+                         f"{ureg.Quantity(1.0, parsed[si_unit]).dimensionality}") from None
+    except Exception as exc:  # noqa: BLE001 - e.g. OverflowError of a power too large
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)} ({type(exc).__name__})") from None
+    scale, offset = float(one - zero), float(zero)
+    if not (math.isfinite(scale) and math.isfinite(offset) and scale != 0.0):
+        raise ValueError(f"unit {_shown(unit)} does not convert to {_shown(si_unit)}: its scale {scale:g} is not a "
+                         "finite, non-zero number")
+    return scale, offset
 
 
 def known_unit(unit: str) -> bool:
