@@ -84,9 +84,9 @@ def cmd_scenes(args) -> int:
 
 
 def _check_bounds(**values) -> None:
-    """The command line's numbers against the campaign spec's physical bounds (:data:`campaigns.spec.BOUNDS`),
+    """The command line's numbers against the campaign spec's physical bounds (:data:`campaigns.runner.spec.BOUNDS`),
     every problem at once, before any work."""
-    from campaigns.spec import in_range
+    from campaigns.runner.spec import in_range
 
     problems = []
     for option, value in values.items():
@@ -117,7 +117,7 @@ def _what_the_feature_is(ds) -> str:
 
 
 def cmd_simulate(args) -> int:
-    from campaigns.files import check_output, write_netcdf
+    from campaigns.runner.files import check_output, write_netcdf
 
     _check_bounds(dt=args.dt, duration=args.duration)
     for path in (args.out, args.plot):  # before the run: a refused file costs nothing
@@ -179,7 +179,7 @@ CHAPTER5_FILES = ("chapter5.json", "fig5_*.png", "fig7_*.png")
 
 def cmd_accuracy(args) -> int:
     from app.studies.accuracy import replot, run_accuracy
-    from campaigns.files import check_outputs
+    from campaigns.runner.files import check_outputs
 
     _check_bounds(duration=args.duration)
     # --replot asks for the charts to be redrawn: it replaces them (and only them) without --force
@@ -209,8 +209,8 @@ class Stages:
 def cmd_campaign_run(args) -> int:
     import campaigns
     from app.pipeline import run_campaign_pipeline
-    from campaigns.budget import estimate
-    from campaigns.files import CampaignInterrupted
+    from campaigns.runner.budget import estimate
+    from campaigns.runner.files import CampaignInterrupted
 
     _check_bounds(workers=args.workers)
     spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
@@ -251,7 +251,7 @@ def resume_command(args, out: Path) -> str:
 
 
 def _bench_run():
-    from campaigns.bench import simulate_run
+    from campaigns.bench.adapter import simulate_run
 
     return simulate_run
 
@@ -260,8 +260,8 @@ def _print_analysis(path: Path) -> None:
     """Name the analysis file, then print its verdict statements (stdout) and insufficient-data warnings (stderr)."""
     import xarray as xr
 
-    from campaigns.analysis import summary
-    from campaigns.margins_analysis import statements as margin_statements
+    from campaigns.analysis.campaign_analysis import summary
+    from campaigns.analysis.margins import statements as margin_statements
 
     print(f"wrote {path}")
     with xr.open_dataset(path, engine="netcdf4") as handle:
@@ -292,9 +292,9 @@ def _undecided(analysis) -> list[tuple[str, str, str]]:
 
 def cmd_campaign_analyze(args) -> int:
     import campaigns
-    from campaigns.model_form import FILE_NAME as MODEL_FORM_FILE
-    from campaigns.model_form import is_model_form
-    from campaigns.storage import check_output, read_results
+    from campaigns.analysis.model_form import FILE_NAME as MODEL_FORM_FILE
+    from campaigns.analysis.model_form import is_model_form
+    from campaigns.runner.storage import check_output, read_results
 
     out = check_output(args.out or args.results.with_name("analysis.nc"), [args.results], force=args.force,
                        product="analysis.nc")
@@ -307,7 +307,7 @@ def cmd_campaign_analyze(args) -> int:
 
 def _results_and_analysis(path: Path):
     """A campaign's results and, when it is beside them, its analysis (None otherwise)."""
-    from campaigns.storage import read_analysis, read_results
+    from campaigns.runner.storage import read_analysis, read_results
 
     results = read_results(path)
     analysis_path = path.with_name("analysis.nc")
@@ -329,7 +329,7 @@ def _nominal_text(parameters: str, target: str) -> str | None:
 
 
 def cmd_campaign_compare(args) -> int:
-    from campaigns.design_comparison import MIN_RUNS, compare, describe_shift, failure_text
+    from campaigns.workflows.design_comparison import MIN_RUNS, compare, describe_shift, failure_text
 
     candidate, candidate_analysis = _results_and_analysis(args.a)
     baseline, baseline_analysis = _results_and_analysis(args.b)
@@ -357,7 +357,7 @@ def cmd_campaign_compare(args) -> int:
 
 
 def cmd_campaign_replay(args) -> int:
-    from campaigns.replay import replay_run
+    from campaigns.bench.replay import replay_run
 
     run = replay_run(args.results, args.dataset, args.run, out=args.out, force=args.force)
     print(f"replayed run {args.run} of data set {args.dataset}: status {run.attrs['status']} "
@@ -385,7 +385,7 @@ def cmd_fidelity_levels(args) -> int:
 
 
 def cmd_fidelity_audit(args) -> int:
-    from campaigns.scene_audit import audit_scene
+    from campaigns.bench.scene_audit import audit_scene
 
     result = audit_scene(args.scene, args.out or Path("out") / f"fidelity_audit_{Path(args.scene).stem}",
                          runs=args.runs, spec_path=args.spec, workers=args.workers)
@@ -396,7 +396,7 @@ def cmd_fidelity_audit(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from campaigns.storage import CampaignError, check_output
+    from campaigns.runner.storage import CampaignError, check_output
     from reports import build_report
 
     if args.out.exists() and not args.out.is_dir():
@@ -411,9 +411,9 @@ def cmd_report(args) -> int:
 
 
 def cmd_measure_import(args) -> int:
-    from campaigns.files import check_output, write_netcdf
-    from campaigns.measured import import_measured, load_mapping
+    from campaigns.runner.files import check_output, write_netcdf
     from campaigns.units import quantity
+    from campaigns.workflows.measured import import_measured, load_mapping
 
     out = args.out or args.file.with_name(f"{args.file.stem}_measured.nc")
     check_output(out, [args.file, args.mapping], force=args.force)
@@ -430,10 +430,10 @@ def cmd_measure_import(args) -> int:
 
 
 def cmd_measure_diagnose(args) -> int:
-    from campaigns.diagnosis import describe, diagnose
-    from campaigns.measured import read_measured
-    from campaigns.storage import read_results
+    from campaigns.runner.storage import read_results
     from campaigns.units import quantity
+    from campaigns.workflows.diagnosis import describe, diagnose
+    from campaigns.workflows.measured import read_measured
 
     test = read_measured(args.test)
     try:
@@ -455,9 +455,9 @@ def cmd_measure_diagnose(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from campaigns.export import export, file_names, tables
-    from campaigns.files import check_outputs
-    from campaigns.storage import read_analysis, read_results
+    from campaigns.runner.files import check_outputs
+    from campaigns.runner.storage import read_analysis, read_results
+    from campaigns.workflows.export import export, file_names, tables
 
     results = read_results(args.results)
     analysis_path = args.analysis or args.results.with_name("analysis.nc")
@@ -486,9 +486,9 @@ SEARCH_FILES = ("search.nc", "ranking.csv", "search_report.html", "search_report
 
 
 def cmd_procedure_search(args) -> int:
-    from campaigns.files import check_outputs
-    from campaigns.procedure_search import describe_plan, design, load_search, run_search, test_duration
-    from campaigns.storage import CampaignError
+    from campaigns.runner.files import check_outputs
+    from campaigns.runner.storage import CampaignError
+    from campaigns.workflows.procedure_search import describe_plan, design, load_search, run_search, test_duration
 
     _check_bounds(workers=args.workers)
     spec = load_search(args.spec, quick=args.quick)
@@ -524,7 +524,7 @@ def cmd_procedure_search(args) -> int:
 
 def cmd_chapter5(args) -> int:
     from app.studies.chapter5 import run_chapter5
-    from campaigns.files import check_outputs
+    from campaigns.runner.files import check_outputs
 
     check_outputs(args.out, CHAPTER5_FILES, force=args.force)
 
@@ -706,7 +706,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _user_errors() -> tuple[type[Exception], ...]:
     """Errors that are the user's to fix: reported in one message, without a traceback."""
-    from campaigns.storage import CampaignError
+    from campaigns.runner.storage import CampaignError
     from reports.errors import ReportError
 
     return InputError, SimulationFailed, CampaignError, ReportError, FileNotFoundError

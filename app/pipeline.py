@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import campaigns
-from campaigns.spec import CampaignSpec
+from campaigns.runner.spec import CampaignSpec
 
 
 @dataclass

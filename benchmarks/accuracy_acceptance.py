@@ -2,12 +2,12 @@
 
 Runs the thesis spec (Table 9.5 uncertainties, thesis seed, data sets 1-7) under the tight reference (full fidelity,
 RK4 at 15.625 us) and under each candidate (the default; the previous default, RK4 at 62.5 us with the dynamic screw
-axial) over the same sampled runs, analyses each campaign and judges each candidate (campaigns.solver_accuracy,
-campaigns.accuracy_rule). Prints every verdict statement and each configuration's mean wall time per run, and writes
-campaign_accuracy.nc, campaign_accuracy.md (the table for docs/accuracy.md) and campaign_accuracy.png/.svg into --out.
-Every line is stamped with the seconds since the start, so the stages' costs can be read off. Without --quick it also
-prints the cost of one paired run (the reference and every candidate, from the runs' own wall times) and what the full
-study (7 data sets x 200 runs) costs at that rate on --workers cores.
+axial) over the same sampled runs, analyses each campaign and judges each candidate (campaigns.bench.solver_accuracy,
+campaigns.statistics.accuracy_rule). Prints every verdict statement and each configuration's mean wall time per run,
+and writes campaign_accuracy.nc, campaign_accuracy.md (the table for docs/accuracy.md) and campaign_accuracy.png/.svg
+into --out. Every line is stamped with the seconds since the start, so the stages' costs can be read off. Without
+--quick it also prints the cost of one paired run (the reference and every candidate, from the runs' own wall times)
+and what the full study (7 data sets x 200 runs) costs at that rate on --workers cores.
 
     python benchmarks/accuracy_acceptance.py --out out/accuracy_acceptance            # 7 x 200 runs per configuration
     python benchmarks/accuracy_acceptance.py --out out/accuracy_acceptance --resume   # continue after an interruption
@@ -27,8 +27,8 @@ from pathlib import Path
 from machine import header
 
 from app.studies.charts import campaign_accuracy_chart
-from campaigns.accuracy_rule import MIN_PAIRED_RUNS
-from campaigns.solver_accuracy import THESIS_SPEC, campaign_accuracy
+from campaigns.bench.solver_accuracy import THESIS_SPEC, campaign_accuracy
+from campaigns.statistics.accuracy_rule import MIN_PAIRED_RUNS
 
 #: --quick: two data sets (one free nut, one preloaded), 1 s runs in which the screw moves one way only, so only the
 #: Eq. 9.12 features are defined (the hysteresis needs both directions), and 3 runs (the fewest an sd ratio's

@@ -44,7 +44,7 @@ from distributed import LocalCluster
 from machine import header
 
 import campaigns
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

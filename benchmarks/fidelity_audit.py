@@ -2,7 +2,7 @@
 
 For each data set, ``--runs`` sampled runs (Table 9.5 uncertainties, thesis seed) at
 ``fidelity="auto"`` and the same runs at full fidelity; prints per feature the audit's verdict statement
-(campaigns.fidelity_audit: the paired mean shift's 95 % t interval against the 0.1 um tolerance and the
+(campaigns.bench.fidelity_audit: the paired mean shift's 95 % t interval against the 0.1 um tolerance and the
 scene's numerical floor), the largest paired difference, the Monte Carlo error of the mean, the KS p-value,
 and per data set the speedup (campaign wall time per run, and the simulation alone on one run).
 
@@ -20,7 +20,7 @@ from pathlib import Path
 from machine import header
 
 import twin
-from campaigns.scene_audit import audit_scene
+from campaigns.bench.scene_audit import audit_scene
 
 DATASETS = ("ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7")
 

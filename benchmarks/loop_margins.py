@@ -1,7 +1,7 @@
 """Cost of the per-run loop margins (twin.control.margins) against the cost of the run itself (issue 19).
 
-Computes the margins of the sampled runs of the thesis study (campaigns.bench.run_margins: parameters, scene,
-all four loops) and times one 10 s thesis run (campaigns.bench.simulate_run, after compilation), both in CPU
+Computes the margins of the sampled runs of the thesis study (campaigns.bench.adapter.run_margins: parameters, scene,
+all four loops) and times one 10 s thesis run (campaigns.bench.adapter.simulate_run, after compilation), both in CPU
 time of this process (``time.process_time``: less sensitive than wall time to the other processes of a loaded
 machine) and in wall time. The requirement: margins under 5 % of a run.
 Usage: python benchmarks/loop_margins.py [--runs N] [--quick]
@@ -15,9 +15,9 @@ from pathlib import Path
 from machine import header
 
 import campaigns
-from campaigns.bench import run_margins, simulate_run
-from campaigns.execution import build_request
-from campaigns.sampling import sample
+from campaigns.bench.adapter import run_margins, simulate_run
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import sample
 
 SPEC = Path(campaigns.__file__).parent / "specs" / "thesis_backlash.toml"
 

@@ -1,11 +1,12 @@
-"""Memory of reading a measured test's CSV (issue 39): the earlier reader against campaigns.measured's.
+"""Memory of reading a measured test's CSV (issue 39): the earlier reader against campaigns.workflows.measured's.
 
 The earlier reader parsed the whole file with pandas' Python engine and a sniffed delimiter (every column, every value
-a Python object first: a 187 MB log took 2.87 GB, 15x the file). campaigns.measured now tells the delimiter from the
-first lines and reads only the mapped columns with the C engine, in chunks of CSV_CHUNK_ROWS rows, straight into float
-arrays. Each reader runs in a fresh process on the same file, a bench log of the README sample's layout (time in ms,
-three channels; 1 kHz); the figure is its peak resident memory above what the process held after its imports, per
-byte of the file. The new reader is also timed through the whole `import_measured` (resampling and the features).
+a Python object first: a 187 MB log took 2.87 GB, 15x the file). campaigns.workflows.measured now tells the delimiter
+from the first lines and reads only the mapped columns with the C engine, in chunks of CSV_CHUNK_ROWS rows, straight
+into float arrays. Each reader runs in a fresh process on the same file, a bench log of the README sample's layout
+(time in ms, three channels; 1 kHz); the figure is its peak resident memory above what the process held after its
+imports, per byte of the file. The new reader is also timed through the whole `import_measured` (resampling and the
+features).
 
 Usage: python benchmarks/measured_import_memory.py [--rows 3000000] [--quick]
 """
@@ -46,10 +47,10 @@ READERS = {
 frame = pd.read_csv(path, sep=None, engine="python", comment="#")
 columns = {n: pd.to_numeric(frame[n], errors="coerce").to_numpy(dtype=float) for n in wanted}
 """,
-    "campaigns.measured (C engine, mapped columns, chunks)": """
+    "campaigns.workflows.measured (C engine, mapped columns, chunks)": """
 names, columns = _read_csv(path, wanted)
 """,
-    "campaigns.measured: the whole import (resampling, features)": """
+    "campaigns.workflows.measured: the whole import (resampling, features)": """
 test = import_measured(path, mapping)
 """,
 }
@@ -57,7 +58,7 @@ CHILD = """
 import json, resource, sys, time
 import pandas as pd
 from pathlib import Path
-from campaigns.measured import _read_csv, import_measured, load_mapping
+from campaigns.workflows.measured import _read_csv, import_measured, load_mapping
 path, mapping = Path(sys.argv[1]), load_mapping(sys.argv[2])
 wanted = [mapping.time, *(c.column for c in mapping.channels.values())]
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -93,7 +94,8 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="a 300 000-row log (about 10 MB; seconds)")
     args = parser.parse_args()
     rows = 300_000 if args.quick else args.rows
-    header("measured-test import: peak memory of reading a bench CSV, earlier reader against campaigns.measured",
+    header("measured-test import: peak memory of reading a bench CSV, earlier reader against "
+           "campaigns.workflows.measured",
            args.quick)
     with tempfile.TemporaryDirectory() as folder:
         log, mapping = Path(folder) / "log.csv", Path(folder) / "mapping.toml"

@@ -2,11 +2,11 @@
 
 Per data set (thesis campaign fidelity, 10 s, nominal parameters, noise seed 0): RK4 at six converged steps that
 divide the 125 us drive period, and at 7.8125 us with the backlash moved by a few picometres
-(campaigns.reference_ensemble). Prints each feature's spread (n, range, standard deviation with its 95 %
+(campaigns.bench.reference_ensemble). Prints each feature's spread (n, range, standard deviation with its 95 %
 chi-square interval), with ``--results`` the share of a campaign's per-data-set variance the numerical spread could
-account for, and the lines of campaigns/numerical_floor.toml (the floor is the range). No solver is judged against
-the ensemble: the per-run rule is retired, a configuration is judged at campaign level (campaigns.accuracy_rule,
-docs/accuracy.md).
+account for, and the lines of campaigns/bench/numerical_floor.toml (the floor is the range). No solver is judged against
+the ensemble: the per-run rule is retired, a configuration is judged at campaign level
+(campaigns.statistics.accuracy_rule, docs/accuracy.md).
 
     python benchmarks/numerical_floor.py [--results /path/to/thesis/results.nc]
     python benchmarks/numerical_floor.py --quick     # ds2, 0.5 s, two steps: checks the pipeline (seconds)
@@ -23,8 +23,8 @@ from machine import header
 from single_run import THESIS_DATASETS, THESIS_OUTPUTS
 
 import twin
-from campaigns.comparison import ensemble_spread
-from campaigns.reference_ensemble import REFERENCE_STEPS, reference_ensemble
+from campaigns.bench.reference_ensemble import REFERENCE_STEPS, reference_ensemble
+from campaigns.statistics.paired_comparison import ensemble_spread
 
 FEATURES = ("backlash_feature", "backlash_feature_true", "backlash_hysteresis", "backlash_hysteresis_true")
 

@@ -5,10 +5,11 @@ Usage::
     python benchmarks/procedure_search.py --quick          # synthetic model, 4 candidates (CI)
     python benchmarks/procedure_search.py --candidates 8   # synthetic model, 8 candidates
 
-Both strategies run on the synthetic model (campaigns.testing: its answer to a procedure is known, so the best
+Both strategies run on the synthetic model (campaigns.runner.synthetic: its answer to a procedure is known, so the best
 candidate is known) with the same design, units and seeds:
 
-* **screening** (``campaigns.procedure_search.run_search``, its default one round): every candidate screened at two
+* **screening** (``campaigns.workflows.procedure_search.run_search``, its default one round): every candidate screened
+at two
   levels (the baseline and the requirement), the best one through the full sweep;
 * **exhaustive**: every candidate through the full sweep and the within-unit analysis, the best by the analysis's
   bounds of the 95th-percentile unit.
@@ -33,7 +34,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from campaigns import analyze, run_campaign  # noqa: E402
-from campaigns.procedure_search import (  # noqa: E402
+from campaigns.analysis.within_unit import MIN_REPEATS, MIN_UNITS  # noqa: E402
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, procedure_effect, synthetic_run  # noqa: E402
+from campaigns.workflows.procedure_search import (  # noqa: E402
     DESIGN_STREAM,
     design,
     load_search,
@@ -41,8 +44,6 @@ from campaigns.procedure_search import (  # noqa: E402
     run_search,
     write_candidate_spec,
 )
-from campaigns.testing import SYNTHETIC_CATALOG, procedure_effect, synthetic_run  # noqa: E402
-from campaigns.within_unit import MIN_REPEATS, MIN_UNITS  # noqa: E402
 
 #: The tests' synthetic search (its campaign beside it): 4 candidates, the reference and one anchor among them.
 SEARCH = ROOT / "tests" / "campaigns" / "data" / "synthetic_search.toml"
@@ -89,7 +90,7 @@ def main() -> None:
 
     print(f"procedure search on the synthetic model: {candidates} candidates, {MIN_UNITS} units, "
           f"{MIN_REPEATS} repeats; design stream {DESIGN_STREAM}")
-    print(f"  known best (smallest noise/sensitivity of campaigns.testing.procedure_effect): {best_known}")
+    print(f"  known best (smallest noise/sensitivity of campaigns.runner.synthetic.procedure_effect): {best_known}")
     print(f"  {'strategy':<12} {'runs':>7} {'wall [s]':>9}  best")
     print(f"  {'screening':<12} {plan_runs(spec):>7} {screening_wall:>9.1f}  {screening_best}")
     print(f"  {'exhaustive':<12} {exhaustive_runs:>7} {exhaustive_wall:>9.1f}  {exhaustive_best}"

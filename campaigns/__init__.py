@@ -7,20 +7,20 @@ Entry points (the ``twin campaign`` CLI calls these):
 * :func:`analyze` — correlations, separation and observability, write ``analysis.nc``.
 
 See ``docs/campaigns.md``. The names are imported on first use so that a
-sandbox process (:mod:`campaigns.sandbox`), which needs only
-:mod:`campaigns.runs` and the run function, does not pay for dask and scipy.
+sandbox process (:mod:`campaigns.runner.sandbox`), which needs only
+:mod:`campaigns.runner.runs` and the run function, does not pay for dask and scipy.
 """
 
 import importlib
 
 _EXPORTS = {
-    "analyze": "campaigns.analysis",
-    "run_campaign": "campaigns.execution",
-    "load_spec": "campaigns.spec",
-    "CampaignSpec": "campaigns.spec",
-    "SpecError": "campaigns.spec",
+    "analyze": "campaigns.analysis.campaign_analysis",
+    "run_campaign": "campaigns.runner.execution",
+    "load_spec": "campaigns.runner.spec",
+    "CampaignSpec": "campaigns.runner.spec",
+    "SpecError": "campaigns.runner.spec",
     "HALF_RANGE_SIGMAS": "campaigns.units",
-    "CampaignError": "campaigns.storage",
+    "CampaignError": "campaigns.runner.storage",
 }
 
 __all__ = list(_EXPORTS)

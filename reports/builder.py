@@ -114,7 +114,7 @@ class Builder:
 
     def used_mask(self, feature: str, dataset: str) -> np.ndarray:
         """The runs of a data set that the statistics use (status ok, finite feature), as in
-        :mod:`campaigns.analysis`."""
+        :mod:`campaigns.analysis.campaign_analysis`."""
         row = self.results.sel(dataset=dataset)
         return (row["status"].values == "ok") & np.isfinite(row[feature].values.astype(float))
 

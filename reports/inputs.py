@@ -1,7 +1,7 @@
 """Reading and checking the stored files a report is made from.
 
 A report never runs a simulation: it reads ``results.nc`` (written by
-:mod:`campaigns.storage`), ``analysis.nc`` (:mod:`campaigns.analysis`; computed
+:mod:`campaigns.runner.storage`), ``analysis.nc`` (:mod:`campaigns.analysis.campaign_analysis`; computed
 in memory from the results when absent) and, optionally, the speed-versus-accuracy
 study ``work_precision.nc`` written by ``twin accuracy`` (:mod:`app.studies.work_precision`). Every problem is a
 :class:`ReportError` that names the file.
@@ -49,9 +49,9 @@ class Inputs:
     files : tuple of InputFile
     analysis_computed : bool
         True when the analysis was computed in memory (no ``analysis.nc`` found).
-    measured : tuple of campaigns.diagnosis.Diagnosis
+    measured : tuple of campaigns.workflows.diagnosis.Diagnosis
         Measured tests placed against this campaign (``twin report --measured``).
-    comparison : campaigns.design_comparison.Comparison or None
+    comparison : campaigns.workflows.design_comparison.Comparison or None
         This campaign against another design (``twin report --against``).
     """
 
@@ -79,10 +79,10 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
     accuracy_path : str or Path, optional
         A speed-versus-accuracy study (``work_precision.nc`` of ``twin accuracy``).
     measured_paths : iterable of paths
-        Measured tests (``twin measure import``) to place against the campaign (:mod:`campaigns.diagnosis`).
+        Measured tests (``twin measure import``) to place against the campaign (:mod:`campaigns.workflows.diagnosis`).
     against_path : str or Path, optional
         Another design's ``results.nc`` (its ``analysis.nc`` beside it, when there): the report compares this
-        campaign against it (:mod:`campaigns.design_comparison`).
+        campaign against it (:mod:`campaigns.workflows.design_comparison`).
 
     Raises
     ------
@@ -98,7 +98,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
         analysis_path = results_path.parent / ANALYSIS_NAME
     if analysis_path is None:
         # lazy: start-up cost (scipy and SALib load only when the analysis must be computed here)
-        from campaigns.analysis import analysis_dataset
+        from campaigns.analysis.campaign_analysis import analysis_dataset
 
         analysis = analysis_dataset(results)
     else:
@@ -118,7 +118,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
         if "measured_test" not in test.attrs:
             raise ReportError(path, "not a measured test (no measured_test attribute); make one with "
                                     "`twin measure import`")
-        from campaigns.diagnosis import diagnose  # lazy: only reports with measured tests need it
+        from campaigns.workflows.diagnosis import diagnose  # lazy: only reports with measured tests need it
 
         try:
             measured.append(diagnose(test, results))
@@ -135,7 +135,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
             other_analysis = _open(against_path.parent / ANALYSIS_NAME, "campaign analysis")
             if other_analysis.attrs.get("source_spec_hash") != other.attrs.get("spec_hash"):
                 other_analysis = None
-        from campaigns.design_comparison import compare  # lazy: only comparison reports need it
+        from campaigns.workflows.design_comparison import compare  # lazy: only comparison reports need it
 
         comparison = compare(other, results, other_analysis, analysis)
         files.append(_describe("compared against", against_path))

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from campaigns.analysis import SWEEP_QUANTITIES
+from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES
 from reports.errors import ReportError
 from reports.model import Callout, Code, Figure, Heading, Paragraph, Report, Section, Table
 from reports.units import display_scale, estimate_with_interval, quantity, quantity_range
@@ -39,7 +39,8 @@ REQUIRED_ATTRIBUTES = ("name", "fault", "fault_unit", "requirement", "statement"
 #: The faults a search minimises, in words.
 FAULT_WORDS = {"backlash": "backlash growth", "preload_loss": "preload loss"}
 #: Display unit of each fault unit (factor from SI, symbol): backlash in µm, preload loss in N, the same in every row
-#: of a column and on the chart, so the candidates compare at a glance; the sweeps' own table (campaigns.analysis).
+#: of a column and on the chart, so the candidates compare at a glance; the sweeps' own table
+#: (campaigns.analysis.campaign_analysis).
 FAULT_DISPLAY = {unit: (scale, shown) for _, unit, scale, shown in SWEEP_QUANTITIES.values()}
 #: The reference procedure in words, when search.nc does not say it (attribute ``reference_procedure``).
 REFERENCE_WORDS = "the base scene's own procedure"

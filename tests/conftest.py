@@ -41,8 +41,8 @@ def measured_campaign(tmp_path_factory):
     from measured_helpers import hidden_run, sweep_spec, write_bench_csv, write_mapping
 
     import campaigns
-    from campaigns.files import write_netcdf
-    from campaigns.measured import import_measured
+    from campaigns.runner.files import write_netcdf
+    from campaigns.workflows.measured import import_measured
 
     root = tmp_path_factory.mktemp("measured")
     spec = sweep_spec(root)

@@ -42,7 +42,7 @@ states (``*_true``), each zeroed by the scene's zero procedure (:data:`twin.scen
 
 The features are accumulated with a few additions per acquisition instant (never per integration
 step) by :func:`accumulate` and finished by :func:`finish`; the compiled loop, the scipy reference
-path, :func:`twin.simulate` and the campaigns' catalog (``campaigns.bench``) all use this module.
+path, :func:`twin.simulate` and the campaigns' catalog (``campaigns.bench.adapter``) all use this module.
 """
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ import campaigns
 from app.service.auth import COOKIE_NAME, identify, require
 from app.service.registry import FINAL_STATES
 from app.service.submission import SUBMITTED_NAME, input_dir, output_dir, prepare
-from campaigns.budget import estimate
-from campaigns.spec import SpecError
+from campaigns.runner.budget import estimate
+from campaigns.runner.spec import SpecError
 
 router = APIRouter()
 
@@ -111,7 +111,7 @@ def error_list(problems: list[str]) -> list[dict]:
 def cost_problems(spec, settings) -> list[str]:
     """The campaign's estimated duration against the service's limit (``twin serve --max-campaign-hours``): one
     problem saying why when it is beyond it, before anything is queued."""
-    from campaigns.bench import simulate_run  # lazy: the twin's catalog loads with the first submission
+    from campaigns.bench.adapter import simulate_run  # lazy: the twin's catalog loads with the first submission
 
     cost = estimate(spec, simulate_run, workers=settings.workers)
     limit = settings.max_campaign_hours * 3600.0

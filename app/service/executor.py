@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from app.service.registry import Registry
-from campaigns.storage import LOCK_NAME, CampaignError, OutputLock
+from campaigns.runner.storage import LOCK_NAME, CampaignError, OutputLock
 
 #: Seconds a runner gets to exit after SIGTERM before its process group is killed.
 STOP_GRACE = 10.0

@@ -5,9 +5,9 @@ calls) with ``resume=True``: a campaign interrupted by a stopped or killed serve
 chunk files, re-running only the runs without a record. The runner records in the registry the stage
 (from the pipeline's announcements), the progress (read from the chunk files every
 ``PROGRESS_PERIOD`` seconds), and at the end the state and the verdict statements of the analysis,
-verbatim as :func:`campaigns.analysis.summary` words them.
+verbatim as :func:`campaigns.analysis.campaign_analysis.summary` words them.
 
-It holds ``campaigns/<id>/.lock`` (:class:`campaigns.storage.OutputLock`) for its whole life: a
+It holds ``campaigns/<id>/.lock`` (:class:`campaigns.runner.storage.OutputLock`) for its whole life: a
 restarted server that finds the lock held knows this runner outlived the old server and waits for it
 instead of starting a second one.
 """
@@ -28,9 +28,9 @@ import xarray as xr
 from app.pipeline import run_campaign_pipeline
 from app.service.registry import Registry
 from app.service.submission import load_frozen, output_dir
-from campaigns.analysis import summary
-from campaigns.files import CampaignInterrupted
-from campaigns.storage import CampaignError, OutputLock
+from campaigns.analysis.campaign_analysis import summary
+from campaigns.runner.files import CampaignInterrupted
+from campaigns.runner.storage import CampaignError, OutputLock
 from reports.errors import ReportError
 from twin.errors import InputError
 

@@ -23,7 +23,7 @@ from app.service.submission import remove_staging_leftovers
 
 #: Largest spec accepted [bytes]: the thesis study is 17 kB; a spec 15 times larger is a mistake, not a study.
 MAX_SPEC_BYTES = 256 * 1024
-#: Longest campaign accepted [h] (estimated before it is queued, :mod:`campaigns.budget`): the thesis study
+#: Longest campaign accepted [h] (estimated before it is queued, :mod:`campaigns.runner.budget`): the thesis study
 #: (7000 runs) takes about 1.2 h on 2 workers; a day of the team's queue is the most one campaign may take.
 MAX_CAMPAIGN_HOURS = 24.0
 #: Campaigns one token may have queued or running at once: a baseline and a few design variants of a review

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import campaigns
 import twin
-from campaigns.spec import CampaignSpec, SpecError, validate_spec
+from campaigns.runner.spec import CampaignSpec, SpecError, validate_spec
 from twin.parameters import available_parameter_sets
 
 BUILTIN_SPECS = Path(campaigns.__file__).parent / "specs"

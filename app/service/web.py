@@ -32,7 +32,7 @@ from app.service.api import (
 )
 from app.service.auth import COOKIE_NAME, AuthError, identify
 from app.service.registry import FINAL_STATES
-from campaigns.spec import SpecError
+from campaigns.runner.spec import SpecError
 
 router = APIRouter(include_in_schema=False)
 # every template autoescaped, whatever its file name (Starlette's default escapes only *.html, not *.html.j2):

@@ -51,7 +51,7 @@ def run_accuracy(out_dir: str | Path, scene: str = "nominal", duration: float = 
         stability_map(progress=progress).to_netcdf(out / "stability.nc", engine="netcdf4")
     if campaign_runs:
         # lazy: start-up cost (dask and the campaign runner load only when a campaign study runs)
-        from campaigns.solver_accuracy import campaign_accuracy
+        from campaigns.bench.solver_accuracy import campaign_accuracy
 
         campaign_accuracy(out / "campaign", runs=campaign_runs)
     return replot(out)

@@ -102,8 +102,9 @@ def stability_chart(stability: xr.Dataset, path: str | Path | None = None) -> pl
 
 
 def campaign_accuracy_chart(judged: xr.Dataset, path: str | Path | None = None) -> plt.Figure:
-    """The accuracy rule per candidate, data set and feature (:func:`campaigns.solver_accuracy.campaign_accuracy`):
-    the mean paired shift and the sd ratio, each with its 95 % interval, against the tolerance band (shaded).
+    """The accuracy rule per candidate, data set and feature
+    (:func:`campaigns.bench.solver_accuracy.campaign_accuracy`): the mean paired shift and the sd ratio, each with its
+    95 % interval, against the tolerance band (shaded).
 
     A candidate meets the rule on a cell when its interval lies inside the band; a cell without an interval
     (insufficient data) is not drawn.

@@ -24,7 +24,7 @@ import pandas as pd
 
 import campaigns
 import twin
-from campaigns.sampling import noise_generator, sample_run
+from campaigns.runner.sampling import noise_generator, sample_run
 from twin.scenes import split_targets
 
 HERE = Path(__file__).resolve().parent

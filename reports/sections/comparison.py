@@ -1,9 +1,9 @@
 """Section "A against B": this campaign (design A) against another design's campaign (B), from
-:mod:`campaigns.design_comparison` (nothing is computed here)."""
+:mod:`campaigns.workflows.design_comparison` (nothing is computed here)."""
 
 from __future__ import annotations
 
-from campaigns.design_comparison import CONFIDENCE, MIN_RUNS, describe_shift, failure_text
+from campaigns.workflows.design_comparison import CONFIDENCE, MIN_RUNS, describe_shift, failure_text
 from reports.builder import VERDICT_TONES, Builder
 from reports.model import Callout, Paragraph
 from reports.sections.executive import feature_words, plain_name
@@ -37,7 +37,8 @@ def build(b: Builder):
            else "The two specs resolve every tolerance alike. ")
         + f"Every difference is {c.name_b} − {c.name_a}, with its {CONFIDENCE * 100:g} % interval: the mean shift "
           "by Student's t (of the paired differences, or Welch's when unpaired), the shift of the standard deviation "
-          "by a percentile bootstrap; a shift is resolved when its interval excludes 0 (campaigns.design_comparison).")
+          "by a percentile bootstrap; a shift is resolved when its interval excludes 0 "
+          "(campaigns.workflows.design_comparison).")
     yield Paragraph(f"Every difference of the two specs ({c.name_a} → {c.name_b}): " + "; ".join(c.spec_changes) + "."
                     if c.spec_changes else "The two specs differ in their name and description only.")
     if failures := failure_text(c, detail=True):

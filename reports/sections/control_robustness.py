@@ -1,8 +1,8 @@
 """Report section "Control robustness": the loop margins of every run against the design limits.
 
 Reads only what the campaign stored: the per-run margins of ``results.nc`` (``role = "margin"``,
-:func:`campaigns.bench.margin_variables`) and the statistics and verdicts of ``analysis.nc``
-(:mod:`campaigns.margins_analysis`). The verdict statements are printed verbatim.
+:func:`campaigns.bench.adapter.margin_variables`) and the statistics and verdicts of ``analysis.nc``
+(:mod:`campaigns.analysis.margins`). The verdict statements are printed verbatim.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from campaigns.margins_analysis import decibels, margin_values
+from campaigns.analysis.margins import decibels, margin_values
 from reports import figures
 from reports.model import Callout, Paragraph
 

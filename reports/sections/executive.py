@@ -1,7 +1,8 @@
 """The executive summary (page 1): a decision per requirement in plain words, then what it rests on.
 
-Every decision is read from ``analysis.nc`` (the verdicts are computed once, in :mod:`campaigns.analysis` and
-:mod:`campaigns.margins_analysis`); this module only puts their numbers into words:
+Every decision is read from ``analysis.nc`` (the verdicts are computed once, in
+:mod:`campaigns.analysis.campaign_analysis` and
+:mod:`campaigns.analysis.margins`); this module only puts their numbers into words:
 
 * GO: the requirement is met (its 95 % bound is within it); NO-GO: not met (its 95 % bound is beyond it);
   UNDETERMINED: the bounds straddle the requirement, the runs cannot tell yet, with the runs that would decide it
@@ -20,9 +21,9 @@ import math
 
 import numpy as np
 
-from campaigns.analysis import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
-from campaigns.comparison import worst_verdict
-from campaigns.diagnosis import p_text
+from campaigns.analysis.campaign_analysis import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
+from campaigns.statistics.paired_comparison import worst_verdict
+from campaigns.workflows.diagnosis import p_text
 from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder, statement_tone
 from reports.model import Callout, Paragraph
 from reports.sections.correlations import rank_order

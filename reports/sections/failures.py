@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from campaigns.runs import STATUS_MEANINGS
+from campaigns.runner.runs import STATUS_MEANINGS
 from reports.builder import LISTED_RUNS, Builder
 from reports.model import Callout
 

@@ -13,7 +13,7 @@ from reports.model import Callout, Paragraph
 AUTO_INTEGRATOR = "auto"
 DEFAULT_INTEGRATOR = "rk4"
 
-#: One feature's part of a ``fidelity_audit_<data set>`` attribute (campaigns.fidelity_audit.summary_attrs; the
+#: One feature's part of a ``fidelity_audit_<data set>`` attribute (campaigns.bench.fidelity_audit.summary_attrs; the
 #: features are separated by " | "): its verdict statement, shown verbatim, then the descriptive figures.
 _AUDIT_LINE = re.compile(r"^(?P<feature>\w+): (?P<statement>(met|not met|undetermined|insufficient data): .+); "
                          r"max paired (?P<paired>[-+0-9.e]+|nan) µm, MC error (?P<error>[-+0-9.e]+|nan) µm, "

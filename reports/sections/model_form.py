@@ -1,7 +1,7 @@
 """Section "Model-form study": what each modelling assumption varied does to the features and to the verdicts
 (issue 33), and the page-1 sentence naming the assumption that moves the verdicts most.
 
-The table is :func:`campaigns.model_form.model_form_dataset` of the report's results and analysis: the function
+The table is :func:`campaigns.analysis.model_form.model_form_dataset` of the report's results and analysis: the function
 that wrote ``model_form.nc`` beside ``analysis.nc``, so the numbers are those of the file. Every verdict and the
 sentence are quoted from it, never composed here; a shift is shown only where its interval resolves it.
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 import json
 from weakref import WeakKeyDictionary
 
-from campaigns import model_form
-from campaigns.analysis import printed_estimate
+from campaigns.analysis import model_form
+from campaigns.analysis.campaign_analysis import printed_estimate
 from reports.builder import VERDICT_TONES, Builder
 from reports.model import Callout, Paragraph, Table
 

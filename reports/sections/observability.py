@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from campaigns.analysis import RESOLUTIONS, printed_estimate
+from campaigns.analysis.campaign_analysis import RESOLUTIONS, printed_estimate
 from reports import figures
 from reports.builder import Builder
 from reports.figures import Line
@@ -125,7 +125,7 @@ def _resolution(analysis, feature: str, minimum: float) -> str:
 
 def _printed(analysis, feature: str, minimum: float) -> float:
     """The minimum detectable backlash as the statement prints it: rounded at the leading digit of its bounds'
-    half-width (:func:`campaigns.analysis.printed_estimate`)."""
+    half-width (:func:`campaigns.analysis.campaign_analysis.printed_estimate`)."""
     if "minimum_detectable_backlash_ci" not in analysis:
         return minimum
     lower, upper = (float(v) for v in analysis["minimum_detectable_backlash_ci"].sel(feature=feature).values)

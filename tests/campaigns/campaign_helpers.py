@@ -7,7 +7,7 @@ from pathlib import Path
 import xarray as xr
 
 import campaigns
-from campaigns.testing import SYNTHETIC_CATALOG
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG
 
 DATA = Path(__file__).parent / "data"
 SYNTHETIC_SPEC = DATA / "synthetic.toml"

@@ -8,7 +8,7 @@ import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load
 
 import campaigns
-from campaigns.testing import synthetic_run
+from campaigns.runner.synthetic import synthetic_run
 
 
 @pytest.fixture(scope="session")

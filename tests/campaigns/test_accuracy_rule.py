@@ -1,6 +1,6 @@
-"""Known answers of the accuracy rule (campaigns.accuracy_rule): the mean paired shift against ±0.05 um, the sd ratio
-against 10 %, the minimum of 200 paired runs, and the analysis verdicts and sensitivity rankings, on synthetic paired
-samples whose statistics are set exactly."""
+"""Known answers of the accuracy rule (campaigns.statistics.accuracy_rule): the mean paired shift against ±0.05 um, the
+sd ratio against 10 %, the minimum of 200 paired runs, and the analysis verdicts and sensitivity rankings, on synthetic
+paired samples whose statistics are set exactly."""
 
 import math
 
@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.accuracy_rule import (
+from campaigns.statistics.accuracy_rule import (
     MEAN_SHIFT_TOLERANCE,
     MIN_PAIRED_RUNS,
     SD_RATIO_TOLERANCE,

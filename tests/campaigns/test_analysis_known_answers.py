@@ -1,4 +1,5 @@
-"""Known answers of the campaign statistics on small constructed samples (campaigns.analysis, campaigns.sensitivity).
+"""Known answers of the campaign statistics on small constructed samples (campaigns.analysis.campaign_analysis,
+campaigns.statistics.sensitivity).
 
 Each test computes the expected value independently (by hand, with scipy, or with a plain loop over the same
 bootstrap resamples) so that a slip in the vectorised code (an index, a default, a boundary, a random stream)
@@ -15,8 +16,8 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns import analysis, sensitivity
-from campaigns.analysis import (
+from campaigns.analysis import campaign_analysis as analysis
+from campaigns.analysis.campaign_analysis import (
     BACKLASH_REQUIREMENT,
     MIN_DETECTION_RUNS,
     analysis_dataset,
@@ -30,7 +31,8 @@ from campaigns.analysis import (
     requirement_statement,
     summary,
 )
-from campaigns.sensitivity import HARMONICS, _easi_order, _first_order_of_signals, first_order
+from campaigns.statistics import sensitivity
+from campaigns.statistics.sensitivity import HARMONICS, _easi_order, _first_order_of_signals, first_order
 
 AGAINST = "against the 1 µm requirement of Table 9.3"
 #: Runs per data set of the constructed sweeps: one more than the detection floor (59 at the default settings).

@@ -11,7 +11,7 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from scipy import stats
 
 import campaigns
-from campaigns.analysis import (
+from campaigns.analysis.campaign_analysis import (
     analysis_dataset,
     bootstrap_correlation,
     detection_probability,
@@ -20,11 +20,11 @@ from campaigns.analysis import (
     prcc,
     requirement_verdict,
 )
-from campaigns.execution import build_request
-from campaigns.files import CONVENTIONS
-from campaigns.runs import execute
-from campaigns.sampling import sample
-from campaigns.testing import synthetic_run
+from campaigns.runner.execution import build_request
+from campaigns.runner.files import CONVENTIONS
+from campaigns.runner.runs import execute
+from campaigns.runner.sampling import sample
+from campaigns.runner.synthetic import synthetic_run
 
 
 def _prcc_by_precision_matrix(X, y):
@@ -192,8 +192,8 @@ def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
 def test_analysis_reports_exclusions_by_status():
     spec = load(SYNTHETIC_SPEC, runs=10)
     samples = sample(spec)
-    from campaigns.storage import build_results
-    from campaigns.testing import SyntheticModel
+    from campaigns.runner.storage import build_results
+    from campaigns.runner.synthetic import SyntheticModel
 
     faults = {("ds2", 0): "raise", ("ds2", 1): "nan"} | {("ds6", i): "diverge" for i in range(10)}
     model = SyntheticModel(faults=faults)
@@ -226,7 +226,7 @@ def test_analysis_reports_exclusions_by_status():
 
 def test_resampled_ranks_are_scipys_average_ranks():
     """The bootstrap ranks each resample from cumulative counts; ties (repeated runs, discrete values) included."""
-    from campaigns.analysis import _resampled_ranks
+    from campaigns.analysis.campaign_analysis import _resampled_ranks
 
     rng = np.random.default_rng(5)
     for v in (rng.normal(size=200), rng.integers(0, 4, 200).astype(float), np.full(200, 2.0)):

@@ -56,7 +56,7 @@ def test_two_real_bench_runs(tmp_path):
         assert not set(margins) & {str(f) for f in a["feature"].values}
         assert len(a["margin_limit_statement"]) == 12  # 4 loops x 3 limits, each with its verdict
     # the sandboxed campaign run, replayed alone in this process, gives the same bits and its full series
-    from campaigns.replay import replay_run
+    from campaigns.bench.replay import replay_run
 
     replayed = replay_run(results, "ds2", 0)
     with xr.open_dataset(results) as ds:
@@ -108,9 +108,9 @@ def test_spec_fidelity_is_validated(tmp_path):
 def test_warm_up_of_a_request_with_its_own_duration():
     """A request whose solver options carry a duration (benchmarks/loop_margins.py shortens runs so) is warmed
     up with the 10 ms warm-up run, not refused for a duplicate keyword, and then runs for its own duration."""
-    from campaigns.bench import simulate_run
-    from campaigns.execution import build_request
-    from campaigns.sampling import sample
+    from campaigns.bench.adapter import simulate_run
+    from campaigns.runner.execution import build_request
+    from campaigns.runner.sampling import sample
 
     spec = campaigns.load_spec("campaigns/specs/thesis_backlash.toml").model_copy(update={"runs_per_dataset": 1})
     request = build_request(spec, sample(spec), 0, 0)

@@ -19,9 +19,9 @@ import pytest
 import xarray as xr
 
 import campaigns
-from campaigns.fidelity_audit import compare_fidelity
-from campaigns.files import CONVENTIONS, write_netcdf
-from campaigns.replay import replay_run
+from campaigns.bench.fidelity_audit import compare_fidelity
+from campaigns.bench.replay import replay_run
+from campaigns.runner.files import CONVENTIONS, write_netcdf
 
 pytest.importorskip("compliance_checker")
 
@@ -120,7 +120,7 @@ def test_units_parse_and_gain_margins_are_ratios(tmp_path):
     "dB", which unit libraries read as a power ratio (23.54 dB became 226 instead of 15.03)."""
     import cf_units
 
-    from campaigns.bench import margin_variables
+    from campaigns.bench.adapter import margin_variables
 
     class _Spec:  # the two fields margin_variables reads
         datasets = [object()]

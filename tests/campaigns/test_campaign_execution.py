@@ -9,11 +9,18 @@ import xarray as xr
 from campaign_helpers import data_variables, load, write_spec
 
 import campaigns
-from campaigns.execution import BALANCE_CHUNKS, OVERHEAD_TARGET, TASK_OVERHEAD, build_request, chunk_size, run_chunk
-from campaigns.runs import execute, kill_grace
-from campaigns.sampling import sample
-from campaigns.sandbox import Sandbox
-from campaigns.testing import SyntheticModel
+from campaigns.runner.execution import (
+    BALANCE_CHUNKS,
+    OVERHEAD_TARGET,
+    TASK_OVERHEAD,
+    build_request,
+    chunk_size,
+    run_chunk,
+)
+from campaigns.runner.runs import execute, kill_grace
+from campaigns.runner.sampling import sample
+from campaigns.runner.sandbox import Sandbox
+from campaigns.runner.synthetic import SyntheticModel
 
 FAULTS = {("ds2", 3): "raise", ("ds4", 1): "nan", ("ds6", 2): "hang", ("ds5", 0): "diverge"}
 

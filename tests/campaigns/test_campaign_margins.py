@@ -11,12 +11,12 @@ import pytest
 import xarray as xr
 
 import campaigns
-from campaigns.analysis import bootstrap_correlation, requirement_verdict
-from campaigns.bench import MARGIN_NOTE, MARGIN_VARIABLES, margin_variables, run_margins
-from campaigns.execution import build_request
-from campaigns.margins_analysis import control_robustness
-from campaigns.sampling import sample
-from campaigns.spec import SpecError
+from campaigns.analysis.campaign_analysis import bootstrap_correlation, requirement_verdict
+from campaigns.analysis.margins import control_robustness
+from campaigns.bench.adapter import MARGIN_NOTE, MARGIN_VARIABLES, margin_variables, run_margins
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import sample
+from campaigns.runner.spec import SpecError
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 

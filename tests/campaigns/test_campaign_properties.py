@@ -19,8 +19,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import campaigns
-from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError, validate_spec
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.spec import MAX_RUNS_PER_DATASET, SpecError, validate_spec
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 
 CI = settings(max_examples=25, deadline=None, derandomize=True, database=None,
               suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -144,7 +144,7 @@ def test_a_broken_spec_is_rejected_with_all_its_errors_and_leaves_nothing(tmp_pa
 valid_specs = st.fixed_dictionaries({
     "root_seed": st.integers(0, 2**63),
     "runs_per_dataset": st.integers(1, MAX_RUNS_PER_DATASET),
-    "timeout": st.floats(1e-3, 3600.0, allow_nan=False),  # campaigns.spec.BOUNDS (issue 31)
+    "timeout": st.floats(1e-3, 3600.0, allow_nan=False),  # campaigns.runner.spec.BOUNDS (issue 31)
     "datasets": st.lists(st.sampled_from(range(4)), min_size=1, max_size=4, unique=True),
     "uncertainties": st.lists(st.sampled_from(range(6)), max_size=6, unique=True),
 })

@@ -23,14 +23,14 @@ from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 import campaigns
 from app.cli import main
-from campaigns import budget, execution
-from campaigns.replay import replay_run
-from campaigns.runs import execute, kill_grace, run_function_name
-from campaigns.sampling import sample
-from campaigns.sandbox import Sandbox
-from campaigns.spec import MAX_RUNS_PER_DATASET, SpecError
-from campaigns.storage import CampaignError, OutputLock, atomic_write, load_chunk
-from campaigns.testing import SyntheticModel, synthetic_run
+from campaigns.bench.replay import replay_run
+from campaigns.runner import budget, execution
+from campaigns.runner.runs import execute, kill_grace, run_function_name
+from campaigns.runner.sampling import sample
+from campaigns.runner.sandbox import Sandbox
+from campaigns.runner.spec import MAX_RUNS_PER_DATASET, SpecError
+from campaigns.runner.storage import CampaignError, OutputLock, atomic_write, load_chunk
+from campaigns.runner.synthetic import SyntheticModel, synthetic_run
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 
@@ -90,7 +90,7 @@ def test_a_second_driver_on_the_same_directory_is_refused_at_once(tmp_path):
     out = tmp_path / "out"
     holder = subprocess.Popen(
         [sys.executable, "-c",
-         f"from campaigns.storage import OutputLock; import sys, time; OutputLock({str(out)!r}).acquire(); "
+         f"from campaigns.runner.storage import OutputLock; import sys, time; OutputLock({str(out)!r}).acquire(); "
                                "print('locked', flush=True); time.sleep(600)"],
         stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
     try:
@@ -270,7 +270,7 @@ def test_a_directory_with_a_spec_but_no_results_is_not_refused(tmp_path):
 
 def test_the_cost_is_estimated_and_printed_before_the_campaign(capsys, monkeypatch, tmp_path):
     spec = campaigns.load_spec(SPECS / "thesis_backlash.toml")
-    from campaigns.bench import simulate_run
+    from campaigns.bench.adapter import simulate_run
 
     cost = budget.estimate(spec, simulate_run, workers=2)
     assert cost.runs == 7000 and cost.wall_seconds == pytest.approx(7000 * simulate_run.typical_run_seconds / 2)
@@ -362,7 +362,9 @@ def test_replay_cli_and_its_refusals(reference_results, tmp_path, capsys):
 
 def test_the_run_function_is_recorded(reference_results):
     with xr.open_dataset(reference_results) as ds:
-        assert ds.attrs["run_function"] == "campaigns.testing:synthetic_run" == run_function_name(synthetic_run)
+        assert (
+            ds.attrs["run_function"] == "campaigns.runner.synthetic:synthetic_run" == run_function_name(synthetic_run)
+        )
 
 
 # --- Row 11: resuming after an upgrade mixed versions silently ------------------------------------
@@ -399,7 +401,7 @@ def test_results_record_versions_and_the_model_code_hash(reference_results):
 def test_a_new_spec_file_leaves_the_model_code_hash_and_a_new_model_file_changes_it(tmp_path, monkeypatch):
     """Campaign specs are inputs (keyed by their own spec hash), not the model: adding one beside the shipped specs
     must not make every campaign unresumable; a changed model file must."""
-    from campaigns.provenance import code_hash
+    from campaigns.runner.provenance import code_hash
 
     package = tmp_path / "hashed_package"
     (package / "specs").mkdir(parents=True)

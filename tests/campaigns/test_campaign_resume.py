@@ -15,13 +15,13 @@ import xarray as xr
 from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 import campaigns
-from campaigns.testing import SyntheticModel, synthetic_run
+from campaigns.runner.synthetic import SyntheticModel, synthetic_run
 
 # Every run of data sets ds6 and ds5 hangs (far past the 600 s budget): the driver can finish ds2 and ds4
 # but never the campaign, so it is always killed mid-way, however fast or slow the machine is.
 DRIVER = """
 import campaigns
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 hangs = {{(d, i): "hang" for d in ("ds6", "ds5") for i in range(40)}}
 campaigns.run_campaign({spec!r}, {out!r}, workers=2, progress=False, catalog=SYNTHETIC_CATALOG,
                        run_function=SyntheticModel(faults=hangs, log_dir={log!r}))

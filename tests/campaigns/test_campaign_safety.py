@@ -26,13 +26,13 @@ from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
 from app.cli import main
-from campaigns import budget
-from campaigns.execution import _compile_and_time, build_request
-from campaigns.files import CampaignError, atomic_write
-from campaigns.sampling import sample
-from campaigns.spec import SpecError
-from campaigns.storage import read_results
-from campaigns.testing import SyntheticModel, synthetic_run
+from campaigns.runner import budget
+from campaigns.runner.execution import _compile_and_time, build_request
+from campaigns.runner.files import CampaignError, atomic_write
+from campaigns.runner.sampling import sample
+from campaigns.runner.spec import SpecError
+from campaigns.runner.storage import read_results
+from campaigns.runner.synthetic import SyntheticModel, synthetic_run
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 
@@ -81,7 +81,7 @@ def test_the_compile_warm_up_runs_under_the_campaigns_budget(tmp_path):
 
 
 def test_the_cost_estimate_scales_with_the_step_and_stops_at_the_budget(tmp_path):
-    from campaigns.bench import simulate_run
+    from campaigns.bench.adapter import simulate_run
 
     spec = campaigns.load_spec(SPECS / "demo.toml")
     finer = spec.model_copy(update={"solver": spec.solver.model_copy(update={"dt": 6.25e-6})})
@@ -101,8 +101,8 @@ _DRIVER = textwrap.dedent("""
     sys.path.insert(0, {helpers!r})
     from campaign_helpers import load, SYNTHETIC_SPEC
     import campaigns
-    from campaigns.files import CampaignInterrupted
-    from campaigns.testing import SyntheticModel
+    from campaigns.runner.files import CampaignInterrupted
+    from campaigns.runner.synthetic import SyntheticModel
 
     if __name__ == "__main__":
         spec = load(SYNTHETIC_SPEC)
@@ -163,7 +163,7 @@ def test_a_refused_resume_names_the_option_that_makes_it_match(tmp_path):
 
 
 def test_the_cli_prints_one_line_with_the_command_that_resumes(tmp_path, capsys, monkeypatch):
-    from campaigns.files import CampaignInterrupted
+    from campaigns.runner.files import CampaignInterrupted
 
     def stopped(spec, out, **kwargs):
         raise CampaignInterrupted(out, 218, 700, "Ctrl-C")
@@ -274,7 +274,7 @@ def test_results_declare_cf_metadata(reference_results):
 def test_the_free_space_estimate_covers_a_real_bench_campaign(tmp_path):
     """The demo study on two data sets, two runs each, one traced, with its fidelity audit and analysis: the
     estimate is at least what the bench actually wrote (results.nc counted twice: its rewrite's peak)."""
-    from campaigns.bench import simulate_run
+    from campaigns.bench.adapter import simulate_run
 
     path = tmp_path / "small.toml"
     path.write_text(f'extends = "{SPECS / "demo.toml"}"\nname = "small"\nruns_per_dataset = 2\n'

@@ -7,9 +7,9 @@ import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load
 from scipy import stats
 
-from campaigns.execution import build_request
-from campaigns.sampling import draw, noise_generator, run_seed_sequence, sample, sample_run
-from campaigns.spec import Distribution
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import draw, noise_generator, run_seed_sequence, sample, sample_run
+from campaigns.runner.spec import Distribution
 
 
 def test_each_run_replays_alone():

@@ -15,12 +15,12 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from SALib.analyze import rbd_fast
 from scipy import stats
 
-from campaigns.analysis import prcc
-from campaigns.execution import build_request
-from campaigns.runs import execute
-from campaigns.sampling import sample
-from campaigns.sensitivity import _easi_order, _first_order_of_signals, first_order
-from campaigns.testing import NOISE_SIGMA, TEMPERATURE_SLOPE, synthetic_run
+from campaigns.analysis.campaign_analysis import prcc
+from campaigns.runner.execution import build_request
+from campaigns.runner.runs import execute
+from campaigns.runner.sampling import sample
+from campaigns.runner.synthetic import NOISE_SIGMA, TEMPERATURE_SLOPE, synthetic_run
+from campaigns.statistics.sensitivity import _easi_order, _first_order_of_signals, first_order
 
 
 def ishigami(X, a=7.0, b=0.1):
@@ -87,7 +87,7 @@ def test_an_additive_linear_function_has_the_squared_correlation_as_index():
 
 
 def test_effect_sizes_of_the_synthetic_model_bracket_its_known_spreads():
-    """The synthetic model (campaigns.testing), 1000 runs of data set 2 (80 um, no load): gain moves the
+    """The synthetic model (campaigns.runner.synthetic), 1000 runs of data set 2 (80 um, no load): gain moves the
     feature by 80 um x std(gain) (2.7 um), the offset by std(offset) (0.58 um), the temperature by its slope
     x std(T) (0.29 um); the stiffness, inert and pressure rows do nothing there.
 

@@ -11,11 +11,11 @@ import logging
 import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load
 
-from campaigns.execution import QuietWorkerClose, _QuietStop, build_request
-from campaigns.files import CampaignInterrupted
-from campaigns.sampling import sample
-from campaigns.sandbox import Sandbox
-from campaigns.testing import synthetic_run
+from campaigns.runner.execution import QuietWorkerClose, _QuietStop, build_request
+from campaigns.runner.files import CampaignInterrupted
+from campaigns.runner.sampling import sample
+from campaigns.runner.sandbox import Sandbox
+from campaigns.runner.synthetic import synthetic_run
 
 
 class _Records(logging.Handler):

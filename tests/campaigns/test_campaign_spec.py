@@ -10,8 +10,8 @@ import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
-from campaigns.spec import SpecError
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.spec import SpecError
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 from campaigns.units import HALF_RANGE_SIGMAS
 
 SPECS = Path(campaigns.__file__).parent / "specs"
@@ -148,13 +148,13 @@ def test_runs_override_and_extends(tmp_path):
 def test_shipped_specs_validate_structurally():
     """Structure only, without the catalog (the rows against the bench: test_table_9_5_extension_specs.py)."""
     for name in ("thesis_backlash.toml", "demo.toml"):
-        data = campaigns.spec.read_spec(SPECS / name)
-        spec = campaigns.spec.validate_spec(data, None)
+        data = campaigns.runner.spec.read_spec(SPECS / name)
+        spec = campaigns.runner.spec.validate_spec(data, None)
         assert len(spec.datasets) == 7
         assert len(spec.uncertainties) == 38 + 10  # every row of Table 9.5, then the 10 rows of its extension
         assert spec.observability.sweep == ["ds4", "ds6", "ds7", "ds2"]
-    assert campaigns.spec.validate_spec(
-        campaigns.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000
+    assert campaigns.runner.spec.validate_spec(
+        campaigns.runner.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000
 
 
 @pytest.mark.parametrize("name, expected", [
@@ -166,7 +166,7 @@ def test_shipped_specs_validate_structurally():
 ])
 def test_a_campaign_name_is_bounded_as_data_set_names_are(tmp_path, name, expected):
     """Issue 39: ``out/<name>`` stays inside out/ (no separator, no dot) and a name fits a file name; the rule is
-    the data sets' (one home, campaigns.spec.check_name)."""
+    the data sets' (one home, campaigns.runner.spec.check_name)."""
     dataset = f'[[datasets]]\nname = {json.dumps(name)}\nscene = "ds2"\n'
     for field, text, append in (("name", f"name = {json.dumps(name)}\n", False), ("datasets[4].name", dataset, True)):
         with pytest.raises(SpecError) as info:

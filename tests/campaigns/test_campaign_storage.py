@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 from campaign_helpers import SYNTHETIC_SPEC, load
 
-from campaigns.files import CONVENTIONS
+from campaigns.runner.files import CONVENTIONS
 
 
 def test_results_round_trip(reference_results, tmp_path):

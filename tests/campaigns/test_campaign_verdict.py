@@ -19,7 +19,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis import (
+from campaigns.analysis.campaign_analysis import (
     MIN_DETECTION_RUNS,
     MIN_OK_RUNS,
     RESOLUTIONS,

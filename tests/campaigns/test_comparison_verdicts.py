@@ -1,5 +1,6 @@
-"""Known answers of campaigns.comparison's verdict vocabulary (the worst of several verdicts) and of the spread of an
-ensemble of tight runs. The verdicts themselves are the accuracy rule's: tests/campaigns/test_accuracy_rule.py."""
+"""Known answers of campaigns.statistics.paired_comparison's verdict vocabulary (the worst of several verdicts) and of
+the spread of an ensemble of tight runs. The verdicts themselves are the accuracy rule's:
+tests/campaigns/test_accuracy_rule.py."""
 
 import math
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from campaigns.comparison import ensemble_spread, worst_verdict
+from campaigns.statistics.paired_comparison import ensemble_spread, worst_verdict
 
 
 @pytest.mark.parametrize(("verdicts", "worst"), [

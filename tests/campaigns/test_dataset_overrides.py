@@ -1,4 +1,4 @@
-"""A data set's fixed parameters and common random numbers (``parameters``, ``seeds_from``: campaigns/spec.py):
+"""A data set's fixed parameters and common random numbers (``parameters``, ``seeds_from``: campaigns/runner/spec.py):
 what they change in the samples, the requests and the replay, and one clear error for each bad input."""
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ import pytest
 from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
-from campaigns.execution import build_request
-from campaigns.replay import replay_run
-from campaigns.sampling import sample
-from campaigns.spec import SpecError
-from campaigns.testing import synthetic_run
+from campaigns.bench.replay import replay_run
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import sample
+from campaigns.runner.spec import SpecError
+from campaigns.runner.synthetic import synthetic_run
 
 # the synthetic spec's data sets are ds2, ds4, ds6, ds5 (indices 0-3); its table samples gain, offset, stiffness,
 # inert, then two scene conditions

@@ -1,5 +1,5 @@
-"""A data set's test procedure (``procedure``: campaigns/spec.py, twin/scenes/procedure.py): it reaches the run, the
-bench builds its scene from it, replay repeats it, a spec without it keeps its hash, and a bad knob is one error."""
+"""A data set's test procedure (``procedure``: campaigns/runner/spec.py, twin/scenes/procedure.py): it reaches the run,
+the bench builds its scene from it, replay repeats it, a spec without it keeps its hash, and a bad knob is one error."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
 
 import campaigns
 import twin
-from campaigns.bench import run_scene
-from campaigns.execution import build_request
-from campaigns.replay import replay_run
-from campaigns.sampling import sample
-from campaigns.spec import SpecError
-from campaigns.testing import procedure_effect, synthetic_run
+from campaigns.bench.adapter import run_scene
+from campaigns.bench.replay import replay_run
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import sample
+from campaigns.runner.spec import SpecError
+from campaigns.runner.synthetic import procedure_effect, synthetic_run
 
 KNOBS = '{ preload = 200.0, external_force = 500.0, cycles = 2, frequency = 2.0, amplitude = 2e-3 }'
 PROCEDURE = f"""

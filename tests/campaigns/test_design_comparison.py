@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from app.cli import main
-from campaigns.design_comparison import Shift, compare, describe_shift, failure_text, pairing, spec_changes
+from campaigns.workflows.design_comparison import Shift, compare, describe_shift, failure_text, pairing, spec_changes
 
 RUNS = 40
 NAMES = ["d0", "d1"]

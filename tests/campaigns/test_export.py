@@ -16,7 +16,7 @@ import scipy.io
 import xarray as xr
 
 import campaigns
-import campaigns.files
+import campaigns.runner.files
 from app.cli import main
 
 
@@ -143,7 +143,7 @@ def test_a_read_only_directory_is_one_line(analysed, tmp_path, capsys, monkeypat
 
     out = tmp_path / "ro"
     out.mkdir()
-    monkeypatch.setattr(campaigns.files.tempfile, "mkstemp", refused)
+    monkeypatch.setattr(campaigns.runner.files.tempfile, "mkstemp", refused)
     _one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(out)],
               "cannot write", "Permission denied")
     assert not list(out.iterdir())

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.accuracy_rule import paired_verdict
-from campaigns.fidelity_audit import (
+from campaigns.bench.fidelity_audit import (
     AUDIT_MIN_PAIRS,
     MEAN_SHIFT_TOLERANCE,
     compare_fidelity,
@@ -16,8 +15,9 @@ from campaigns.fidelity_audit import (
     numerical_floors,
     summary_attrs,
 )
-from campaigns.scene_audit import THESIS_SPEC
-from campaigns.spec import load_spec
+from campaigns.bench.scene_audit import THESIS_SPEC
+from campaigns.runner.spec import load_spec
+from campaigns.statistics.accuracy_rule import paired_verdict
 
 UM = 1e-6
 RUNS = 12
@@ -86,7 +86,7 @@ def test_without_a_not_met_the_worst_remaining_verdict_is_named():
 
 
 def test_the_thesis_data_sets_have_a_measured_floor():
-    """campaigns/numerical_floor.toml covers every thesis data set (its conditions are the scene's own)."""
+    """campaigns/bench/numerical_floor.toml covers every thesis data set (its conditions are the scene's own)."""
     spec = load_spec(THESIS_SPEC)
     floors = numerical_floors(spec, list(spec.features))
     assert {d for d, _ in floors} == {d.name for d in spec.datasets}

@@ -18,8 +18,8 @@ import xarray as xr
 from measured_helpers import HIDDEN_BACKLASH, LEVELS, MAPPING, close
 
 from app.cli import main
-from campaigns.diagnosis import MIN_RUNS, describe, diagnose, place
-from campaigns.measured import MeasuredError, acquisition_grid, import_measured, load_mapping, read_measured
+from campaigns.workflows.diagnosis import MIN_RUNS, describe, diagnose, place
+from campaigns.workflows.measured import MeasuredError, acquisition_grid, import_measured, load_mapping, read_measured
 
 
 def test_the_twins_run_logged_by_a_bench_gives_back_the_twins_features(measured_campaign):

@@ -16,9 +16,9 @@ import pandas as pd
 import pytest
 from measured_helpers import SAMPLE, bench_run
 
-import campaigns.measured as measured
+import campaigns.workflows.measured as measured
 from app.cli import main
-from campaigns.measured import (
+from campaigns.workflows.measured import (
     ALLOWED_DISAGREEMENT,
     LARGEST_BACKLASH,
     MeasuredError,

@@ -15,8 +15,8 @@ import xarray as xr
 from measured_helpers import ROOT, SAMPLE
 
 from app.cli import main
-from campaigns.diagnosis import diagnose
-from campaigns.measured import read_measured
+from campaigns.workflows.diagnosis import diagnose
+from campaigns.workflows.measured import read_measured
 
 
 def readme_measured_commands() -> list[list[str]]:

@@ -1,4 +1,5 @@
-"""The model-form table (campaigns/model_form.py): known answers on synthetic results, and the spec end to end."""
+"""The model-form table (campaigns/analysis/model_form.py): known answers on synthetic results, and the spec end to
+end."""
 
 from __future__ import annotations
 
@@ -12,11 +13,11 @@ import xarray as xr
 
 import campaigns
 import twin
-from campaigns import model_form
-from campaigns.analysis import mean_shift, observability_sweep
-from campaigns.bench import BenchCatalog
-from campaigns.comparison import VERDICTS
-from campaigns.spec import read_spec, validate_spec
+from campaigns.analysis import model_form
+from campaigns.analysis.campaign_analysis import mean_shift, observability_sweep
+from campaigns.bench.adapter import BenchCatalog
+from campaigns.runner.spec import read_spec, validate_spec
+from campaigns.statistics.paired_comparison import VERDICTS
 
 SPEC = Path(__file__).parents[2] / "campaigns" / "specs" / "model_form.toml"
 #: The sweep of the synthetic study [m]: ds4 is the reference, ds6 the one level below the 1 µm requirement.

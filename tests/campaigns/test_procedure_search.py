@@ -1,5 +1,6 @@
-"""The test-procedure designer (campaigns.procedure_search) on the synthetic model, whose answer to a procedure is
-known (campaigns.testing.procedure_effect: a preload hides the backlash, a force adds noise, cycles average it).
+"""The test-procedure designer (campaigns.workflows.procedure_search) on the synthetic model, whose answer to a
+procedure is known (campaigns.runner.synthetic.procedure_effect: a preload hides the backlash, a force adds noise,
+cycles average it).
 
 Behaviour: the plan and the budget, the design, the screening estimate's closed form, the ranking against the
 known answer, the statement, the evidence re-run to the same numbers, the files, and every bad input refused
@@ -21,9 +22,12 @@ from campaign_helpers import SYNTHETIC_SPEC
 from scipy import stats
 
 import campaigns
-from campaigns.analysis import FALSE_ALARM_RATE, POWER
-from campaigns.files import CONVENTIONS
-from campaigns.procedure_search import (
+from campaigns.analysis.campaign_analysis import FALSE_ALARM_RATE, POWER
+from campaigns.analysis.within_unit import extrapolated_detectable
+from campaigns.runner.files import CONVENTIONS
+from campaigns.runner.spec import SpecError
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, procedure_effect, synthetic_run
+from campaigns.workflows.procedure_search import (
     describe_plan,
     design,
     final_seed,
@@ -33,9 +37,6 @@ from campaigns.procedure_search import (
     run_search,
     screening_scores,
 )
-from campaigns.spec import SpecError
-from campaigns.testing import SYNTHETIC_CATALOG, procedure_effect, synthetic_run
-from campaigns.within_unit import extrapolated_detectable
 
 SEARCH_FILE = SYNTHETIC_SPEC.parent / "synthetic_search.toml"
 SEARCH = SEARCH_FILE.read_text().replace('campaign = "synthetic_search_campaign.toml"',

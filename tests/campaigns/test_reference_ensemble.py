@@ -3,7 +3,7 @@ what it is, and before the first move (where nothing amplifies a difference) the
 
 import pytest
 
-from campaigns.reference_ensemble import GAP_PERTURBATIONS_AT_ZERO, reference_ensemble
+from campaigns.bench.reference_ensemble import GAP_PERTURBATIONS_AT_ZERO, reference_ensemble
 
 OUTPUTS = ["backlash_feature", "backlash_feature_true", "nut1_position", "screw_equivalent_position",
            "linear_encoder_position", "position_demand"]

@@ -17,8 +17,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns import sensitivity
-from campaigns.analysis import (
+from campaigns.analysis.campaign_analysis import (
     MIN_DETECTION_RUNS,
     analysis_dataset,
     analyze,
@@ -26,7 +25,8 @@ from campaigns.analysis import (
     min_runs_for_quantile_bound,
     quantile_bound_rank,
 )
-from campaigns.files import CONVENTIONS
+from campaigns.runner.files import CONVENTIONS
+from campaigns.statistics import sensitivity
 
 # --- the detection threshold's floor ------------------------------------------------------------------------------
 
@@ -201,7 +201,10 @@ def test_coordinates_are_labels_without_fill_values_and_the_file_says_what_it_is
             assert "_FillValue" not in variable.ncattrs(), name
         assert nc.Conventions == CONVENTIONS and nc.title.startswith("Analysis of test campaign")
         lines = nc.history.splitlines()
-        assert lines[0] == "made by a test" and lines[1].endswith(": campaigns.analysis.analyze(results.nc)")
+        assert (
+            lines[0] == "made by a "
+                        "test" and lines[1].endswith(": campaigns.analysis.campaign_analysis.analyze(results.nc)")
+        )
         assert nc.min_detection_runs == 59 and nc.first_order_min_runs == sensitivity.MIN_RUNS
     with xr.open_dataset(analysis_file, engine="netcdf4") as a:  # and xarray reads the labels back as coordinates
         assert a["dataset"].values.tolist() == ["d0", "d1"] and float(a["n_used"].sel(dataset="d1", feature="f")) == 60

@@ -1,6 +1,6 @@
-"""The acceptance study (campaigns.solver_accuracy) end to end on the synthetic model: the reference and the
+"""The acceptance study (campaigns.bench.solver_accuracy) end to end on the synthetic model: the reference and the
 candidates over the same sampled runs, their analyses, the judgement, its CF file, its markdown table and its chart;
-and the descriptive figures of campaigns.comparison."""
+and the descriptive figures of campaigns.statistics.paired_comparison."""
 
 import numpy as np
 import pytest
@@ -9,10 +9,17 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from test_campaign_cf import high_priority_findings
 
 from app.studies.charts import campaign_accuracy_chart
-from campaigns.comparison import compare_features
-from campaigns.solver_accuracy import CANDIDATES, REFERENCE, THESIS_SPEC, campaign_accuracy, markdown_table, variant
-from campaigns.spec import load_spec
-from campaigns.testing import synthetic_run
+from campaigns.bench.solver_accuracy import (
+    CANDIDATES,
+    REFERENCE,
+    THESIS_SPEC,
+    campaign_accuracy,
+    markdown_table,
+    variant,
+)
+from campaigns.runner.spec import load_spec
+from campaigns.runner.synthetic import synthetic_run
+from campaigns.statistics.paired_comparison import compare_features
 
 RUNS = 24
 

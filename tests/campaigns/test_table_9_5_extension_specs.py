@@ -11,7 +11,7 @@ import pytest
 
 import campaigns
 import twin
-from campaigns.spec import read_spec
+from campaigns.runner.spec import read_spec
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 EXTENSION = "EXTENSION of Table 9.5"

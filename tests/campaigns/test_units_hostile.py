@@ -9,7 +9,7 @@ from campaign_helpers import load, write_spec
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from campaigns.spec import SpecError
+from campaigns.runner.spec import SpecError
 from campaigns.units import MAX_UNIT_LENGTH, conversion
 
 PROBES = ["deg)", "(deg", "m*", "1/0", "m**", "**", "m/", "()", "{", "\x00", "m**(1/0)", "km**400"]

@@ -1,4 +1,4 @@
-"""Known answers of the within-unit detection statistics (campaigns.within_unit) on constructed units.
+"""Known answers of the within-unit detection statistics (campaigns.analysis.within_unit) on constructed units.
 
 Every unit is ``offset_u + k * level + N(0, sigma)``: a fixed offset per unit (its fixed errors, drawn large), a
 feature sensitivity ``k`` per metre of fault, and a Gaussian test-to-test noise. A unit's threshold is its baseline
@@ -22,14 +22,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from campaigns.analysis import (
+from campaigns.analysis.campaign_analysis import (
     BACKLASH_REQUIREMENT,
     RESOLUTIONS,
     bootstrap_minimum_detectable,
     min_runs_for_quantile_bound,
     minimum_detectable,
 )
-from campaigns.within_unit import (
+from campaigns.analysis.within_unit import (
     DESIGN_REVIEW_QUANTILE,
     MIN_REPEATS,
     MIN_UNITS,

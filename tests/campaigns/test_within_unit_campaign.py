@@ -1,11 +1,11 @@
 """Within-unit campaigns (the spec's ``[units]``, issue 29): the same units tested repeatedly at every fault level.
 
-Known answers on the synthetic model (campaigns/testing.py): its measured feature is ``gain * backlash + offset +
-TEMPERATURE_SLOPE * (room_temperature - 298.15 K) + noise``. With gain and offset drawn once per unit, a unit's
+Known answers on the synthetic model (campaigns/runner/synthetic.py): its measured feature is ``gain * backlash +
+offset + TEMPERATURE_SLOPE * (room_temperature - 298.15 K) + noise``. With gain and offset drawn once per unit, a unit's
 tests differ by the room temperature (uniform 15-35 degC: sd 5.77 K, times 0.05 µm/K = 0.289 µm) and the noise
 (0.2 µm), a test-to-test sigma of 0.351 µm. The median unit then detects a growth of about
-``(z_0.95 sqrt(1 + 1/R) + z_0.95) sigma = 1.24 µm`` (R = 3 baseline repeats; campaigns/within_unit.py), which lies
-between the 1 and 2 µm levels of the sweep; between units the offsets (uniform ±1 µm) add to the scatter, so one
+``(z_0.95 sqrt(1 + 1/R) + z_0.95) sigma = 1.24 µm`` (R = 3 baseline repeats; campaigns/analysis/within_unit.py), which
+lies between the 1 and 2 µm levels of the sweep; between units the offsets (uniform ±1 µm) add to the scatter, so one
 test per unit detects no less than that.
 """
 
@@ -21,15 +21,15 @@ from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 from scipy import stats
 
 import campaigns
-from campaigns.analysis import analysis_dataset, summary
-from campaigns.execution import build_request
-from campaigns.export import runs_table
-from campaigns.fidelity_audit import full_fidelity_variant
-from campaigns.replay import replay_run
-from campaigns.sampling import UNIT_STREAM, draw, sample
-from campaigns.spec import SpecError
-from campaigns.testing import NOISE_SIGMA, TEMPERATURE_SLOPE, SyntheticModel, synthetic_run
-from campaigns.within_unit import MIN_REPEATS, MIN_UNITS, unit_values, within_unit_dataset
+from campaigns.analysis.campaign_analysis import analysis_dataset, summary
+from campaigns.analysis.within_unit import MIN_REPEATS, MIN_UNITS, unit_values, within_unit_dataset
+from campaigns.bench.fidelity_audit import full_fidelity_variant
+from campaigns.bench.replay import replay_run
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import UNIT_STREAM, draw, sample
+from campaigns.runner.spec import SpecError
+from campaigns.runner.synthetic import NOISE_SIGMA, TEMPERATURE_SLOPE, SyntheticModel, synthetic_run
+from campaigns.workflows.export import runs_table
 
 UNITS, REPEATS = MIN_UNITS, MIN_REPEATS
 LEVELS = (0.0, 1e-6, 2e-6, 5e-6)

@@ -11,9 +11,9 @@ import xarray as xr
 from scipy.stats import linregress
 
 from app import cli
-from campaigns import fidelity_audit
-from campaigns.accuracy_rule import paired_verdict
-from campaigns.scene_audit import THESIS_SPEC
+from campaigns.bench import fidelity_audit
+from campaigns.bench.scene_audit import THESIS_SPEC
+from campaigns.statistics.accuracy_rule import paired_verdict
 
 
 def run(*args):

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from app.cli import main
-from campaigns.files import CampaignError, campaign_file, check_output
+from campaigns.runner.files import CampaignError, campaign_file, check_output
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ import pytest
 import campaigns
 import twin
 from app.cli import main
-from campaigns.spec import SpecError, condition_range_problem
+from campaigns.runner.spec import SpecError, condition_range_problem
 from campaigns.units import conversion, normalise
 from twin.errors import InputError, did_you_mean
 

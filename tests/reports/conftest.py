@@ -9,7 +9,7 @@ import pytest
 
 import campaigns
 import reports
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 
 SPEC = Path(__file__).parent / "data" / "campaign.toml"
 #: Runs that fail, one per failure kind the runner records without waiting for a timeout.

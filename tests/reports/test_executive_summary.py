@@ -26,7 +26,8 @@ def _executive_html(html_path) -> str:
 
 
 def _contract_analysis(analysis: xr.Dataset) -> xr.Dataset:
-    """The analysis with the CONTRACT.md verdict variables, as campaigns.analysis writes them (kept when present)."""
+    """The analysis with the CONTRACT.md verdict variables, as campaigns.analysis.campaign_analysis writes them (kept
+    when present)."""
     if "requirement_statement" in analysis:
         return analysis
     features = [str(f) for f in analysis["feature"].values]

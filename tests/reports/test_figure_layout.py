@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import campaigns
-from campaigns.analysis import analysis_dataset
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.analysis.campaign_analysis import analysis_dataset
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 from reports import content, figures
 from reports.builder import Builder
 from reports.inputs import load_inputs

@@ -11,14 +11,14 @@ import xarray as xr
 
 import campaigns
 import reports
-from campaigns.testing import SYNTHETIC_CATALOG, SyntheticModel
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 from reports.content import build
 from reports.inputs import load_inputs
 from reports.model import Callout, Table
 
 SPEC = Path(__file__).parent / "data" / "campaign.toml"
 #: A one-at-a-time variant of the synthetic sweep: 2 kN of external force on a 2e8 N/m stiffness adds 10 µm to
-#: both features (campaigns/testing.py), in every data set alike, so the sweep detects as before.
+#: both features (campaigns/runner/synthetic.py), in every data set alike, so the sweep detects as before.
 VARIANTS = "".join(
     f'\n[[datasets]]\nname = "{name}__external_force_2000"\nscene = "{name}"\n'
     f"conditions = {{ backlash = {backlash}, preload = 0.0, external_force = 2000.0 }}\n"

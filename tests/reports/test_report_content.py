@@ -93,7 +93,7 @@ def extended(campaign, tmp_path_factory):
         fidelity_ds2="pneumatics=full, current_loop=ideal", fidelity_audit="met",
         fidelity_audit_ds2=f"speedup x0.73; backlash_feature: {_MET}; max paired 0.0257 µm, MC error 0.0862 µm, KS p "
                            f"1.00 | backlash_feature_true: {_UNDETERMINED}; max paired 0.3 µm, MC error 0.1 µm, KS p "
-                           "0.50",  # the format of campaigns.fidelity_audit.summary_attrs
+                           "0.50",  # the format of campaigns.bench.fidelity_audit.summary_attrs
     )
     return build(dataclasses.replace(inputs, results=results), "T")
 
@@ -175,7 +175,7 @@ def test_display_scale_ignores_non_finite_values():
 
 def test_a_data_set_without_successful_runs(inputs):
     """Every figure still draws (warnings are errors in the test suite) and the failures are reported."""
-    from campaigns.analysis import analysis_dataset
+    from campaigns.analysis.campaign_analysis import analysis_dataset
 
     status = inputs.results["status"].copy()
     status.loc[{"dataset": "ds4"}] = "error"

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.analysis import analysis_dataset
+from campaigns.analysis.campaign_analysis import analysis_dataset
 from reports import ReportError
 from reports.builder import Builder
 from reports.inputs import Inputs, load_inputs

@@ -12,7 +12,7 @@ import xarray as xr
 
 import campaigns
 import reports
-from campaigns.testing import SYNTHETIC_CATALOG, synthetic_run
+from campaigns.runner.synthetic import SYNTHETIC_CATALOG, synthetic_run
 
 SPEC = """
 name = "report_within_unit"

@@ -11,7 +11,7 @@ import xarray as xr
 from service_helpers import SPEC, client, twin, wait_final
 
 from app.service.submission import BUILTIN_SPECS
-from campaigns.analysis import summary
+from campaigns.analysis.campaign_analysis import summary
 
 
 def test_health_needs_no_token_and_the_api_needs_one(service):

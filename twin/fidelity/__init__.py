@@ -5,7 +5,7 @@ Each subsystem of the bench has named levels (:mod:`twin.levels`);
 demands, duration and requested outputs allow, by the rules of
 ``rules.toml`` (:mod:`twin.fidelity.rules`), and explains every choice.
 ``twin fidelity audit`` checks the choice against the full model
-(:mod:`campaigns.fidelity_audit`).
+(:mod:`campaigns.bench.fidelity_audit`).
 """
 
 from twin.fidelity.requests import full_plant, requested_levels

@@ -104,7 +104,7 @@ NOISE_PATHS = {
 }
 
 #: Every condition a scene states: the one table of names, units and allowed values
-#: (campaigns.catalog derives the campaigns' condition units from it).
+#: (campaigns.runner.catalog derives the campaigns' condition units from it).
 CONDITIONS: dict[str, Condition] = {
     "preload": Condition("N", "preload between the nuts (its meaning depends on zero_procedure)", ">= 0",
                          lambda v: v >= 0),

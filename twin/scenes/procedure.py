@@ -7,7 +7,8 @@ thesis's raised-cosine sinusoid (Fig. 9.6a: ``0 -> 2 amplitude -> 0`` at ``frequ
 fault (backlash, preload loss) stays a condition of the data set, applied after the procedure.
 
 Each knob is declared once in :data:`KNOBS` (unit, what it sets, the bench's limit and its source); the campaign
-spec (``[datasets.procedure]``) and the procedure search (:mod:`campaigns.procedure_search`) validate against it.
+spec (``[datasets.procedure]``) and the procedure search (:mod:`campaigns.workflows.procedure_search`) validate against
+it.
 """
 
 from __future__ import annotations

@@ -1,0 +1,348 @@
+"""The model-form table: what each modelling assumption does to the features and to the verdicts.
+
+A model-form study (``campaigns/specs/model_form.toml``, issue 33) is a campaign whose data sets are baselines and
+one-at-a-time variants: a variant data set is named ``<baseline>__<label>`` and differs from its baseline in exactly
+one scene condition (the *assumption*; the spec states it in both), or in the parameters it fixes alone (a parameter
+variant, named ``<baseline>__<assumption>_<value>``: one assumption may be several parameters, e.g. every
+ball-groove friction coefficient). From the campaign's results and analysis this
+module computes, per assumption and variant, per baseline data set and feature:
+
+* the shift of the feature's mean against the baseline with its t interval at the analysis's confidence
+  (:func:`campaigns.analysis.campaign_analysis.mean_shift`): of the run-by-run differences when the variant takes its
+  baseline's seeds (``seeds_from``: run ``i`` of both is one unit with one noise record under two assumptions, common
+  random numbers), else Welch's for independent samples. A shift is stated only where its interval excludes zero
+  (``shift_status``);
+* the requirement verdict of the observability sweep with every sweep data set replaced by its variant, computed by
+  :func:`campaigns.analysis.campaign_analysis.observability_sweep` with the analysis's settings and bootstrap stream,
+  against the analysis's verdict (both in the vocabulary of :data:`campaigns.statistics.paired_comparison.VERDICTS`);
+
+and one sentence, :func:`headline`: the assumption that changes the most verdicts or, when none changes one, the one
+whose resolved shift of a feature is largest. :func:`write_model_form` writes it all as ``model_form.nc``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from campaigns.analysis.campaign_analysis import (
+    _OBSERVABILITY_STREAM,
+    _used,
+    mean_shift,
+    observability_sweep,
+    printed_estimate,
+)
+from campaigns.runner.files import write_netcdf
+
+#: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.
+SEPARATOR = "__"
+#: The table's file, beside ``analysis.nc``.
+FILE_NAME = "model_form.nc"
+#: ``shift_status`` values: the interval excludes zero (``resolved``) or not; too few ok runs on either side; or the
+#: study has no such variant of the data set.
+SHIFT_STATUS = ("not_resolved", "resolved", "insufficient_data", "not_run")
+#: ``verdict_change`` values: both verdicts given and equal, given and different, or not both given (insufficient
+#: data on either side, or a sweep data set without this variant).
+VERDICT_CHANGE = ("unchanged", "changed", "not_compared")
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A variant data set: its baseline and the one assumption that differs, with both values as written.
+
+    A condition variant changes one scene condition (``assumption`` is its name); a parameter variant fixes
+    parameters (``parameters``, JSON, SI units) and is named ``<baseline>__<assumption>_<value>``. ``paired`` when
+    it takes its baseline's seeds (``seeds_from``): run ``i`` of both is then one unit under two assumptions.
+    """
+
+    dataset: str
+    baseline: str
+    assumption: str
+    value: str
+    baseline_value: str
+    paired: bool = False
+    parameters: str = ""
+
+    @property
+    def label(self) -> str:
+        return f"{self.assumption}={self.value}"
+
+
+def _changed(mine: dict, theirs: dict) -> list[str]:
+    return sorted(k for k in set(mine) | set(theirs) if mine.get(k) != theirs.get(k))
+
+
+def variants(spec: dict) -> list[Variant]:
+    """The variant data sets of a spec (its ``spec`` table, as stored in ``results.nc``), in spec order.
+
+    Raises
+    ------
+    ValueError
+        A ``<baseline>__<label>`` data set whose baseline is not a data set, whose scene differs from it, or that
+        does not differ from it in exactly one condition stated by both or in its fixed parameters alone.
+    """
+    datasets = {d["name"]: d for d in spec["datasets"]}
+    sampled = {u["target"] for u in spec.get("uncertainties", [])}
+    found, problems = [], []
+    for name, entry in datasets.items():
+        if SEPARATOR not in name:
+            continue
+        baseline, label = name.split(SEPARATOR, 1)
+        if baseline not in datasets:
+            problems.append(f"{name}: no baseline data set {baseline!r}")
+            continue
+        base = datasets[baseline]
+        if entry.get("scene") != base.get("scene"):
+            problems.append(f"{name}: scene {entry.get('scene')!r}, its baseline's is {base.get('scene')!r}")
+            continue
+        paired = entry.get("seeds_from") == baseline
+        mine, theirs = entry.get("conditions", {}), base.get("conditions", {})
+        conditions = _changed(mine, theirs)
+        fixed, fixed_base = entry.get("parameters", {}), base.get("parameters", {})
+        parameters = _changed(fixed, fixed_base)
+        if parameters and not conditions:
+            assumption, _, value = label.rpartition("_")
+            if not assumption:
+                problems.append(f"{name}: a variant of parameters is named <baseline>__<assumption>_<value>")
+                continue
+            baseline_value = ("set by the data set" if any(k in fixed_base for k in parameters)
+                              else "sampled" if any(k in sampled for k in parameters) else "nominal")
+            found.append(Variant(name, baseline, assumption, value, baseline_value, paired,
+                                 json.dumps({k: fixed[k] for k in parameters if k in fixed}, sort_keys=True)))
+            continue
+        if parameters or len(conditions) != 1 or conditions[0] not in mine or conditions[0] not in theirs:
+            problems.append(f"{name}: must differ from {baseline} in exactly one condition stated by both, or in its "
+                            f"parameters alone (differs in: {', '.join(conditions + parameters) or 'none'})")
+            continue
+        key = conditions[0]
+        found.append(Variant(name, baseline, key, str(mine[key]), str(theirs[key]), paired))
+    if problems:
+        raise ValueError("model-form study: " + "; ".join(problems))
+    return found
+
+
+def _settings(analysis: xr.Dataset) -> dict:
+    """The analysis's own settings of the observability verdict (its attributes), so a variant is judged as the
+    baseline was."""
+    boot = json.loads(analysis.attrs["bootstrap"])
+    return {"n_boot": int(boot["n_boot"]), "confidence": float(boot["confidence"]), "seed": int(boot["seed"]),
+            "false_alarm_rate": float(analysis.attrs["false_alarm_rate"]),
+            "power": float(analysis.attrs["detection_power"]),
+            "min_runs": int(analysis.attrs["min_detection_runs"]),
+            "condition": str(analysis.attrs["observability_condition"]),
+            "requirement": float(analysis.attrs["requirement"]),
+            "requirement_source": str(analysis.attrs["requirement_source"])}
+
+
+def _variant_verdict(results: xr.Dataset, spec: dict, by_baseline: dict[str, str], feature: str, f: int,
+                     settings: dict) -> tuple[str, str]:
+    """The sweep's verdict and statement with every sweep data set replaced by its variant (``by_baseline``);
+    ``("insufficient data", why)`` when a sweep data set has no such variant."""
+    observability = spec["observability"]
+    sweep = list(observability["sweep"])
+    missing = [n for n in sweep if n not in by_baseline]
+    if not sweep or missing:
+        why = "no observability sweep" if not sweep else f"no variant of sweep data set(s) {', '.join(missing)}"
+        return "insufficient data", f"insufficient data: {why}"
+    swapped = results.sel(dataset=[by_baseline[n] for n in sweep]).assign_coords(
+        dataset=np.array(sweep, dtype=object))
+    found = observability_sweep(
+        swapped, feature, sweep, false_alarm_rate=settings["false_alarm_rate"], power=settings["power"],
+        n_boot=settings["n_boot"], confidence=settings["confidence"], min_runs=settings["min_runs"],
+        seed=np.random.SeedSequence(settings["seed"], spawn_key=(_OBSERVABILITY_STREAM, f)),
+        condition=settings["condition"], reference=observability.get("reference"),
+        requirement=settings["requirement"], requirement_source=settings["requirement_source"])
+    return str(found["requirement_verdict"].item()), str(found["requirement_statement"].item())
+
+
+def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
+    """The model-form table of a campaign (see the module docstring and the variables' ``long_name``).
+
+    Raises
+    ------
+    ValueError
+        When the campaign is not a model-form study (no ``<baseline>__<label>`` data set), or see :func:`variants`.
+    """
+    spec = json.loads(results.attrs["spec_json"])["spec"]
+    found = variants(spec)
+    if not found:
+        raise ValueError("not a model-form study: no data set is named <baseline>__<label>")
+    settings = _settings(analysis)
+    confidence, min_runs = settings["confidence"], int(analysis.attrs["min_ok_runs"])
+    features = [str(f) for f in analysis["feature"].values]
+    labels = list(dict.fromkeys(v.label for v in found))
+    baselines = list(dict.fromkeys(v.baseline for v in found))
+    shape = (len(labels), len(baselines), len(features))
+    shift, bounds = np.full(shape, math.nan), np.full(shape + (2,), math.nan)
+    status = np.full(shape, SHIFT_STATUS.index("not_run"), dtype=np.int8)
+    n_variant, n_baseline = np.zeros(shape, dtype=np.int32), np.zeros(shape, dtype=np.int32)
+    used = {feature: _used(results, feature) for feature in features}
+    for v in found:
+        i, d = labels.index(v.label), baselines.index(v.baseline)
+        for f, feature in enumerate(features):
+            # unused runs as NaN, so that a paired shift keeps run i against run i
+            a, b = (results[feature].sel(dataset=n).where(used[feature].sel(dataset=n)).values
+                    for n in (v.dataset, v.baseline))
+            kept = np.isfinite(a) & np.isfinite(b) if v.paired else None
+            n_variant[i, d, f], n_baseline[i, d, f] = ((kept.sum(), kept.sum()) if v.paired
+                                                       else (np.isfinite(a).sum(), np.isfinite(b).sum()))
+            shift[i, d, f], bounds[i, d, f, 0], bounds[i, d, f, 1] = mean_shift(
+                a, b, paired=v.paired, confidence=confidence, min_runs=min_runs)
+            status[i, d, f] = SHIFT_STATUS.index(
+                "insufficient_data" if not math.isfinite(shift[i, d, f])
+                else "resolved" if bounds[i, d, f, 0] > 0 or bounds[i, d, f, 1] < 0 else "not_resolved")
+    baseline_verdict = [str(analysis["requirement_verdict"].sel(feature=f).item()) for f in features]
+    verdict = np.empty((len(labels), len(features)), dtype=object)
+    statement = np.empty_like(verdict)
+    change = np.empty(verdict.shape, dtype=np.int8)
+    for i, label in enumerate(labels):
+        by_baseline = {v.baseline: v.dataset for v in found if v.label == label}
+        for f, feature in enumerate(features):
+            verdict[i, f], statement[i, f] = _variant_verdict(results, spec, by_baseline, feature, f, settings)
+            both = "insufficient data" not in (verdict[i, f], baseline_verdict[f])
+            change[i, f] = VERDICT_CHANGE.index(
+                "not_compared" if not both else "changed" if verdict[i, f] != baseline_verdict[f] else "unchanged")
+    first = {label: next(v for v in found if v.label == label) for label in labels}
+    units = [str(results[f].attrs.get("units", "1")) for f in features]
+    feature_units = {"units": units[0]} if len(set(units)) == 1 else {
+        "comment": "in the units of each feature, given by the feature_units coordinate"}
+    cells = ("variant", "dataset", "feature")
+    table = xr.Dataset(
+        {
+            "assumption": ("variant", np.array([first[k].assumption for k in labels], dtype=object),
+                           {"long_name": "the modelling assumption the variant changes: a scene condition, or the "
+                                         "parameters in variant_parameters"}),
+            "variant_parameters": ("variant", np.array([first[k].parameters for k in labels], dtype=object),
+                                   {"long_name": "the parameters the variant fixes, JSON, SI units (empty for a "
+                                                 "scene condition)"}),
+            "pairing": ("variant", np.array(["paired" if first[k].paired else "independent" for k in labels],
+                                            dtype=object),
+                        {"long_name": "paired: the variant takes its baseline's seeds (seeds_from), the shift is "
+                                      "that of run-by-run differences; independent: Welch's two-sample interval"}),
+            "variant_value": ("variant", np.array([first[k].value for k in labels], dtype=object),
+                              {"long_name": "the assumption's value in the variant data sets"}),
+            "baseline_value": ("variant", np.array([first[k].baseline_value for k in labels], dtype=object),
+                               {"long_name": "the assumption's value in the baseline data sets"}),
+            "mean_shift": (cells, shift, {
+                "long_name": "mean of the feature in the variant minus mean in the baseline (used runs); NaN unless "
+                             "shift_status is resolved or not_resolved; print it only where resolved",
+                **feature_units}),
+            "mean_shift_ci": (cells + ("bound",), bounds, {
+                "long_name": f"{confidence:g} t interval of mean_shift: of the run-by-run differences where the "
+                             "variant is paired, Welch's where independent (see pairing)", **feature_units}),
+            "shift_status": (cells, status, {
+                "long_name": "whether the interval of mean_shift excludes zero (resolved), too few used runs on "
+                             f"either side (insufficient_data: fewer than {min_runs}), or no such variant of the "
+                             "data set (not_run)",
+                "flag_values": np.arange(len(SHIFT_STATUS), dtype=np.int8),
+                "flag_meanings": " ".join(SHIFT_STATUS)}),
+            "n_variant": (cells, n_variant, {"units": "1", "long_name": "used runs of the variant data set (paired: "
+                                                                        "runs used on both sides)"}),
+            "n_baseline": (cells, n_baseline, {"units": "1", "long_name": "used runs of the baseline data set "
+                                                                          "(paired: runs used on both sides)"}),
+            "baseline_verdict": ("feature", np.array(baseline_verdict, dtype=object), {
+                "long_name": "requirement verdict of the analysis (baseline sweep): met / not met / undetermined / "
+                             "insufficient data"}),
+            "variant_verdict": (("variant", "feature"), verdict, {
+                "long_name": "requirement verdict with every sweep data set replaced by its variant, same settings "
+                             "and bootstrap stream as the analysis"}),
+            "variant_statement": (("variant", "feature"), statement, {
+                "long_name": "the variant's requirement verdict with its bounds and sample size, in one sentence"}),
+            "verdict_change": (("variant", "feature"), change, {
+                "long_name": "whether the variant changes the requirement verdict (not_compared: insufficient data "
+                             "on either side)",
+                "flag_values": np.arange(len(VERDICT_CHANGE), dtype=np.int8),
+                "flag_meanings": " ".join(VERDICT_CHANGE)}),
+        },
+        coords={
+            "variant": ("variant", np.array(labels, dtype=object), {"long_name": "assumption=value of the variant"}),
+            "dataset": ("dataset", np.array(baselines, dtype=object), {"long_name": "baseline data set"}),
+            "feature": ("feature", np.array(features, dtype=object)),
+            "feature_units": ("feature", np.array(units, dtype=object), {"long_name": "units of each feature"}),
+            "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
+        },
+    )
+    table.attrs = {
+        "source_spec_hash": results.attrs.get("spec_hash", ""),
+        "confidence": confidence,
+        "min_ok_runs": min_runs,
+        "method": "one-at-a-time variants of scene conditions or parameters against their baseline data sets; "
+                  "mean shift with a t interval (paired where the variant takes its baseline's seeds, else Welch); "
+                  "requirement verdict of the observability sweep recomputed on the variants",
+    }
+    table.attrs["headline"] = headline(table)
+    return table
+
+
+def shown_quantities(values, half_width: float, unit: str, extra: int = 1) -> list[str]:
+    """Values in the feature's display unit (µm for m) to the leading digit of the interval's half-width plus
+    ``extra`` digits: 0 for an estimate (rounded there, :func:`campaigns.analysis.campaign_analysis.printed_estimate`),
+    1 for the bounds, so those of a narrow interval read apart. 3 significant digits for an interval of zero width."""
+    scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
+    if not half_width > 0:
+        return [f"{v * scale:.3g} {shown}" for v in values]
+    decimals = max(0, extra - math.floor(math.log10(half_width * scale)))
+    return [f"{v * scale:.{decimals}f} {shown}" for v in values]
+
+
+def headline(table: xr.Dataset) -> str:
+    """One sentence from the numbers: the assumption that changes the most requirement verdicts; when none changes
+    one, the assumption with the largest resolved feature shift (ranked by the distance of its interval from zero,
+    the size the data guarantee), printed rounded to its interval; never a shift the interval does not resolve."""
+    assumptions = list(dict.fromkeys(str(a) for a in table["assumption"].values))
+    varied = ", ".join(assumptions)
+    change = table["verdict_change"].values
+    of = {a: change[table["assumption"].values == a] for a in assumptions}
+    changed = {a: int((of[a] == VERDICT_CHANGE.index("changed")).sum()) for a in assumptions}
+    compared = int((change != VERDICT_CHANGE.index("not_compared")).sum())
+    most = max(changed.values())
+    if most > 0:
+        leaders = [a for a in assumptions if changed[a] == most]
+        cases = []
+        for i, f in zip(*np.nonzero(change == VERDICT_CHANGE.index("changed")), strict=True):
+            if str(table["assumption"].values[i]) in leaders:
+                cases.append(f"{table['variant'].values[i]}, {table['feature'].values[f]}: "
+                             f"{table['baseline_verdict'].values[f]} → {table['variant_verdict'].values[i, f]}")
+        n = [str(int((of[a] != VERDICT_CHANGE.index("not_compared")).sum())) for a in leaders]
+        who = (f"{leaders[0]} moves the requirement verdicts most, changing {most} of its {n[0]} compared verdicts"
+               if len(leaders) == 1 else f"{' and '.join(leaders)} move the requirement verdicts most, each changing "
+               f"{most} (of {' and '.join(n)} compared)")
+        return f"Of the assumptions varied ({varied}), {who}: {'; '.join(cases)}."
+    opening = (f"No assumption varied ({varied}) changes a requirement verdict ({compared} compared"
+               + (f", {change.size - compared} not compared: insufficient data" if compared < change.size else "")
+               + ")")
+    resolved = table["shift_status"].values == SHIFT_STATUS.index("resolved")
+    if not resolved.any():
+        return opening + "; no shift of a feature's mean is resolved by its interval."
+    ci = table["mean_shift_ci"].values
+    guaranteed = np.where(resolved, np.minimum(np.abs(ci[..., 0]), np.abs(ci[..., 1])), -1.0)
+    i, d, f = np.unravel_index(int(np.argmax(guaranteed)), guaranteed.shape)
+    lower, upper = ci[i, d, f]
+    unit = str(table["feature_units"].values[f])
+    value = printed_estimate(float(table["mean_shift"].values[i, d, f]), (lower, upper))
+    (shown,) = shown_quantities((abs(value),), 0.5 * (upper - lower), unit, extra=0)
+    low, high = shown_quantities((lower, upper), 0.5 * (upper - lower), unit)
+    confidence = float(table.attrs["confidence"])
+    return (f"{opening}; {table['assumption'].values[i]} moves the features most: with "
+            f"{table['assumption'].values[i]} = {table['variant_value'].values[i]} instead of "
+            f"{table['baseline_value'].values[i]}, the mean of {table['feature'].values[f]} in "
+            f"{table['dataset'].values[d]} shifts by {'+' if value >= 0 else '-'}{shown} "
+            f"({confidence * 100:g} % interval {low} to {high}, "
+            f"n = {int(table['n_variant'].values[i, d, f])} and {int(table['n_baseline'].values[i, d, f])} runs).")
+
+
+def is_model_form(results: xr.Dataset) -> bool:
+    """Whether a campaign is a model-form study (a data set named ``<baseline>__<label>``)."""
+    return any(SEPARATOR in str(n) for n in results["dataset"].values)
+
+
+def write_model_form(results: xr.Dataset, analysis: xr.Dataset, path: str | Path) -> Path:
+    """Write :func:`model_form_dataset` as a CF netCDF file (``model_form.nc``)."""
+    table = model_form_dataset(results, analysis)
+    return write_netcdf(table, path, title=f"Model-form table of {results.attrs.get('title', 'a BenchTwin campaign')}",
+                        history=f"campaigns.analysis.model_form.write_model_form -> {Path(path).name}")

@@ -1,0 +1,297 @@
+"""The bench twin as a campaign model: its catalog and the default run function.
+
+The campaign machinery (spec, sampling, runs, execution, storage, analysis) is a general
+runner; this module is where it meets the bench twin. The synthetic test model
+(:mod:`campaigns.runner.synthetic`) runs without it.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+import twin
+from campaigns.runner.catalog import CONDITION_UNITS, condition_units, lookup_nominal
+from campaigns.runner.runs import RunRequest
+from twin.control.margins import LOOPS, METRICS, loop_margins
+from twin.engine.model import load_system_parameters
+from twin.errors import InputError
+from twin.features import FEATURES
+from twin.layout import OUTPUT_NAMES
+from twin.scenes import CONDITIONS
+from twin.scenes.profiles import profile_values
+from twin.simulation import DEFAULT_LANES, solver_label
+
+#: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
+#: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
+BENCH_FEATURES: dict[str, tuple[str, str]] = {name: (f.unit, f.long_name) for name, f in FEATURES.items()}
+
+
+def scene_conditions(scene) -> dict[str, float]:
+    """Numeric conditions of a scene (``scene.conditions``) that campaigns know units for."""
+    return {k: float(v) for k, v in scene.conditions.items() if k in CONDITION_UNITS}
+
+
+def dataset_conditions(spec) -> tuple[dict, dict]:
+    """Every condition of each data set's effective scene, for ``results.attrs["dataset_conditions"]``.
+
+    Takes all conditions the scene holds (numbers in SI with the unit of
+    ``twin.scenes.CONDITIONS``, strings as they are), after the data set's overrides, plus
+    ``external_force_peak`` [N], the largest |force demand| of the scene. Returns
+    ``({dataset: {condition: {"value", "unit"}}}, the base scene's conditions in the same form)``.
+    """
+    def described(scene) -> dict:
+        entries = {k: {"value": float(v) if isinstance(v, (int, float)) else str(v),
+                       "unit": CONDITIONS[k][0] if k in CONDITIONS and isinstance(v, (int, float)) else ""}
+                   for k, v in scene.conditions.items()}
+        entries["external_force_peak"] = {"value": force_demand_peak(scene), "unit": "N"}
+        return entries
+
+    datasets = {d.name: described(_scene(d.scene or spec.base.scene).with_procedure(d.procedure)
+                          .with_conditions(dict(d.conditions)))
+                for d in spec.datasets}
+    return datasets, described(_scene(spec.base.scene))
+
+
+def force_demand_peak(scene) -> float:
+    """The largest |force demand| of a scene [N], on 2001 instants over its duration."""
+
+
+    times = np.linspace(0.0, scene.duration, 2001)
+    return float(np.max(np.abs(profile_values(scene.force_table(), times))))
+
+
+#: Per-run loop margins stored in ``results.nc`` (role "margin"): ``{variable: (loop, metric)}``
+#: for every loop and figure of :mod:`twin.control.margins`.
+MARGIN_VARIABLES = {f"{loop}_loop_{metric}": (loop, metric) for loop in LOOPS for metric in METRICS}
+#: Variable holding why a run's margins are NaN (empty when all present loops were computed).
+MARGIN_NOTE = "loop_margins_note"
+
+
+def run_margins(request: RunRequest) -> tuple[dict[str, float], str]:
+    """Loop margins of one run's parameter set (:func:`twin.control.margins.loop_margins`).
+
+    The run's parameters and scene conditions as :func:`simulate_run` builds them; the force loop
+    only when the scene's cylinder is attached, linearised at the scene's peak force demand (the force
+    it holds) with the scene's supply pressure and air temperature. Never raises: a loop that cannot be
+    computed is NaN and the second return value says why (a property of the parameters, so a failed run
+    gets its margins too).
+
+    Returns
+    -------
+    (dict, str)
+        ``{variable of MARGIN_VARIABLES: value}`` and the note (empty when every present loop was computed).
+    """
+    values = dict.fromkeys(MARGIN_VARIABLES, math.nan)
+    notes = []
+    try:
+        scene = run_scene(request)
+        p = _parameters(request.parameters).with_values(request.parameter_values).values()
+    except Exception as exc:  # noqa: BLE001 - a bad parameter set is recorded, not raised
+        return values, f"parameters: {type(exc).__name__}: {exc}"
+    groups = [(("current", "speed", "position"), None, 0.0)]
+    if scene.condition("cylinder") == "detached":
+        notes.append("force loop: cylinder detached (no force loop)")
+    else:
+        try:
+            groups.append((("force",), load_system_parameters(p, scene), force_demand_peak(scene)))
+        except Exception as exc:  # noqa: BLE001
+            notes.append(f"force loop: {type(exc).__name__}: {exc}")
+    for loops, load_system, force in groups:
+        try:
+            margins = loop_margins(p, load_system, force, loops=loops)
+        except Exception as exc:  # noqa: BLE001 - recorded per loop group
+            notes.append(f"{'/'.join(loops)} loop: {type(exc).__name__}: {exc}")
+            continue
+        for name, (loop, metric) in MARGIN_VARIABLES.items():
+            if loop in margins:
+                values[name] = float(getattr(margins[loop], metric))
+    return values, "; ".join(notes)
+
+
+#: Runs per margin task when the margins are computed on a cluster (a few ms each: tens of ms per task).
+MARGIN_CHUNK = 50
+
+
+def margin_chunk(requests: list[RunRequest]) -> list[tuple[dict[str, float], str]]:
+    """:func:`run_margins` of several runs, in order (one task on a cluster)."""
+    return [run_margins(request) for request in requests]
+
+
+def margin_variables(spec, request_of, map_chunks=None) -> dict:
+    """``results.nc`` variables ``(dataset, run)`` of the loop margins of every run.
+
+    ``request_of(d, i)`` is the run's :class:`campaigns.runner.runs.RunRequest`
+    (:func:`campaigns.runner.execution.build_request`). Variables carry CF ``units``, ``long_name`` and
+    ``role = "margin"`` (not features: the feature machinery skips them); :data:`MARGIN_NOTE` holds
+    why a margin is NaN. ``map_chunks(margin_chunk, chunks)`` returns each chunk's result in order,
+    e.g. computed in parallel on the campaign's cluster (a run's margins do not depend on where
+    they are computed); default: here, one chunk after the other.
+    """
+    shape = (len(spec.datasets), spec.runs_per_dataset)
+    keys = [(d, i) for d in range(shape[0]) for i in range(shape[1])]
+    chunks = [[request_of(d, i) for d, i in keys[k:k + MARGIN_CHUNK]] for k in range(0, len(keys), MARGIN_CHUNK)]
+    results = map_chunks(margin_chunk, chunks) if map_chunks else [margin_chunk(chunk) for chunk in chunks]
+    arrays = {name: np.full(shape, math.nan) for name in MARGIN_VARIABLES}
+    notes = np.full(shape, "", dtype=object)
+    for (d, i), (values, note) in zip(keys, (result for chunk in results for result in chunk), strict=True):
+        notes[d, i] = note
+        for name, value in values.items():
+            arrays[name][d, i] = value
+    dims = ("dataset", "run")
+    out = {}
+    for name, (loop, metric) in MARGIN_VARIABLES.items():
+        unit, long_name = METRICS[metric]
+        values, attrs = arrays[name], {}
+        if unit == "dB":  # an amplitude ratio in dB; stored as the ratio, which every unit library reads alike
+            values, unit = 10.0 ** (values / 20.0), "1"
+            attrs["comment"] = "amplitude ratio (gain margin in dB = 20 log10 of it); inf: no phase crossover"
+        out[name] = (dims, values, {"units": unit, "long_name": f"{loop} loop {long_name} (twin.control.margins)",
+                                    "role": "margin", "loop": loop, "metric": metric, **attrs})
+    out[MARGIN_NOTE] = (dims, notes, {"long_name": "why loop margins are NaN (empty: every present loop computed)"})
+    return out
+
+
+class BenchCatalog:
+    """Catalog of the bench twin for one parameter set and base scene.
+
+    Parameters
+    ----------
+    parameters : str
+        Parameter-set name or path (``twin.load_parameters``).
+    scene : str
+        Base scene name or path (``twin.load_scene``); its conditions are the
+        nominal values of ``scene.*`` targets.
+
+    Raises
+    ------
+    twin.errors.InputError
+        If the twin, the parameter set or the scene cannot be loaded.
+    """
+
+    feature_units = BENCH_FEATURES
+
+    def __init__(self, parameters: str = "bench", scene: str = "nominal"):
+        try:
+            params = twin.load_parameters(parameters)
+            base_scene = twin.load_scene(scene)
+            self.scene_names = list(twin.list_scenes())
+            self.condition_names = list(CONDITIONS)
+        except InputError:
+            raise
+        except Exception as exc:  # twin missing or broken: report it as a spec problem
+            raise InputError("bench twin", [f"cannot load parameters {parameters!r} / scene {scene!r}: "
+                                            f"{type(exc).__name__}: {exc}"]) from exc
+        self._parameters = {n: (params[n].value, params[n].unit) for n in params.names}
+        self.condition_units = condition_units()
+        self._conditions = {k: (v, self.condition_units[k]) for k, v in scene_conditions(base_scene).items()}
+
+    @property
+    def parameter_names(self) -> list[str]:
+        return list(self._parameters)
+
+    def nominal(self, target: str) -> tuple[float, str]:
+        return lookup_nominal(target, self._parameters, self._conditions)
+
+
+@lru_cache(maxsize=8)
+def _scene(name: str):
+    return twin.load_scene(name)
+
+
+def run_scene(request: RunRequest):
+    """The scene a run simulates: the data set's scene, its test procedure, then its conditions."""
+    return _scene(request.scene).with_procedure(request.procedure).with_conditions(request.conditions)
+
+
+@lru_cache(maxsize=2)
+def _parameters(name: str):
+    return twin.load_parameters(name)
+
+
+def simulate_run(request: RunRequest) -> dict:
+    """Default run function: one ``twin.simulate`` call (see :mod:`campaigns.runner.runs` for the contract).
+
+    The run's noise generator goes to ``twin.simulate``; the compiled loop cannot
+    be interrupted from inside, so the per-run timeout is the sandbox's kill
+    (:mod:`campaigns.runner.sandbox`); without isolation a run that returns over its
+    budget is recorded as ``timeout`` (:func:`campaigns.runner.runs.execute`).
+    """
+    scene = run_scene(request)
+    params = _parameters(request.parameters).with_values(request.parameter_values)
+    options = {k: v for k, v in request.solver.items() if v is not None}
+    options.update(throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None)
+    if not request.trace_variables:  # scalars only: no Dataset to build (twin.simulate_features, same numbers)
+        summary = twin.simulate_features(scene, params, **options)
+        return {"status": summary.status, "failure_reason": summary.failure_reason, "t_reached": summary.t_reached,
+                "features": {f: float(summary.features[f]) for f in request.features if f in summary.features},
+                "trace": None, "fidelity": summary.fidelity,
+                "integrator": solver_label(summary.integrator, summary.dt)}
+    ds = twin.simulate(scene, params, **options)
+    kept = [v for v in request.trace_variables if v in ds]
+    return {
+        "status": ds.attrs.get("status", "ok"),
+        "failure_reason": ds.attrs.get("failure_reason", ""),
+        "t_reached": float(ds.attrs.get("t_reached", math.nan)),
+        "features": {f: float(ds[f]) for f in request.features if f in ds},
+        "trace": ds[kept].isel(time=slice(None, None, request.trace_decimation)),
+        "fidelity": ds.attrs.get("fidelity", ""),
+        "integrator": solver_label(ds.attrs.get("integrator", ""), float(ds.attrs.get("dt", math.nan))),
+    }
+
+
+def simulate_group(requests: list[RunRequest]) -> list[dict]:
+    """:func:`simulate_run` of several runs of one data set at once: the untraced ones in the twin's lock-step lanes
+    (:func:`twin.simulate_batch`, the same numbers as each alone), the traced ones one by one (their Dataset).
+    Raises if a request cannot be built (the caller then runs each alone and records its own failure)."""
+    results: dict[int, dict] = {}
+    untraced = [k for k, r in enumerate(requests) if not r.trace_variables]
+    for k, request in enumerate(requests):
+        if request.trace_variables:
+            results[k] = simulate_run(request)
+    if untraced:
+        first = requests[untraced[0]]
+        options = {key: value for key, value in first.solver.items() if value is not None}
+        options.update(throw=False, outputs=list(first.outputs) or None)
+        runs = [(run_scene(requests[k]),
+                 _parameters(requests[k].parameters).with_values(requests[k].parameter_values),
+                 requests[k].noise_rng()) for k in untraced]
+        for k, summary in zip(untraced, twin.simulate_batch(runs, lanes=len(runs), **options), strict=True):
+            request = requests[k]
+            results[k] = {"status": summary.status, "failure_reason": summary.failure_reason,
+                          "t_reached": summary.t_reached,
+                          "features": {f: float(summary.features[f]) for f in request.features
+                                       if f in summary.features},
+                          "trace": None, "fidelity": summary.fidelity,
+                          "integrator": solver_label(summary.integrator, summary.dt)}
+    return [results[k] for k in range(len(requests))]
+
+
+def _warm_up(request: RunRequest) -> None:
+    """Load (or compile) the compiled loop with a 10 ms run of the request's configuration, before the
+    run's clock starts (:func:`campaigns.runner.runs.warm_up`)."""
+    # the warm-up lasts 10 ms whatever the run's own duration (a request may carry one in its solver options)
+    options = {k: v for k, v in request.solver.items() if v is not None and k != "duration"}
+    twin.simulate(_scene(request.scene).with_procedure(request.procedure), _parameters(request.parameters),
+                  throw=False, duration=0.01,
+                  outputs=list(request.outputs) or None, **options)
+
+
+simulate_run.warm_up = _warm_up
+simulate_run.run_group = simulate_group
+#: Runs a group takes at once: the twin's lane count (the results do not depend on it).
+simulate_run.lanes = DEFAULT_LANES
+#: Wall time of one 10 s data-set run, auto fidelity: 1.0-1.7 s measured on a loaded 2-core machine (2026-11).
+simulate_run.typical_run_seconds = 1.2
+#: Samples of a trace before decimation: 10 s at the 1 ms output spacing, both ends included.
+simulate_run.trace_samples = 10_001
+
+
+def _signals() -> tuple[str, ...]:
+    """Every signal and feature the twin can return (what a replay keeps, :mod:`campaigns.bench.replay`)."""
+    return OUTPUT_NAMES
+
+
+simulate_run.signals = _signals

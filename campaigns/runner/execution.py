@@ -1,0 +1,455 @@
+"""Running a campaign on dask.distributed.
+
+Runs are grouped into chunks (one dask task each, all from one data set). The
+driver keeps ``2 x`` the number of worker threads of chunks in flight, writes
+each finished chunk (:mod:`campaigns.runner.storage`) and submits the next one.
+
+Chunk size rule
+---------------
+Unless the spec fixes ``execution.chunk_size``, the first chunks hold one run
+each (the pilot); afterwards the median measured run time ``T`` sets
+
+``c = ceil(TASK_OVERHEAD / (OVERHEAD_TARGET * T))``
+
+so that the per-task overhead (scheduling, transfer of the chunk, the driver's
+chunk write; ``TASK_OVERHEAD`` is a measured upper value, see
+``benchmarks/campaign_throughput.py``) stays below 5 % of the compute. ``c`` is
+capped so that (i) every worker thread still gets ``BALANCE_CHUNKS`` chunks of
+what remains (load balance, progress granularity) and (ii) a chunk holds at most
+``MAX_CHUNK_SECONDS`` of work (what a killed driver loses). Chunking never
+changes results: every run is stateless (:mod:`campaigns.runner.sampling`).
+
+Failure semantics
+-----------------
+A run that raises, diverges, returns NaN or exceeds its wall-clock budget is a
+record with a status and a reason (:mod:`campaigns.runner.runs`, :mod:`campaigns.runner.sandbox`);
+the campaign goes on. Only infrastructure failures — a lost worker
+(``KilledWorker``) or a broken connection (``CommClosedError``/``OSError`` from
+the comm layer) — are retried, ``MAX_RETRIES`` times; a chunk still failing
+after that is recorded with status ``"lost"``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import math
+import os
+import signal
+import statistics
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from pathlib import Path
+
+from distributed import Client, LocalCluster, WorkerPlugin, as_completed
+from distributed.comm.core import CommClosedError
+from distributed.scheduler import KilledWorker
+from tqdm.auto import tqdm
+
+from campaigns.bench import adapter as bench_adapter
+from campaigns.bench.fidelity_audit import audit_campaign, has_automatic_choice
+from campaigns.runner.budget import check_disk, estimate
+from campaigns.runner.catalog import Catalog
+from campaigns.runner.files import CampaignError, CampaignInterrupted
+from campaigns.runner.provenance import provenance
+from campaigns.runner.runs import RunFunction, RunRequest, execute_group, record, run_function_name
+from campaigns.runner.sampling import sample
+from campaigns.runner.sandbox import STOP_SIGNALS, Sandbox, children_ignore_stop_signals, run_group_isolated
+from campaigns.runner.spec import BOUNDS, CampaignSpec, load_spec
+from campaigns.runner.storage import ChunkStore, OutputLock
+from twin.scenes import split_targets
+
+#: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write. Measured
+#: 9 ms (1 worker) to 13 ms (2 workers sharing 2 cores with the driver) with one-run chunks of
+#: the synthetic model; rounded up.
+TASK_OVERHEAD = 0.02
+#: Largest fraction of the compute time the per-task overhead may take.
+OVERHEAD_TARGET = 0.05
+#: Chunks per worker thread kept available for load balancing.
+BALANCE_CHUNKS = 4
+#: Most work [s] put in one chunk.
+MAX_CHUNK_SECONDS = 60.0
+#: Resubmissions of a chunk after an infrastructure failure.
+MAX_RETRIES = 2
+INFRASTRUCTURE_ERRORS = (KilledWorker, CommClosedError, OSError)
+
+
+def chunk_size(run_time: float | None, remaining: int, slots: int) -> int:
+    """Number of runs in the next chunk (see the module docstring).
+
+    Parameters
+    ----------
+    run_time : float or None
+        Median wall time of one run so far [s]; ``None`` before any is known (pilot: 1).
+    remaining : int
+        Runs not yet submitted.
+    slots : int
+        Worker threads.
+    """
+    if run_time is None:
+        return 1
+    per_run = max(run_time, 1e-9)
+    overhead_bound = math.ceil(TASK_OVERHEAD / (OVERHEAD_TARGET * per_run))
+    balance_bound = math.ceil(remaining / (BALANCE_CHUNKS * slots))
+    duration_bound = math.floor(MAX_CHUNK_SECONDS / per_run)
+    return max(1, min(overhead_bound, balance_bound, duration_bound))
+
+
+def run_chunk(run_function: RunFunction, requests: list[RunRequest], isolation: str) -> list[dict]:
+    """Dask task: execute the runs of one chunk, in lane groups of ``run_function.lanes`` where the run function
+    takes groups (:func:`campaigns.runner.runs.execute_group`), and return their records in order."""
+    lanes = group_lanes(run_function)
+    run = run_group_isolated if isolation == "process" else execute_group
+    return [record for first in range(0, len(requests), lanes)
+            for record in run(run_function, requests[first:first + lanes])]
+
+
+def group_lanes(run_function: RunFunction) -> int:
+    """How many runs the run function takes at once (1 without ``run_group``)."""
+    return int(getattr(run_function, "lanes", 1)) if getattr(run_function, "run_group", None) else 1
+
+
+def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int, *,
+                  targets: list[str] | None = None) -> RunRequest:
+    """The request of run ``run_index`` of data set ``dataset_index``.
+
+    ``samples`` is the array of :func:`campaigns.runner.sampling.sample`; sampled
+    ``scene.*`` targets become scene conditions, the others parameter values,
+    with the data set's fixed ``parameters``.
+    ``targets`` names the sampled columns (default: the spec's resolved table;
+    :mod:`campaigns.bench.replay` passes those stored in ``results.nc``).
+    """
+    dataset = spec.datasets[dataset_index]
+    targets = [d.target for d in spec.distributions()] if targets is None else targets
+    sampled, parameter_values = split_targets(
+        {target: float(value) for target, value in zip(targets, samples[dataset_index, run_index], strict=False)})
+    conditions = {**dataset.conditions, **sampled}
+    parameter_values = {**dataset.parameters, **parameter_values}  # a fixed sampled column holds its fixed value
+    traced = run_index < spec.traces.runs_per_dataset
+    return RunRequest(
+        dataset=dataset.name,
+        dataset_index=dataset_index,
+        run_index=run_index,
+        scene=dataset.scene or spec.base.scene,
+        parameters=spec.base.parameters,
+        conditions=conditions,
+        parameter_values=parameter_values,
+        root_seed=spec.root_seed,
+        solver=spec.solver.model_dump(),
+        features=tuple(spec.features),
+        trace_variables=tuple(spec.traces.variables) if traced else (),
+        outputs=tuple(spec.features) + (tuple(spec.traces.variables) if spec.traces.runs_per_dataset else ()),
+        trace_decimation=spec.traces.decimation,
+        wall_time_limit=spec.execution.timeout,
+        seed_index=spec.seed_index(dataset_index),
+        procedure=dict(dataset.procedure),
+    )
+
+
+class _QuietStop:
+    """Silences logging from the moment a stop (Ctrl-C, SIGTERM: ``KeyboardInterrupt`` in the driver) unwinds the
+    cluster's context until the client and the cluster are closed (:func:`_run`).
+
+    Closing them with runs in flight cancels tasks and ends workers mid-run, and dask and its event loop log that at
+    ERROR with tracebacks (a comm closed, a heartbeat failed, a task destroyed while pending), timing-dependent, before
+    the runner's one line: they tell the user nothing, who asked for the stop. Only the signal path is silenced (a
+    failure keeps its logs), and only for the seconds of the close; the client is closed before the cluster
+    (:func:`_client`), so no client waits on a scheduler already gone.
+    """
+
+    def __init__(self):
+        self._previous: int | None = None
+
+    def on_exit(self, exc_type, exc, tb) -> bool:
+        if exc_type is not None and issubclass(exc_type, (KeyboardInterrupt, CampaignInterrupted)) \
+                and self._previous is None:
+            self._previous = logging.root.manager.disable
+            logging.disable(logging.CRITICAL)
+        return False  # the stop goes on unwinding
+
+    def restore(self) -> None:
+        if self._previous is not None:
+            logging.disable(self._previous)
+            self._previous = None
+
+
+@contextlib.contextmanager
+def _client(workers: int, scheduler: str | None):
+    """A client of ``scheduler``, or of a local cluster of ``workers`` processes; on exit the client closes first."""
+    if scheduler is not None:
+        with Client(scheduler) as client:
+            yield client
+        return
+    # silence_logs: the nanny's shutdown warnings (a worker killed after its grace period) are not the user's business
+    with LocalCluster(
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+    ) as cluster, Client(cluster) as client:
+        client.register_plugin(QuietWorkerClose())  # this campaign's own workers only, never a shared scheduler's
+        yield client
+
+
+class QuietWorkerClose(WorkerPlugin):
+    """A local cluster's worker process logs nothing once it starts closing (the campaign is done or stopped): what
+    a worker closing under in-flight runs logs (its comm to the scheduler closed, its tasks cancelled) is no run's
+    record and reached the terminal, with tracebacks, before the runner's one line. A run's failures are records
+    (:mod:`campaigns.runner.runs`), an infrastructure failure is retried and recorded (module docstring)."""
+
+    name = "benchtwin-quiet-close"
+
+    def teardown(self, worker) -> None:  # called as the worker's close begins
+        logging.disable(logging.CRITICAL)
+
+
+def run_campaign(
+    spec: CampaignSpec | str | Path,
+    out_dir: str | Path,
+    *,
+    workers: int = 2,
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    run_function: RunFunction | None = None,
+    catalog: Catalog | None = None,
+    allow_version_mix: bool = False,
+    announce: Callable[[str, str], None] | None = None,
+) -> Path:
+    """Run (or resume) a campaign and write ``results.nc``.
+
+    Parameters
+    ----------
+    spec : CampaignSpec or path
+        A validated spec, or a spec file (validated first; nothing runs if it is invalid).
+    out_dir : str or Path
+        Output directory (layout in :mod:`campaigns.runner.storage`).
+    workers : int, default 2
+        Worker processes of the local cluster (one thread each); ignored with ``scheduler``.
+    scheduler : str, optional
+        Address of an existing dask scheduler to use instead of a local cluster.
+    resume : bool, default False
+        Continue an interrupted campaign in ``out_dir``: finished chunks are kept,
+        only missing runs execute. Refused if ``out_dir`` holds another spec's results.
+    progress : bool, default True
+        Show a progress bar.
+    run_function : callable, optional
+        ``run_function(RunRequest) -> dict`` (contract in :mod:`campaigns.runner.runs`);
+        default :func:`campaigns.bench.adapter.simulate_run`.
+    catalog : Catalog, optional
+        Used only when ``spec`` is a path (see :func:`campaigns.load_spec`).
+    allow_version_mix : bool, default False
+        On resume, accept finished chunks computed by other package versions or model code
+        (:mod:`campaigns.runner.provenance`); ``results.nc`` then lists every provenance it mixes.
+    announce : callable, optional
+        ``announce(stage, message)`` is called as each stage starts (compile, cluster start, runs,
+        margins, assembly, fidelity audit, cluster stop), with its expected duration in the message;
+        default silent.
+
+    Returns
+    -------
+    Path
+        The ``results.nc`` file, with the fidelity audit of :mod:`campaigns.bench.fidelity_audit`
+        in its ``fidelity_audit*`` attributes (its full-fidelity runs in ``out_dir/fidelity_audit``).
+
+    Raises
+    ------
+    SpecError
+        If ``spec`` is a path to an invalid spec.
+    CampaignError
+        If ``out_dir`` holds results that may not be mixed with this campaign's, is in use by
+        another driver, cannot be written, or lacks the disk space the campaign needs.
+        Everything is checked before the cluster starts.
+    """
+    if not isinstance(spec, CampaignSpec):
+        spec = load_spec(spec, catalog=catalog)
+    announce = announce or (lambda stage, message: None)
+    bench = run_function is None
+    if bench:
+        run_function = bench_adapter.simulate_run
+    if not (isinstance(workers, int) and 1 <= workers <= BOUNDS["workers"][1]):
+        raise CampaignError(f"workers: {workers!r} is not a whole number in [1, {BOUNDS['workers'][1]}]")
+    check_disk(out_dir, estimate(spec, run_function, workers=workers))
+    stores: list[ChunkStore] = []
+    with _stop_signals() as stopped:
+        try:
+            return _run(spec, out_dir, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
+                        run_function=run_function, bench=bench, allow_version_mix=allow_version_mix,
+                        announce=announce, stores=stores)
+        except (KeyboardInterrupt, CampaignInterrupted) as exc:  # the second: the fidelity audit's own campaign
+            kept = len(stores[0].done) if stores else 0
+            name = exc.signal_name if isinstance(exc, CampaignInterrupted) else stopped.name or "Ctrl-C"
+            raise CampaignInterrupted(out_dir, kept, len(spec.datasets) * spec.runs_per_dataset, name) from None
+
+
+class _Stop:
+    """Which signal stopped the campaign (``name``), set by the handlers of :func:`_stop_signals`."""
+
+    name = ""
+
+
+@contextlib.contextmanager
+def _stop_signals():
+    """Ctrl-C and SIGTERM stop the campaign cleanly: the first raises ``KeyboardInterrupt`` in the driver, whose
+    unwinding ends the workers and the sandboxes and releases the lock; a second one while that runs ends the
+    driver at once (its chunk files are complete or absent, and the OS drops the lock). Outside the main thread
+    (a driver inside a server thread) nothing is installed."""
+    stop = _Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def first(signum, frame):
+        stop.name = "Ctrl-C" if signum == signal.SIGINT else signal.Signals(signum).name
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, again)
+        raise KeyboardInterrupt
+
+    def again(signum, frame):
+        print(f"\n{signal.Signals(signum).name} again: stopping at once", file=sys.stderr, flush=True)
+        os._exit(128 + signum)
+
+    previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+    for sig in STOP_SIGNALS:
+        if previous[sig] is not signal.SIG_IGN:
+            signal.signal(sig, first)
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _compile_and_time(run_function: RunFunction, request: RunRequest) -> float | None:
+    """Compile the run function's model once before the workers start, then time one run, both in a sandbox.
+
+    The sandbox's start-up (imports, the run function's warm-up: numba compiles and writes its on-disk cache,
+    which the workers then load) has the sandbox's own limit (:data:`campaigns.runner.sandbox.STARTUP_TIMEOUT`); the
+    timed run has the campaign's budget (``execution.timeout`` and its grace), as every run: a spec whose runs
+    cannot finish in time stops here after that budget, not after however long the run would take.
+
+    Returns the run's wall time [s], or None when it did not end ok within its budget.
+    """
+    sandbox = Sandbox()
+    try:
+        record = sandbox.run(run_function, request)
+    finally:
+        sandbox.close()
+    return record["wall_time"] if record["status"] == "ok" else None
+
+
+def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, bench, allow_version_mix, announce,
+         stores: list) -> Path:
+    """:func:`run_campaign` once its arguments are checked (``stores`` receives the chunk store, for the count of
+    an interruption)."""
+    with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
+        store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
+                           allow_version_mix=allow_version_mix)
+        stores.append(store)
+        samples = sample(spec)
+        pending = deque(
+            (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
+        )
+        executed = len(pending)
+        start = time.perf_counter()
+        per_run = None
+        # once here, before the workers start, so they load the compiled code instead of compiling it
+        if pending and bench:
+            announce("compile",
+                     f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached), then "
+                     f"timing one run (within its {spec.execution.timeout:g} s budget)")
+            per_run = _compile_and_time(run_function, build_request(spec, samples, *pending[0]))
+            if per_run is None:
+                announce("compile", f"{spec.name}: the timed run did not end ok within its budget; duration unknown")
+        # One cluster for the runs, the margins and the fidelity audit: started when first needed, closed at the end.
+        with contextlib.ExitStack() as cluster:
+            client = None
+            quiet = _QuietStop()
+            cluster.callback(quiet.restore)  # last: once the client and the cluster are closed
+            if pending:
+                slots = 1 if scheduler else workers
+                announce("cluster start",
+                         f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
+                         "(about 10-20 s)")
+                with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
+                    client = cluster.enter_context(_client(workers, scheduler))
+                cluster.push(quiet.on_exit)  # first: a stop silences the close that follows
+                expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
+                            else "see the bar")
+                announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
+                with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
+                    _execute(client, spec, samples, pending, run_function, store, bar)
+            attrs = {"run_function": run_function_name(run_function)}
+            margins = {}
+            if bench:
+                conditions, base = bench_adapter.dataset_conditions(spec)
+                attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
+                announce("margins", f"{spec.name}: loop margins of {len(spec.datasets) * spec.runs_per_dataset} runs"
+                         + (" on the cluster" if client else ""))
+                margins = bench_adapter.margin_variables(
+                    spec, lambda d, i: build_request(spec, samples, d, i),
+                    map_chunks=(lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
+            announce("assembly", f"{spec.name}: writing results.nc")
+            results = store.assemble(samples,
+                                     {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                                      "workers": scheduler or workers}, attrs, margins)
+            if spec.fidelity_audit.runs >= 2 and has_automatic_choice(spec):
+                runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
+                announce("fidelity audit",
+                         f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
+                         + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)"
+                            if per_run else ""))
+            # the audit's runs go to the cluster already started (its workers are warm), else it starts one
+            audit_campaign(results, spec, run_campaign, workers=workers,
+                           scheduler=client.scheduler.address if client else scheduler, resume=resume,
+                           progress=progress, run_function=None if bench else run_function,
+                           allow_version_mix=allow_version_mix, announce=announce)
+            if client is not None and scheduler is None:
+                announce("cluster stop", f"{spec.name}: stopping the {workers} worker processes")
+    return results
+
+
+def _execute(client: Client, spec, samples, pending: deque, run_function, store: ChunkStore, bar) -> None:
+    slots = max(1, sum(client.nthreads().values()))
+    run_times: list[float] = []
+    in_flight: dict = {}
+    completed = as_completed()
+
+    def submit(chunk: list[RunRequest], attempt: int) -> None:
+        future = client.submit(run_chunk, run_function, chunk, spec.execution.isolation, pure=False)
+        in_flight[future] = (chunk, attempt)
+        completed.add(future)
+
+    lanes = group_lanes(run_function)
+
+    def next_chunk() -> list[RunRequest]:
+        size = spec.execution.chunk_size or chunk_size(
+            statistics.median(run_times) if run_times else None, len(pending), slots
+        )
+        size = lanes * math.ceil(size / lanes)  # whole lane groups (the pilot: one group)
+        d = pending[0][0]
+        chunk = []
+        while pending and len(chunk) < size and pending[0][0] == d:
+            chunk.append(build_request(spec, samples, *pending.popleft()))
+        return chunk
+
+    def refill() -> None:
+        while pending and len(in_flight) < 2 * slots:
+            submit(next_chunk(), 0)
+
+    refill()
+    for future in completed:
+        chunk, attempt = in_flight.pop(future)
+        try:
+            records = future.result()
+        except INFRASTRUCTURE_ERRORS as exc:
+            if attempt < MAX_RETRIES:
+                submit(chunk, attempt + 1)
+                continue
+            reason = f"infrastructure failure after {MAX_RETRIES} retries: {type(exc).__name__}: {exc}"
+            records = [record(r, "lost", reason, math.nan, math.nan) for r in chunk]
+        store.write_chunk(records)
+        run_times.extend(r["wall_time"] for r in records if r["status"] == "ok")
+        bar.update(len(records))
+        refill()

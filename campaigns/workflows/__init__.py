@@ -1,0 +1,1 @@
+"""What an engineer does with campaigns: measured tests, diagnosis, export, design comparison, procedure search."""
