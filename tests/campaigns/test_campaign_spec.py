@@ -146,11 +146,13 @@ def test_runs_override_and_extends(tmp_path):
 
 def test_shipped_specs_validate_structurally():
     """Structure only, without the catalog (the rows against the bench: test_table_9_5_extension_specs.py)."""
-    for name in ("thesis_backlash.toml", "demo.toml"):
+    # the demo: the thesis's 7 data sets, then 0.5, 1 and 2 um levels at and around the requirement (issue 42)
+    for name, datasets, sweep in (("thesis_backlash.toml", 7, ["ds4", "ds6", "ds7", "ds2"]),
+                                  ("demo.toml", 10, ["ds4", "b0_5", "b1", "b2", "ds6", "ds7", "ds2"])):
         data = campaigns.spec.read_spec(SPECS / name)
         spec = campaigns.spec.validate_spec(data, None)
-        assert len(spec.datasets) == 7
+        assert len(spec.datasets) == datasets
         assert len(spec.uncertainties) == 38 + 10  # every row of Table 9.5, then the 10 rows of its extension
-        assert spec.observability.sweep == ["ds4", "ds6", "ds7", "ds2"]
+        assert spec.observability.sweep == sweep
     assert campaigns.spec.validate_spec(
         campaigns.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000
