@@ -430,8 +430,8 @@ def _pairs(analysis) -> list[tuple[str, str | None]]:
 
 
 def _decision_label(analysis, feature: str, scale: float, shown: str, quantity_name: str) -> str:
-    """``backlash_feature: NO-GO, minimum detectable backlash 1–2 µm (95 % bounds)``: the analysis's verdict and its
-    bounds, in the figure's legend."""
+    """``backlash_feature: NO-GO, 1–2 µm (95 % bounds)``: the analysis's verdict and the bounds of the minimum
+    detectable size, in the figure's legend (short: the legend has two columns on the page's width)."""
     verdict = str(analysis["requirement_verdict"].sel(feature=feature).item())
     name = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
     lower, upper = ((float(v) for v in analysis[name].sel(feature=feature).values) if name in analysis
@@ -440,8 +440,7 @@ def _decision_label(analysis, feature: str, scale: float, shown: str, quantity_n
     if not (math.isfinite(lower) or math.isfinite(upper)):
         return f"{feature}: {decision}"
     high = f"{number(upper * scale)} {shown}" if math.isfinite(upper) else "beyond the sweep"
-    return (f"{feature}: {decision}, minimum detectable {quantity_name} {number(lower * scale)}–{high} "
-            "(95 % bounds)")
+    return f"{feature}: {decision}, {number(lower * scale)}–{high} (95 % bounds)"
 
 
 def detection_answer(analysis) -> tuple[bytes, str] | None:
@@ -462,6 +461,8 @@ def detection_answer(analysis) -> tuple[bytes, str] | None:
     fa = float(analysis.attrs.get("false_alarm_rate", 0.05))
     sweep = [str(s) for s in analysis["sweep_point"].values]
     pairs = _pairs(analysis)
+    if not sweep or not pairs:
+        return None
     n = min(int(analysis["n_used"].sel(dataset=d, feature=f)) for d in sweep for f, _ in pairs)
     x = levels * scale
     units = (str(analysis["feature_units"].sel(feature=pairs[0][0]).item()) if "feature_units" in analysis.coords
