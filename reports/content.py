@@ -29,18 +29,20 @@ from reports.sections import (
     traces,
 )
 
+#: The sections in their order: the results first (the answer, then what it rests on), provenance and the long
+#: tables of the campaign's configuration last (issue 42).
 SECTION_TITLES = {
-    "summary": "Campaign and provenance",
+    "observability": "Observability",
+    "control_robustness": control_robustness.TITLE,
     "distributions": "Feature distributions",
     "correlations": "Correlations",
     "scatter": "Feature against the top-ranked parameters",
     "traces": "Representative traces",
-    "observability": "Observability",
     "failures": "Failed runs",
-    "speed": "Speed and accuracy",
     "fidelity": "Fidelity",
-    "control_robustness": control_robustness.TITLE,
     "model_form": model_form.TITLE,
+    "speed": "Speed and accuracy",
+    "summary": "Campaign and provenance",
 }
 
 
@@ -69,18 +71,18 @@ def build(inputs: Inputs, generated_at: str) -> Report:
         Section(key, titles[key], tuple(make(b)))
         for key, make in (
             *optional_first,
-            ("summary", summary.build),
+            ("observability", observability.build),
+            *optional_measured,
+            ("control_robustness", control_robustness.build),
             ("distributions", distributions.build),
             ("correlations", correlations.build),
             ("scatter", scatter.build),
             ("traces", traces.build),
-            ("observability", observability.build),
-            *optional_measured,
             ("failures", failures.build),
-            ("speed", speed.build),
             ("fidelity", fidelity.build),
-            ("control_robustness", control_robustness.build),
             ("model_form", model_form.build),
+            ("speed", speed.build),
+            ("summary", summary.build),
         )
     )
     status = b.results["status"].values

@@ -340,27 +340,99 @@ def time_series(panels: list[Panel], *, sharey: bool = False) -> bytes:
     fig.axes[-1].set_xlabel(panels[-1].xlabel)
     return _png(fig)
 
-@_styled
-def detection(curves: list[Line], *, power: float, false_alarm_rate: float, requirement: tuple[str, float],
-              minima: list[tuple[str, float, str]], xlabel: str) -> bytes:
-    """Detection probability along the backlash sweep, with the power target and the requirement.
+class Points(NamedTuple):
+    """Values at discrete levels with their interval (NaN: no bar), drawn as unjoined markers: between two levels
+    there are no data, so nothing is drawn there."""
 
-    ``requirement`` is ``(label, value)``; ``minima`` are ``(label, value, colour)`` of the
-    minimum detectable backlash per feature (NaN: not reached), in the units of the x axis.
+    label: str
+    x: np.ndarray
+    y: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    color: str
+    filled: bool = True
+
+
+#: Ratio of the largest to the smallest non-zero level above which a level axis is logarithmic.
+LOG_LEVELS = 10.0
+
+
+def level_axis(levels) -> str:
+    """``"log"`` when the non-zero levels span more than :data:`LOG_LEVELS` (0.5 ... 80 µm: a linear axis would
+    crowd the levels near the requirement into its first percent), else ``"linear"``."""
+    positive = np.asarray(levels, dtype=float)
+    positive = positive[np.isfinite(positive) & (positive > 0)]
+    return "log" if positive.size > 1 and positive.max() / positive.min() > LOG_LEVELS else "linear"
+
+
+@_styled
+def detection(series: list[Points], *, power: float, false_alarm_rate: float, requirement: tuple[str, float],
+              bounds: list[tuple[str, float, float, str]], xlabel: str, ylabel: str = "detection probability [–]",
+              bands: tuple[tuple[str, float, float, str], ...] = ()) -> bytes:
+    """Detection probability against fault size: each series' points with their intervals at the sweep levels
+    (side by side when several series share a level), the power target, the false-alarm rate and the requirement.
+
+    A ``power`` of NaN draws other values (feature means below the detection floor): no target lines, the value axis
+    scaled to the data (logarithmic when the values are positive and span more than :data:`LOG_LEVELS`), and
+    ``bands``, ``(label, low, high, colour)``, bands across the axes (each series' reference interval).
+    ``requirement`` is
+    ``(label, value)``; ``bounds`` are ``(label, lower, upper, colour)``: the 95 % bounds of a minimum detectable size,
+    drawn as a bar above the points (``lower`` 0 or ``upper`` inf: to the axis' edge). All in the x axis' units.
+    The axis is linear or logarithmic (:func:`level_axis`), its ticks at the levels themselves, written as plain
+    numbers; a logarithmic axis cannot show the level 0, and leaves it out (the caller says so).
     """
-    fig = _new(1, 1, 4.0)
+    levels = np.unique(np.concatenate([np.asarray(s.x, dtype=float) for s in series] + [[requirement[1]]]))
+    scale = level_axis(levels)
+    shown = levels[levels > 0] if scale == "log" else levels
+    fig = _new(1, 1, 3.5)  # page 1 holds it below the decisions
     ax = fig.axes[0]
-    for line in curves:
-        ax.plot(line.x, line.y, "o" + line.style, color=line.color, lw=1.4, label=line.label)
-    ax.axhline(power, color="black", ls="--", lw=0.9, label=f"target detection probability {power:.0%}")
-    ax.axhline(false_alarm_rate, color="grey", ls=":", lw=0.9, label=f"false-alarm rate {false_alarm_rate:.0%}")
+    if scale == "log":
+        ax.set_xscale("log")
+    span = np.log10(shown.max() / shown.min()) if scale == "log" else float(np.ptp(shown)) or 1.0
+    step = 0.012 * span  # side by side: a hundredth of the axis between series at one level
+    for k, item in enumerate(series):
+        offset = (k - 0.5 * (len(series) - 1)) * step
+        x = np.asarray(item.x, dtype=float)
+        keep = x > 0 if scale == "log" else np.isfinite(x)
+        x_drawn = x[keep] * 10.0**offset if scale == "log" else x[keep] + offset
+        y, low, high = (np.asarray(v, dtype=float)[keep] for v in (item.y, item.low, item.high))
+        bars = np.isfinite(low) & np.isfinite(high) & np.isfinite(y)
+        ax.errorbar(x_drawn[bars], y[bars], yerr=[y[bars] - low[bars], high[bars] - y[bars]], fmt="none",
+                    ecolor=item.color, elinewidth=1.0, capsize=3.0)
+        ax.plot(x_drawn, y, "o" if item.filled else "s", ls="none", color=item.color, ms=5.5,
+                mfc=item.color if item.filled else "white", label=item.label, zorder=3)
+    probability = math.isfinite(power)  # else the values are not probabilities (means below the detection floor)
+    if probability:
+        ax.axhline(power, color="black", ls="--", lw=0.9, label=f"target detection probability {power:.0%}")
+        ax.axhline(false_alarm_rate, color="grey", ls=":", lw=0.9, label=f"false-alarm rate {false_alarm_rate:.0%}")
     ax.axvline(requirement[1], color="#2e7d32", lw=1.6, label=requirement[0])
-    for label, value, color in minima:
-        if math.isfinite(value):
-            ax.plot([value], [power], "*", ms=12, color=color, mec="black", label=label)
-    ax.set_xscale("symlog", linthresh=1.0)
-    ax.set_ylim(-0.03, 1.03)
-    ax.set(xlabel=xlabel, ylabel="detection probability [–]")
+    margin = 0.06 * span
+    left, right = ((shown.min() / 10.0**margin, shown.max() * 10.0**margin) if scale == "log"
+                   else (shown.min() - margin, shown.max() + margin))
+    ax.set_xlim(left, right)
+    for k, (label, lower, upper, color) in enumerate(bounds):
+        low = lower if math.isfinite(lower) and (scale == "linear" or lower > 0) else left
+        high = upper if math.isfinite(upper) else right
+        if math.isfinite(lower) or math.isfinite(upper):
+            y = 1.04 + 0.04 * k  # above the points, which reach 1
+            ax.plot([low, high], [y, y], "-", color=color, lw=4.0, alpha=0.45, solid_capstyle="butt", label=label)
+    ax.set_xticks(shown, [f"{value:g}" for value in shown])
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.tick_params(axis="x", which="minor", bottom=False)
+    for label, low, high, color in bands:
+        if math.isfinite(low) and math.isfinite(high):
+            ax.axhspan(low, high, color=color, alpha=0.18, lw=0, label=label)
+    if probability:
+        ax.set_ylim(-0.03, 1.06 + 0.04 * len(bounds))
+    else:
+        values = np.concatenate([np.asarray(v, dtype=float) for s in series for v in (s.y, s.low, s.high)]
+                                + [np.asarray(band[1:3], dtype=float) for band in bands])
+        values = values[np.isfinite(values)]
+        if values.size and values.min() > 0 and values.max() / values.min() > LOG_LEVELS:
+            ax.set_yscale("log")
+            ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+            ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set(xlabel=xlabel, ylabel=ylabel)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5, frameon=False)
     return _png(fig)
 

@@ -36,6 +36,8 @@ from scipy import stats
 from campaigns.analysis.margins import control_robustness
 from campaigns.runner.files import CONVENTIONS, atomic_write
 from campaigns.statistics import sensitivity
+from campaigns.units import estimate_with_interval
+from campaigns.units import quantity as quantity_text
 
 #: Table 9.3: minimum detectable linear backlash [m].
 BACKLASH_REQUIREMENT = 1e-6
@@ -132,6 +134,80 @@ def detection_run_floor(false_alarm_rate: float = FALSE_ALARM_RATE, power: float
 #: At the previous floor, 20, even the largest run bounds the 95 % quantile with only 64 % confidence (1 - 0.95^20),
 #: and the threshold used (interpolated between the two largest runs) with 26-64 %.
 MIN_DETECTION_RUNS = detection_run_floor()
+
+#: Probabilities of the quantiles stored per data set (``feature_quantile``): the median and the two tails that the
+#: detection rule reads (a 5 % false-alarm threshold on either side of a reference).
+QUANTILE_PROBABILITIES = (0.05, 0.5, 0.95)
+#: How each small-sample interval is computed, in words (analysis.nc attributes, docs/campaigns.md, Analysis).
+MEAN_INTERVAL_METHOD = ("Student t interval, mean +- t((1 + c)/2, n - 1) s / sqrt(n): exact for a normal feature, "
+                        "approximate for others (central limit); from 2 runs")
+STD_INTERVAL_METHOD = ("chi-square interval, s sqrt((n - 1) / chi2((1 +- c)/2, n - 1)): exact for a normal feature "
+                       "only, its coverage depends on the feature's kurtosis at any n (Box 1953); from 2 runs")
+QUANTILE_INTERVAL_METHOD = ("distribution-free order-statistic interval [X_(l), X_(u)], ranks from Binomial(n, q) "
+                            "with (1 - c)/2 in each tail (Hahn & Meeker 1991, Sec. 5.2); NaN below "
+                            "feature_quantile_min_runs: n too small for a bound")
+
+
+def mean_interval(values, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """``(mean, lower, upper)``: the Student t interval of the mean (:data:`MEAN_INTERVAL_METHOD`); NaN bounds below 2
+    values, all NaN for none. Values without spread give an interval of zero width."""
+    y = np.asarray(values, dtype=float)
+    if y.size == 0:
+        return math.nan, math.nan, math.nan
+    mean = float(y.mean())
+    if y.size < 2:
+        return mean, math.nan, math.nan
+    half = float(stats.t.ppf(0.5 + 0.5 * confidence, y.size - 1) * y.std(ddof=1) / math.sqrt(y.size))
+    return mean, mean - half, mean + half
+
+
+def std_interval(values, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """``(s, lower, upper)``: the sample standard deviation with its chi-square interval (:data:`STD_INTERVAL_METHOD`:
+    ``(n - 1) s^2 / sigma^2`` is chi-square with ``n - 1`` degrees of freedom for a normal feature); NaN below 2
+    values."""
+    y = np.asarray(values, dtype=float)
+    if y.size < 2:
+        return math.nan, math.nan, math.nan
+    s, dof = float(y.std(ddof=1)), y.size - 1
+    alpha = 1.0 - confidence
+    return (s, s * math.sqrt(dof / stats.chi2.ppf(1.0 - 0.5 * alpha, dof)),
+            s * math.sqrt(dof / stats.chi2.ppf(0.5 * alpha, dof)))
+
+
+def quantile_interval_ranks(n: int, quantile: float, confidence: float = CONFIDENCE) -> tuple[int, int] | None:
+    """Ranks ``(l, u)`` (1-based) of the order statistics of ``n`` runs that bound the distribution's ``quantile``
+    with ``confidence``, ``(1 - confidence) / 2`` in each tail; None when ``n`` is too small for either bound.
+
+    Distribution-free: ``X_(u)`` is the one-sided upper bound of :func:`quantile_bound_rank` at ``(1 + c) / 2``, and
+    ``X_(l)`` its mirror image (the upper bound of the ``1 - quantile`` quantile of ``-X``), so ``P(X_(l) <= xi_q <=
+    X_(u)) >= confidence`` for any continuous distribution (Hahn & Meeker 1991, *Statistical Intervals*, Sec. 5.2).
+    """
+    tail = 0.5 + 0.5 * confidence
+    upper = quantile_bound_rank(n, quantile, tail)
+    mirrored = quantile_bound_rank(n, 1.0 - quantile, tail)
+    if upper is None or mirrored is None:
+        return None
+    return n + 1 - mirrored, upper
+
+
+def quantile_interval_min_runs(quantile: float, confidence: float = CONFIDENCE) -> int:
+    """The fewest runs with which :func:`quantile_interval_ranks` bounds the ``quantile`` on both sides: the sample
+    extremes must bound it with ``(1 + confidence) / 2`` each (:func:`min_runs_for_quantile_bound`): 6 for the median,
+    72 for the 5 % and 95 % quantiles at 95 %."""
+    return min_runs_for_quantile_bound(max(quantile, 1.0 - quantile), 0.5 + 0.5 * confidence)
+
+
+def quantile_interval(values, quantile: float, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """``(estimate, lower, upper)``: the sample quantile (numpy's linear interpolation) with its order-statistic
+    interval (:func:`quantile_interval_ranks`); NaN bounds where the runs are too few for a bound."""
+    y = np.sort(np.asarray(values, dtype=float))
+    if y.size == 0:
+        return math.nan, math.nan, math.nan
+    estimate = float(np.quantile(y, quantile))
+    ranks = quantile_interval_ranks(y.size, quantile, confidence)
+    if ranks is None:
+        return estimate, math.nan, math.nan
+    return estimate, float(y[ranks[0] - 1]), float(y[ranks[1] - 1])
 
 
 def _pearson(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -427,6 +503,7 @@ def bootstrap_minimum_detectable(
     return {
         "probability": probability,
         "probability_se": boot.std(axis=0, ddof=1),
+        "probability_ci": detection_probability_interval(probability, boot, [len(s) for s in samples], confidence),
         "estimate": estimate,
         "bracket": (lower, upper),
         "bounds": bounds,
@@ -434,6 +511,31 @@ def bootstrap_minimum_detectable(
         "resolution": resolution,
         "printed": printed_estimate(estimate, bounds) if resolution == "resolved" else math.nan,
     }
+
+
+def detection_probability_interval(probability, replicates, n_runs, confidence: float = CONFIDENCE) -> np.ndarray:
+    """Interval of each sweep level's detection probability, shape (levels, 2) (:data:`DETECTION_INTERVAL_METHOD`).
+
+    The percentile interval of the bootstrap ``replicates`` (shape (n_boot, levels): the reference and the level's
+    runs resampled, so the threshold's own scatter is in it), widened to contain the exact (Clopper-Pearson)
+    interval of the level's count at the estimated threshold: a level whose every run is flagged has every replicate
+    at 1, yet its runs bound the probability only to ``(1 - c/2)^(1/n)`` (0.94 at 59 runs), which a bar at 1 would
+    hide.
+    """
+    alpha = 0.5 * (1.0 - confidence)
+    boot_low, boot_high = np.quantile(np.asarray(replicates, dtype=float), [alpha, 1.0 - alpha], axis=0)
+    out = np.full((len(n_runs), 2), math.nan)
+    for i, (p, n) in enumerate(zip(probability, n_runs, strict=True)):
+        if n and math.isfinite(p):
+            exact = stats.binomtest(round(p * n), n).proportion_ci(confidence_level=confidence, method="exact")
+            out[i] = min(boot_low[i], exact.low), max(boot_high[i], exact.high)
+    return out
+
+
+#: How :func:`detection_probability_interval` bounds a level's detection probability, in words (analysis.nc).
+DETECTION_INTERVAL_METHOD = ("percentile bootstrap (every sweep data set's runs resampled, the reference's threshold "
+                             "with them), widened to contain the exact Clopper-Pearson interval of the level's count "
+                             "at the estimated threshold")
 
 
 def sweep_resolution(levels, estimate: float, bounds: tuple[float, float]) -> str:
@@ -717,7 +819,7 @@ def observability_sweep(
         probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
                                 for s, ok in zip(samples, enough, strict=False)])
         found = {"estimate": math.nan, "printed": math.nan, "bracket": nan2, "bounds": nan2,
-                 "resolution": "insufficient_data"}
+                 "resolution": "insufficient_data", "probability_ci": np.full((len(datasets), 2), math.nan)}
         verdict = "insufficient data"
     else:
         found = bootstrap_minimum_detectable(
@@ -749,6 +851,11 @@ def observability_sweep(
                  "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against "
                               f"{datasets[reference]} (NaN: insufficient data)"},
             ),
+            "sweep_detection_probability_ci": (
+                ("sweep_point", "bound"),
+                found["probability_ci"],
+                {"units": "1", "long_name": f"{confidence:g} interval of sweep_detection_probability (NaN: "
+                                            "insufficient data)", "method": DETECTION_INTERVAL_METHOD}),
             f"minimum_detectable_{stem}": (
                 (),
                 found["estimate"] if found["resolution"] == "resolved" else math.nan,
@@ -815,7 +922,10 @@ def analysis_dataset(
     """Compute every statistic of :func:`analyze` on an opened results dataset.
 
     A data set with fewer than ``min_ok_runs`` used runs of a feature is flagged
-    in ``data_sufficient`` and gets NaN statistics for that feature. A detection
+    in ``data_sufficient`` and gets NaN correlations, indices and detection
+    probabilities for that feature; its mean, standard deviation and quantiles
+    are computed at any n, each with the interval its method allows there
+    (:func:`mean_interval`, :func:`std_interval`, :func:`quantile_interval`). A detection
     probability needs ``min_detection_runs`` (default :func:`detection_run_floor`
     of ``false_alarm_rate``, ``power`` and ``confidence``) in its reference data
     set, and the verdict in every sweep data set. ``sensitivity_boot`` resamples
@@ -840,6 +950,9 @@ def analysis_dataset(
     first_order_flag = np.zeros(shape, dtype=np.int8)
     n_used = np.zeros((len(names), len(features)), dtype=np.int64)
     mean, std = np.full(n_used.shape, math.nan), np.full(n_used.shape, math.nan)
+    mean_ci, std_ci = np.full(n_used.shape + (2,), math.nan), np.full(n_used.shape + (2,), math.nan)
+    quantiles = np.full(n_used.shape + (len(QUANTILE_PROBABILITIES),), math.nan)
+    quantiles_ci = np.full(quantiles.shape + (2,), math.nan)
     overlap = np.full((len(features), len(names), len(names)), math.nan)
     detection = np.full_like(overlap, math.nan)
     used_values: dict[tuple[int, int], np.ndarray] = {}
@@ -850,10 +963,15 @@ def analysis_dataset(
             y = row[feature].values[mask]
             n_used[d, f] = len(y)
             first_order_flag[d, f] = sensitivity.BELOW_MIN_RUNS if len(y) < sensitivity.MIN_RUNS else 0
+            # moments and quantiles at any n, each with the interval its method allows there (issue 42): a few runs
+            # already separate data sets whose means differ by many spreads
+            mean[d, f], *mean_ci[d, f] = mean_interval(y, confidence)
+            std[d, f], *std_ci[d, f] = std_interval(y, confidence)
+            for k, q in enumerate(QUANTILE_PROBABILITIES):
+                quantiles[d, f, k], *quantiles_ci[d, f, k] = quantile_interval(y, q, confidence)
             if len(y) < min_ok_runs:
                 continue
             used_values[d, f] = y
-            mean[d, f], std[d, f] = y.mean(), y.std(ddof=1)
             X = np.stack([row[p].values[mask] for p in parameters]) if parameters else np.empty((0, len(y)))
             rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(d, f)))
             idx = rng.integers(0, len(y), (n_boot, len(y)))
@@ -892,16 +1010,40 @@ def analysis_dataset(
             ("dataset", "feature"),
             (n_used >= min_ok_runs).astype(np.int8),
             {
-                "long_name": f"at least {min_ok_runs} used runs (else every statistic of the data set is NaN)",
+                "long_name": f"at least {min_ok_runs} used runs (else the data set's correlations, indices and "
+                             "detection probabilities are NaN; its mean, standard deviation and quantiles are given "
+                             "with their intervals at any n, which below this floor rest on a shape so few runs "
+                             "cannot check)",
                 "flag_values": np.array([0, 1], dtype=np.int8),
                 "flag_meanings": "insufficient_data sufficient_data",
                 "min_ok_runs": min_ok_runs,
             },
         ),
         "feature_mean": (("dataset", "feature"), mean,
-                         {"long_name": "mean of the feature over used runs", **in_feature_units}),
+                         {"long_name": "mean of the feature over used runs (from 1 run)", **in_feature_units}),
+        "feature_mean_ci": (("dataset", "feature", "bound"), mean_ci,
+                            {"long_name": f"{confidence:g} interval of feature_mean (below min_ok_runs, "
+                                          "data_sufficient = 0: flagged, read as indicative)",
+                             "method": MEAN_INTERVAL_METHOD, **in_feature_units}),
         "feature_std": (("dataset", "feature"), std,
-                        {"long_name": "standard deviation of the feature over used runs", **in_feature_units}),
+                        {"long_name": "standard deviation of the feature over used runs (from 2 runs)",
+                         **in_feature_units}),
+        "feature_std_ci": (("dataset", "feature", "bound"), std_ci,
+                           {"long_name": f"{confidence:g} interval of feature_std (below min_ok_runs, "
+                                          "data_sufficient = 0: flagged, read as indicative)",
+                            "method": STD_INTERVAL_METHOD, **in_feature_units}),
+        "feature_quantile": (("dataset", "feature", "quantile_probability"), quantiles,
+                             {"long_name": "quantile of the feature over used runs (linear interpolation between "
+                                           "order statistics)", **in_feature_units}),
+        "feature_quantile_ci": (("dataset", "feature", "quantile_probability", "bound"), quantiles_ci,
+                                {"long_name": f"{confidence:g} interval of feature_quantile (NaN: n too small for a "
+                                              "bound, below feature_quantile_min_runs)",
+                                 "method": QUANTILE_INTERVAL_METHOD, **in_feature_units}),
+        "feature_quantile_min_runs": (
+            "quantile_probability",
+            np.array([quantile_interval_min_runs(q, confidence) for q in QUANTILE_PROBABILITIES], dtype=np.int32),
+            {"units": "1", "long_name": "fewest used runs with which order statistics bound the quantile on both "
+                                        f"sides at {confidence:g}"}),
         "pearson": (corr_dims, out["pearson"], {"units": "1", "long_name": "Pearson correlation"}),
         "pearson_ci": (corr_dims + ("bound",), ci["pearson"],
                        {"units": "1", "long_name": f"{confidence:g} percentile-bootstrap interval of pearson"}),
@@ -971,6 +1113,8 @@ def analysis_dataset(
                                               dtype=object), {"long_name": "units of each feature"}),
         "parameter": ("parameter", np.array(parameters, dtype=object)),
         "bound": ("bound", np.array(["lower", "upper"], dtype=object)),
+        "quantile_probability": ("quantile_probability", np.array(QUANTILE_PROBABILITIES),
+                                 {"units": "1", "long_name": "probability of the quantile"}),
         "status": ("status", np.array(statuses, dtype=object)),
     }
     analysis = xr.Dataset(data_vars, coords=coords)
@@ -1078,11 +1222,26 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
         if len(short) == len(n_used) > 1 and len(set(n_used.values)) == 1:
             short = [f"all {len(short)} data sets ({_runs(int(n_used[0]))} each)"]
         if short:
+            means = [f"{d} {mean_text(analysis, str(d), feature)}" for d, n in zip(
+                analysis["dataset"].values, n_used.values, strict=True) if 0 < n < min_ok_runs]
             warnings.append(
                 f"{feature}: insufficient data in {', '.join(short)}: fewer than {min_ok_runs} ok runs, "
-                "their statistics are NaN"
-            )
+                "their correlations, indices and detection probabilities are NaN"
+                + (f"; their means (flagged): {', '.join(means)}" if means else ""))
     return statements, warnings
+
+
+def mean_text(analysis: xr.Dataset, dataset: str, feature: str) -> str:
+    """A data set's mean of a feature with its t interval, at the precision the interval resolves: ``1.23 µm (95 %
+    interval 1.1 … 1.4 µm, n = 8)``; one run has no interval, and says so."""
+    cell = analysis.sel(dataset=dataset, feature=feature)
+    n, mean = int(cell["n_used"]), float(cell["feature_mean"])
+    unit = str(analysis["feature_units"].sel(feature=feature).item()) if "feature_units" in analysis.coords else "1"
+    if "feature_mean_ci" not in analysis or n < 2:
+        return f"{quantity_text(mean, unit)} ({_runs(n)}, no interval)" if n else "– (no ok run)"
+    low, high = (float(v) for v in cell["feature_mean_ci"].values)
+    confidence = float(json.loads(analysis.attrs.get("bootstrap", "{}")).get("confidence", CONFIDENCE))
+    return estimate_with_interval(mean, low, high, unit, confidence).removeprefix("+").replace(")", f", n = {n})", 1)
 
 
 def analyze(results_path: str | Path, out_path: str | Path | None = None, **options) -> Path:

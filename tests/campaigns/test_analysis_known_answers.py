@@ -431,7 +431,8 @@ def test_per_data_set_counts_means_and_the_separation_matrices():
     used = [f[0, 2:], np.delete(f[1], 2)]
     np.testing.assert_allclose(a["feature_mean"][:2], [u.mean() for u in used], rtol=1e-14)
     np.testing.assert_allclose(a["feature_std"][:2], [u.std(ddof=1) for u in used], rtol=1e-14)
-    assert np.isnan(a["feature_mean"][2]) and np.isnan(a["spearman"][2]).all()
+    # below min_ok_runs the mean is still given (flagged by data_sufficient), correlations are not (issue 42)
+    assert float(a["feature_mean"][2]) == pytest.approx(f[2, 6:].mean(), rel=1e-14) and np.isnan(a["spearman"][2]).all()
     # detection_probability(dataset=i, reference=j) flags runs of i against the threshold of j
     assert float(a["detection_probability"].sel(dataset="d1", reference="d0")) == detection_probability(
         used[0], used[1]
@@ -493,18 +494,19 @@ def test_summary_prints_each_statement_and_warns_about_short_data_sets():
     a = analysis_dataset(results, n_boot=20)
     statements, warnings = summary(a)
     assert statements == [f"f: {a['requirement_statement'].sel(feature='f').item()}"]
-    assert warnings == ["f: insufficient data in d1 (5 ok runs): fewer than 20 ok runs, their statistics are NaN"]
+    withheld = "fewer than 20 ok runs, their correlations, indices and detection probabilities are NaN"
+    [warning] = warnings
+    assert warning.startswith(f"f: insufficient data in d1 (5 ok runs): {withheld}; their means (flagged): d1 ")
+    assert warning.endswith(", n = 5)") and "(95 % interval " in warning
     status[:, 1:] = "error"
     statements, warnings = summary(analysis_dataset(results.assign(status=(("dataset", "run"), status)), n_boot=20))
-    assert warnings == [
-        "f: insufficient data in all 3 data sets (1 ok run each): fewer than 20 ok runs, their statistics are NaN"
-    ]
+    [warning] = warnings
+    assert warning.startswith(f"f: insufficient data in all 3 data sets (1 ok run each): {withheld}; their means")
+    assert warning.count("(1 ok run, no interval)") == 3
     status[0, 1] = "ok"  # 2, 1, 1 ok runs: each named
     _, warnings = summary(analysis_dataset(results.assign(status=(("dataset", "run"), status)), n_boot=20))
-    assert warnings == [
-        "f: insufficient data in d0 (2 ok runs), d1 (1 ok run), d2 (1 ok run): fewer than 20 ok runs, "
-        "their statistics are NaN"
-    ]
+    assert warnings[0].startswith(
+        f"f: insufficient data in d0 (2 ok runs), d1 (1 ok run), d2 (1 ok run): {withheld}; their means (flagged): d0 ")
     assert summary(analysis_dataset(results_dataset({"f": rng.normal(size=(2, 25))}, {}), n_boot=20))[1] == []
 
 

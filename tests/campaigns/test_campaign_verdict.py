@@ -190,17 +190,18 @@ def test_too_few_ok_runs_is_insufficient_data_with_nan_statistics():
     assert statement.startswith("insufficient data: each of the 7 sweep data sets has 1 ok run; ")
     assert f"at least {MIN_DETECTION_RUNS} per sweep data set are needed" in statement
     assert (a["data_sufficient"] == 0).all() and (a["n_used"] == 1).all() and a.attrs["min_ok_runs"] == MIN_OK_RUNS
-    for name in ("feature_mean", "feature_std", "pearson", "spearman", "prcc", "overlap", "detection_probability",
+    for name in ("feature_std", "feature_mean_ci", "pearson", "spearman", "prcc", "overlap", "detection_probability",
                  "sweep_detection_probability"):
         assert np.isnan(a[name]).all(), name
+    assert np.isfinite(a["feature_mean"]).all()  # one run has a mean, flagged, without an interval (issue 42)
     # one data set short is enough: the others keep their statistics, the verdict is withheld
     results = sweep_results(0.1e-6)
     results["status"][2, MIN_OK_RUNS - 1 :] = "error"
     a = analysis_dataset(results, n_boot=50)
     assert list(a["data_sufficient"].sel(feature="f").values) == [1, 1, 0, 1, 1, 1, 1]
     assert str(a["requirement_verdict"].sel(feature="f").item()) == "insufficient data"
-    assert (np.isnan(a["feature_mean"].sel(dataset="b2")).all()
-            and np.isfinite(a["feature_mean"].sel(dataset="b1")).all())
+    assert (np.isnan(a["spearman"].sel(dataset="b2")).all() and np.isfinite(a["feature_mean"].sel(dataset="b2")).all()
+            and np.isfinite(a["spearman"].sel(dataset="b1", feature="f")).any())
     assert f"b2 has {MIN_OK_RUNS - 1} ok runs" in str(a["requirement_statement"].sel(feature="f").item())
     # enough runs for the moments and correlations (20) but not for the detection threshold (59): b2's statistics are
     # computed, no detection probability against it, and the verdict is withheld with the number needed

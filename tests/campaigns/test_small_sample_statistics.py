@@ -19,11 +19,18 @@ from scipy import stats
 
 from campaigns.analysis.campaign_analysis import (
     MIN_DETECTION_RUNS,
+    MIN_OK_RUNS,
     analysis_dataset,
     analyze,
     detection_run_floor,
+    mean_interval,
     min_runs_for_quantile_bound,
     quantile_bound_rank,
+    quantile_interval,
+    quantile_interval_min_runs,
+    quantile_interval_ranks,
+    std_interval,
+    summary,
 )
 from campaigns.runner.files import CONVENTIONS
 from campaigns.statistics import sensitivity
@@ -76,6 +83,106 @@ def test_the_old_floor_did_not_bound_the_threshold():
     assert stats.binom.ppf(0.001, repetitions, 1 - 0.95**20) <= maximum <= stats.binom.ppf(0.999, repetitions,
                                                                                          1 - 0.95**20)
     assert threshold < maximum < stats.binom.ppf(0.001, repetitions, 0.95)
+
+
+# --- means, standard deviations and quantiles at any n (issue 42) -------------------------------------------------
+
+#: Seeded repetitions of each coverage test: the binomial 0.1-99.9 % band of a 95 % rate is then about +-1 point.
+REPETITIONS = 4000
+
+
+def _within_band(covered: int, rate: float) -> bool:
+    """K of REPETITIONS covered, with true rate ``rate``: inside the 0.1-99.9 % band of Binomial(R, rate)."""
+    return stats.binom.ppf(0.001, REPETITIONS, rate) <= covered <= stats.binom.ppf(0.999, REPETITIONS, rate)
+
+
+@pytest.mark.parametrize("n", [2, 3, 8, 20])
+def test_the_mean_and_sd_intervals_cover_a_normal_truth_at_their_stated_rate(n):
+    """Normal samples (mean 5, sd 2): the t interval holds the true mean, the chi-square interval the true sd, in
+    95 % of seeded samples at every n from 2 on (both exact for a normal feature), within the binomial band."""
+    rng = np.random.default_rng(1000 + n)
+    samples = rng.normal(5.0, 2.0, (REPETITIONS, n))
+    means = np.array([mean_interval(y) for y in samples])
+    stds = np.array([std_interval(y) for y in samples])
+    assert _within_band(int(((means[:, 1] <= 5.0) & (5.0 <= means[:, 2])).sum()), 0.95)
+    assert _within_band(int(((stds[:, 1] <= 2.0) & (2.0 <= stds[:, 2])).sum()), 0.95)
+    assert (means[:, 1] < means[:, 0]).all() and (stds[:, 1] < stds[:, 0]).all() and (stds[:, 0] < stds[:, 2]).all()
+
+
+def test_the_mean_and_sd_intervals_closed_forms_and_edges():
+    """n = 2, values 0 and 2: mean 1, s = sqrt(2); t(0.975, 1) = 12.706 gives 1 +- 12.706; the chi-square interval is
+    s / sqrt(chi2(0.975, 1)) = s / 2.2414 and s / sqrt(chi2(0.025, 1)) = s / 0.031338. One value: its mean, no
+    interval; none: NaN. A constant sample: an interval of zero width."""
+    mean, low, high = mean_interval([0.0, 2.0])
+    assert mean == 1.0 and high - mean == pytest.approx(12.7062, rel=1e-5) and mean - low == pytest.approx(12.7062,
+                                                                                                            rel=1e-5)
+    s, low, high = std_interval([0.0, 2.0])
+    assert s == pytest.approx(math.sqrt(2.0)) and low == pytest.approx(math.sqrt(2.0) / 2.2414, rel=1e-4)
+    assert high == pytest.approx(math.sqrt(2.0) / 0.031338, rel=1e-4)
+    assert mean_interval([3.0])[0] == 3.0 and np.isnan(mean_interval([3.0])[1:]).all()
+    assert np.isnan(mean_interval([])).all() and np.isnan(std_interval([3.0])).all()
+    assert mean_interval([4.0] * 5) == (4.0, 4.0, 4.0) and std_interval([4.0] * 5) == (0.0, 0.0, 0.0)
+
+
+def test_the_quantile_interval_ranks_are_the_binomial_closed_form():
+    """P(X_(l) <= xi_q <= X_(u)) = P(l <= Binomial(n, q) <= u - 1), written out with math.comb: at least 95 %, with at
+    most 2.5 % in each tail, and neither rank can move inwards. Floors: 6 runs for the median (1 - 2 0.5^6 = 0.969 with
+    the extremes; at 5 runs a tail holds 3.1 %), 72 for the 5 % and 95 % quantiles (0.95^72 = 0.0249 <= 0.025 <
+    0.95^71)."""
+
+    def cdf(k, n, q):
+        return sum(math.comb(n, j) * q**j * (1 - q) ** (n - j) for j in range(k + 1))
+
+    assert [quantile_interval_min_runs(q) for q in (0.05, 0.5, 0.95)] == [72, 6, 72]
+    assert quantile_interval_ranks(5, 0.5) is None and quantile_interval_ranks(6, 0.5) == (1, 6)
+    assert quantile_interval_ranks(71, 0.95) is None and quantile_interval_ranks(72, 0.95) == (64, 72)
+    for n, q in ((6, 0.5), (8, 0.5), (20, 0.5), (59, 0.5), (72, 0.95), (100, 0.05), (200, 0.95)):
+        low, high = quantile_interval_ranks(n, q)
+        below, above = cdf(low - 1, n, q), 1.0 - cdf(high - 1, n, q)  # the two tails: xi_q outside the interval
+        assert below <= 0.025 and above <= 0.025, (n, q)
+        assert cdf(low, n, q) > 0.025 and 1.0 - cdf(high - 2, n, q) > 0.025, (n, q)  # either rank moved in fails
+    assert min(quantile_interval_min_runs(q) for q in (0.05, 0.5, 0.95)) == 6 < MIN_OK_RUNS
+
+
+@pytest.mark.parametrize(("n", "q"), [(8, 0.5), (72, 0.95), (100, 0.05)])
+def test_the_quantile_interval_covers_at_its_closed_form_rate(n, q):
+    """Seeded normal samples: [X_(l), X_(u)] holds the true quantile in a fraction whose expectation is the binomial
+    closed form P(l <= Binomial(n, q) <= u - 1) >= 0.95 (the ranks are discrete, so the rate exceeds 0.95: 0.992 for
+    the median of 8); the count stays inside that rate's binomial band. Below the floor the bounds are NaN."""
+    rng = np.random.default_rng(int(n / q))
+    truth = stats.norm.ppf(q)
+    found = np.array([quantile_interval(y, q) for y in rng.standard_normal((REPETITIONS, n))])
+    low, high = quantile_interval_ranks(n, q)
+    exact = stats.binom.cdf(high - 1, n, q) - stats.binom.cdf(low - 1, n, q)
+    assert exact >= 0.95 and _within_band(int(((found[:, 1] <= truth) & (truth <= found[:, 2])).sum()), exact)
+    assert np.isnan(quantile_interval(rng.standard_normal(quantile_interval_min_runs(q) - 1), q)[1:]).all()
+
+
+def test_eight_runs_give_means_with_intervals_and_no_verdict():
+    """The README's quicker look (--runs 8): the analysis gives every data set's mean, sd and median with their
+    intervals (the two data sets' means, 10 noise sd apart, are told apart by disjoint intervals), the 5 % and 95 %
+    quantiles without bounds (n too small), flags the data set (data_sufficient = 0), and withholds correlations,
+    detection and the verdict; the summary prints the means with their intervals."""
+    results = _results(8, 3, 11)
+    results["f"] = results["f"] + xr.DataArray([0.0, 10e-6], dims="dataset")  # d1 10 µm above d0 (sd about 1.5 µm)
+    a = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    assert (a["data_sufficient"] == 0).all() and np.isnan(a["spearman"]).all()
+    assert np.isnan(a["detection_probability"]).all() and (a["requirement_verdict"] == "insufficient data").all()
+    for name in ("feature_mean", "feature_std", "feature_mean_ci", "feature_std_ci"):
+        assert np.isfinite(a[name]).all(), name
+    mean = a["feature_mean_ci"].sel(feature="f")
+    assert float(mean.sel(dataset="d0", bound="upper")) < float(mean.sel(dataset="d1", bound="lower"))
+    median = a["feature_quantile_ci"].sel(feature="f", quantile_probability=0.5)
+    assert np.isfinite(median).all() and np.isnan(a["feature_quantile_ci"].sel(quantile_probability=0.95)).all()
+    assert a["feature_quantile_min_runs"].values.tolist() == [72, 6, 72]
+    for d in ("d0", "d1"):
+        values = results["f"].sel(dataset=d).values
+        np.testing.assert_allclose(float(a["feature_mean"].sel(dataset=d, feature="f")), values.mean(), rtol=1e-12)
+        np.testing.assert_allclose(float(a["feature_quantile"].sel(dataset=d, feature="f", quantile_probability=0.5)),
+                                   np.median(values), rtol=1e-12)
+    [warning] = summary(a)[1]
+    assert warning.startswith("f: insufficient data in all 2 data sets (8 ok runs each): fewer than 20 ok runs")
+    assert "their means (flagged): d0 " in warning and "(95 % interval " in warning and "n = 8)" in warning
 
 
 # --- the first-order index at small n -----------------------------------------------------------------------------

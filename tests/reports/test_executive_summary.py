@@ -82,7 +82,7 @@ def test_page_one_links_each_finding_to_its_section(with_verdicts):
     section = re.search(r'<section id="executive".*?</section>', html, re.S).group(0)
     for key in ("observability", "correlations", "failures", "fidelity"):
         assert f'href="#{key}"' in section
-    assert "§6 Observability" in _page_one(paths["pdf"])
+    assert "§1 Observability" in _page_one(paths["pdf"])  # the results first, provenance last (issue 42)
 
 
 def test_an_older_analysis_gives_no_verdict(campaign, generated_at, tmp_path):

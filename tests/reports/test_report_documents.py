@@ -33,7 +33,9 @@ def test_html_has_every_section_with_captioned_figures(report):
     figures = re.findall(r'<figure id="figure-(\d+)">\s*<img src="data:image/png;base64,[A-Za-z0-9+/=]+" '
                          r'alt="[^"]+">\s*'
                          r"<figcaption><b>Figure (\d+)\.</b> [^<]{40,}</figcaption>", html)
-    assert len(figures) >= 12  # per-data-set distributions are small multiples of one figure, not a figure each
+    # per-data-set distributions are small multiples of one figure, not a figure each; a separation matrix whose
+    # cells all read 1.00 (or 0.00) is a sentence instead (issue 42)
+    assert len(figures) >= 10
     assert [int(a) for a, _ in figures] == list(range(1, len(figures) + 1))
     assert "@media print" in html
 
@@ -75,7 +77,7 @@ def test_pdf_title_page_contents_sections_and_figures(report):
         assert f"{number}. {title}" in contents  # the table of contents
         assert f"{number}. {title}" in body
     # same numbered figures as the HTML, each with its caption
-    numbers = {int(n) for n in re.findall(r"Figure (\d+):", body)}
+    numbers = {int(n) for n in re.findall(r"Figure (\d+):", " ".join(pages))}  # Figure 1 is page 1's answer
     assert numbers == set(range(1, n_figures + 1))
     outline = [o.title for o in reader.outline if not isinstance(o, list)]
     assert outline[: len(SECTION_TITLES)] == [f"{n}. {t}" for n, t in enumerate(SECTION_TITLES.values(), start=1)]

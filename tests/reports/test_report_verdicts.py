@@ -170,7 +170,9 @@ def test_the_data_set_table_gives_the_runs_used_and_mutes_the_short_ones():
     page = executive(results)
     [table] = [t for t in page if isinstance(t, Table) and t.caption.startswith("Data sets")]
     assert [row[2] for row in table.rows] == ["60 of 60", "12 of 60 (insufficient data: 12 ok run(s) < 20)", "57 of 60"]
-    assert [row[3] for row in table.rows] == ["–", "–", "–"]  # no measured test given
+    assert [row[4] for row in table.rows] == ["–", "–", "–"]  # no measured test given
+    assert all(" (95 % interval " in row[3] and row[3].endswith(f"n = {n})") for row, n in zip(table.rows, (60, 12, 57),
+                                                                                               strict=True))
     assert table.muted == (False, True, False)
     assert "at least 20 needed, the analysis's minimum" in table.caption
     assert "Measured test: none given" in table.caption
@@ -416,23 +418,18 @@ def test_the_observability_section_gives_the_bracket_never_an_interpolated_value
     assert np.isnan(analysis["minimum_detectable_backlash"]).all()
     blocks = _section_blocks(observability, results, analysis)
     texts = [getattr(b, "text", "") or getattr(b, "caption", "") for b in blocks]
+    page_one = executive(results, analysis)  # the detection figure is page 1's
     for feature in ("f", "f_true"):
         statement = str(analysis["requirement_statement"].sel(feature=feature).item())
         assert statement.startswith("met: minimum detectable backlash between the adjacent sweep levels 0 µm (b0) and "
                                     "0.5 µm (b1) (")
         assert f"{feature}: {statement}" in texts
-    [caption] = [b.caption for b in blocks if isinstance(b, Figure) and b.key == "detection-sweep"]
-    assert "f between 0 and 0.5 µm; f_true between 0 and 0.5 µm" in caption and "no star is drawn" in caption
+    [caption] = [b.caption for b in page_one if isinstance(b, Figure) and b.key == "detection-sweep"]
+    assert "nothing is drawn between them, where no run was made" in caption and "bound" in caption
     assert not any("interpolated linearly" in t for t in texts)
     assert any("lies between 0 and that level, and no value inside is resolved" in t for t in texts)
     assert not any("never reaches" in t for t in texts)
-    # a resolved value (as a finer sweep gives): a star, and only f_true's bracket in the caption
-    analysis["minimum_detectable_status"].loc[dict(feature="f")] = 1
-    analysis["minimum_detectable_backlash"].loc[dict(feature="f")] = 1.19e-6
-    analysis["minimum_detectable_backlash_ci"].loc[dict(feature="f")] = [0.0, 2e-6]
-    [caption] = [b.caption for b in _section_blocks(observability, results, analysis)
-                 if isinstance(b, Figure) and b.key == "detection-sweep"]
-    assert "(f_true between 0 and 0.5 µm)" in caption
+    assert not [b for b in blocks if isinstance(b, Figure) and b.key == "detection-sweep"]  # drawn once, on page 1
 
 
 def test_the_separation_map_says_why_a_column_is_blank():
