@@ -31,13 +31,21 @@ def _queued_and_cancelled(service, text: str) -> dict:
 
 
 def test_markup_in_user_fields_is_escaped_on_every_page(service):
+    """A campaign name is letters, digits, _ and - (issue 39: it names out/<name>), so markup never becomes a
+    campaign's name: refused before anything is queued, and the refusal shows it back escaped."""
     text = SPEC.read_text().replace('name = "service_small_thesis"', f"name = '{MARKUP}'")
-    record = _queued_and_cancelled(service, text)
+    submitter = client(service, service.tokens["submitter"])
+    before = submitter.get("/api/v1/campaigns").json()["campaigns"]
+    response = submitter.post("/api/v1/campaigns", content=text, params={"runs": 1})
+    assert response.status_code == 422 and response.json()["errors"][0]["path"] == "name", response.text
+    assert submitter.get("/api/v1/campaigns").json()["campaigns"] == before  # nothing queued
     with _cookie_client(service) as browser:
-        for path in ("/", f"/campaigns/{record['id']}"):
-            page = browser.get(path).text
-            assert "&lt;b id=&#34;injected&#34;&gt;x&lt;/b&gt;" in page, path
-            assert "<b id=" not in page and 'href="https://evil.example"' not in page, path
+        refused = browser.post("/submit", data={"spec": text, "runs": "1"}, headers={"Origin": service.url})
+        assert refused.status_code == 422
+        assert "&lt;b id=&#34;injected&#34;&gt;x&lt;/b&gt;" in refused.text
+        assert "<b id=" not in refused.text and 'href="https://evil.example"' not in refused.text
+        page = browser.get("/").text
+        assert "<b id=" not in page and 'href="https://evil.example"' not in page
         # a spec's own text and its errors are shown back escaped too
         response = browser.post("/submit", data={"spec": f"name = 3\n# </textarea>{MARKUP}", "runs": "x<i>"},
                                 headers={"Origin": service.url})
