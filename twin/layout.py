@@ -295,6 +295,17 @@ COMPONENTS: tuple[Component, ...] = (
         _e("CHAMBER2_PRESSURE", "Pa", "cylinder rod-side chamber pressure (absolute)"),
         _e("PISTON_POSITION", "m", "piston position from the cap-end stop"),
     )),
+    Component("seal", states=(
+        _e("SEAL_DEFLECTION", "m", "presliding deflection z of the cylinder seals (the elasto-plastic seal-friction "
+                                   "level, twin.physics.bristle_friction)"),
+    ), constants=(
+        _e("SEAL_STIFFNESS", "N/m", "seals' presliding stiffness sigma_0", "pneumatics.friction_presliding_stiffness"),
+        _e("SEAL_DAMPING", "N s/m", "seals' presliding damping sigma_1", "pneumatics.friction_bristle_damping"),
+        _e("SEAL_DAMPING_SPEED", "m/s", "speed v_d above which the presliding damping fades",
+           "pneumatics.friction_bristle_damping_speed"),
+        _e("SEAL_ELASTIC_DEFLECTION", "m", "z_ba: deflection up to which the seals are purely elastic, "
+                                           "friction_elastic_fraction F_d / sigma_0"),
+    )),
     Component("instruments", signals=(
         # measured signals, held at their last acquisition sample (twin.engine.instrumentation)
         _e("LINEAR_ENCODER_POSITION", "m", "sled position read by the linear encoder (zeroed at t = 0)"),

@@ -56,7 +56,7 @@ def test_explain_fidelity_prints_each_choice_and_why():
     result = run("simulate", "ds2", "--duration", "0.2", "--explain-fidelity")
     assert result.returncode == 0, result.stderr
     assert "current_loop          ideal" in result.stdout
-    assert "peak voltage demand" in result.stdout and "integrated states: 17 of 24" in result.stdout
+    assert "peak voltage demand" in result.stdout and "integrated states: 17 of 25" in result.stdout
 
 
 def test_fidelity_option_and_levels_listing():

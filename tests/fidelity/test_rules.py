@@ -74,7 +74,10 @@ def test_requested_levels_override_auto_and_say_so(bench):
     fidelity = resolve_fidelity(twin.load_scene("ds2"), bench, {"current_loop": "full", "default": "auto"})
     assert fidelity.level("current_loop") == "full" and fidelity.reasons["current_loop"] == "requested"
     full = resolve_fidelity(twin.load_scene("ds2"), bench, "full")
-    assert full.active_states.size == N_STATES
+    # every state but the seals' deflection, integrated only at the opt-in elasto-plastic seal level (twin.levels)
+    assert full.active_states.size == N_STATES - 1 and S.SEAL_DEFLECTION not in full.active_states
+    every = resolve_fidelity(twin.load_scene("ds2"), bench, {"default": "full", "seal_friction": "elasto_plastic"})
+    assert every.active_states.size == N_STATES
 
 
 def test_removed_states_leave_the_integrated_vector(bench):

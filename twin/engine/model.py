@@ -164,7 +164,8 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.NUT1_ZERO] = x0[S.NUT1_POSITION]
     c[K.SCREW_ANGLE_ZERO] = x0[S.SCREW_ANGLE]
     if fidelity.level("pneumatics") == "full":
-        x0[S.SPOOL_POSITION:] = pneumatic_constants(c, p, scene)
+        # the seals start undeflected (SEAL_DEFLECTION 0): the force loop's start holds zero force
+        x0[S.SPOOL_POSITION:S.PISTON_SPEED + 1] = pneumatic_constants(c, p, scene)
     active = fidelity.active_states
     pairs = np.array([pair for pair in POSITION_VELOCITY_PAIRS if pair[0] in active], dtype=np.int64).reshape(-1, 2)
     return Model(c, x0, scene.position_table(), scene.force_table(), levels, active, pairs)
@@ -335,6 +336,9 @@ def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.
     c[K.CYLINDER_FRICTION_RATE] = q["pneumatics.friction_stribeck_coefficient"]
     c[K.CYLINDER_FRICTION_VISCOUS] = q["pneumatics.friction_viscous"]
     c[K.CYLINDER_V_THRESHOLD] = q["pneumatics.friction_velocity_threshold"]
+    # elasto-plastic seal level: elastic up to a fraction of the smallest steady deflection F_d / sigma_0
+    c[K.SEAL_ELASTIC_DEFLECTION] = (q["pneumatics.friction_elastic_fraction"] * c[K.CYLINDER_FRICTION_DYNAMIC]
+                                    / c[K.SEAL_STIFFNESS])
     c[K.DAMPER_STIFFNESS] = q["pneumatics.damper_stiffness"]
     c[K.DAMPER_TRAVEL] = q["pneumatics.damper_travel"]
     c[K.DAMPER_DAMPING] = q["pneumatics.damper_damping"]

@@ -35,14 +35,17 @@ from twin.engine.codes import (
     PNEUMATICS_IDEAL,
     SCREW_AXIAL,
     SCREW_AXIAL_DYNAMIC,
+    SEAL_FRICTION,
+    SEAL_FRICTION_ELASTO_PLASTIC,
     THERMAL_DYNAMIC,
 )
 from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
 from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
+from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
 from twin.physics.coupling import elasto_backlash
-from twin.physics.friction import stribeck_friction
+from twin.physics.friction import stribeck_friction, stribeck_level
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.physics.preload import preload_force
 from twin.scenes.profiles import profile_value
@@ -466,10 +469,25 @@ def _nuts(x, c, w, dxdt, lanes, rotation):
                                             - c[K.GUIDE_ROLL_DAMPING, lane] * x[position + 3, lane]) / c[K.J_NUT, lane]
 
 
+@numba.njit(**SCALAR)
+def seal_bristle(x, c, lane):
+    """The elasto-plastic seal level's friction force [N] and the seals' deflection rate [m/s]
+    (:mod:`twin.physics.bristle_friction`, sliding level Eq. 7.63 without its regularisation)."""
+    v = x[S.PISTON_SPEED, lane]
+    z = x[S.SEAL_DEFLECTION, lane]
+    level = stribeck_level(v, c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
+                           c[K.CYLINDER_FRICTION_RATE, lane])
+    rate = elastoplastic_deflection_rate(v, z, level, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_ELASTIC_DEFLECTION, lane])
+    force = bristle_force(v, z, rate, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_DAMPING, lane],
+                          c[K.SEAL_DAMPING_SPEED, lane], c[K.CYLINDER_FRICTION_VISCOUS, lane])
+    return force, rate
+
+
 @numba.njit(**KERNEL)
-def pneumatics_rhs(x, c, u, w, dxdt, lanes):
+def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal):
     """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11): the one home of the load
-    system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design)."""
+    system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design).
+    ``seal`` is the seal-friction level's code: the regularised Eq. 7.63 or the elasto-plastic bristle law."""
     for lane in range(lanes):
         dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
             x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
@@ -490,13 +508,17 @@ def pneumatics_rhs(x, c, u, w, dxdt, lanes):
         dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
             p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
         dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
-        dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration(
+        if seal == SEAL_FRICTION_ELASTO_PLASTIC:
+            friction, dxdt[S.SEAL_DEFLECTION, lane] = seal_bristle(x, c, lane)
+        else:
+            friction = stribeck_friction(x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane],
+                                         c[K.CYLINDER_FRICTION_DYNAMIC, lane], c[K.CYLINDER_FRICTION_RATE, lane],
+                                         c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane])
+        dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration_under_friction(
             p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
             c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
-            c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
-            c[K.CYLINDER_FRICTION_RATE, lane], c[K.CYLINDER_FRICTION_VISCOUS, lane],
-            c[K.CYLINDER_V_THRESHOLD, lane], c[K.STROKE, lane], c[K.DAMPER_TRAVEL, lane],
-            c[K.DAMPER_STIFFNESS, lane], c[K.DAMPER_DAMPING, lane], c[K.END_STOP_STIFFNESS, lane])
+            friction, c[K.STROKE, lane], c[K.DAMPER_TRAVEL, lane], c[K.DAMPER_STIFFNESS, lane],
+            c[K.DAMPER_DAMPING, lane], c[K.END_STOP_STIFFNESS, lane])
 
 
 @numba.njit(**KERNEL)
@@ -530,7 +552,7 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
         _screw_axial(x, c, w, dxdt, lanes)
     _nuts(x, c, w, dxdt, lanes, levels[NUT_ROTATION])
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
-        pneumatics_rhs(x, c, u, w, dxdt, lanes)
+        pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[SEAL_FRICTION])
 
 
 EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)

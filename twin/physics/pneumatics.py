@@ -606,9 +606,22 @@ def piston_acceleration(p1, p2, x, v, load_cell_force, a1, a2, p_atm, mass, damp
     float
         Piston acceleration [m/s^2].
     """
+    return piston_acceleration_under_friction(
+        p1, p2, x, v, load_cell_force, a1, a2, p_atm, mass, damping,
+        stribeck_friction(v, f_static, f_dynamic, stribeck_coefficient, viscous_coefficient, velocity_threshold),
+        stroke, damper_travel, damper_stiffness, damper_damping, end_stop_stiffness)
+
+
+@numba.njit(**SCALAR)
+def piston_acceleration_under_friction(p1, p2, x, v, load_cell_force, a1, a2, p_atm, mass, damping, friction,
+                                       stroke, damper_travel, damper_stiffness, damper_damping,
+                                       end_stop_stiffness):
+    """Eq. 9.11 with the seal friction ``F_fr,cyl`` given [N] (opposing positive ``v``): the one home of the piston's
+    balance, shared by the regularised law (:func:`piston_acceleration`) and the bristle law of
+    :mod:`twin.physics.bristle_friction` (the elasto-plastic seal level). Other arguments as in
+    :func:`piston_acceleration`."""
     force = (piston_force(p1, p2, a1, a2, p_atm)
-             - stribeck_friction(v, f_static, f_dynamic, stribeck_coefficient,
-                                 viscous_coefficient, velocity_threshold)
+             - friction
              - damping * v
              + end_stroke_damper_force(x, v, stroke, damper_travel, damper_stiffness,
                                        damper_damping, end_stop_stiffness)
