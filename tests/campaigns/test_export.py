@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 import scipy.io
 import xarray as xr
+from cli_helpers import refused_in_one_line
 
 import campaigns
 import campaigns.runner.files
@@ -86,15 +87,6 @@ def test_export_keeps_the_write_rule(analysed, tmp_path, capsys):
         shutil.rmtree(analysed.parent / "chunks")
 
 
-def _one_line(capsys, argv: list[str], *words: str) -> str:
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    for word in words:
-        assert word in err, err
-    return err
-
-
 def _fail_midway(monkeypatch, errno_code: int, *, on_call: int = 1):
     """``DataFrame.to_csv`` writes half its text, then the disk refuses (as a full disk does), on call ``on_call``."""
     original = pd.DataFrame.to_csv
@@ -120,8 +112,8 @@ def test_a_full_disk_leaves_the_previous_export_whole(analysed, tmp_path, capsys
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     capsys.readouterr()
     _fail_midway(monkeypatch, errno.ENOSPC)
-    _one_line(capsys, ["export", str(analysed), "--out", str(out), "--force"],
-              f"cannot write {out / 'runs.csv'}", "the disk is full", "Nothing was replaced")
+    refused_in_one_line(capsys, ["export", str(analysed), "--out", str(out), "--force"],
+                        f"cannot write {out / 'runs.csv'}", "the disk is full", "Nothing was replaced")
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # every file as it was, no temporary left
 
 
@@ -129,8 +121,8 @@ def test_a_failure_after_some_tables_names_those_written_and_leaves_no_truncated
                                                                                    monkeypatch):
     _fail_midway(monkeypatch, errno.ENOSPC, on_call=2)
     out = tmp_path / "csv"
-    _one_line(capsys, ["export", str(analysed), "--out", str(out)], f"cannot write {out / 'features.csv'}",
-              "(written before it: runs.csv)")
+    refused_in_one_line(capsys, ["export", str(analysed), "--out", str(out)], f"cannot write {out / 'features.csv'}",
+                        "(written before it: runs.csv)")
     assert sorted(p.name for p in out.iterdir()) == ["runs.csv"]
     assert len(pd.read_csv(out / "runs.csv")) > 0  # whole
 
@@ -144,12 +136,12 @@ def test_a_read_only_directory_is_one_line(analysed, tmp_path, capsys, monkeypat
     out = tmp_path / "ro"
     out.mkdir()
     monkeypatch.setattr(campaigns.runner.files.tempfile, "mkstemp", refused)
-    _one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(out)],
-              "cannot write", "Permission denied")
+    refused_in_one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(out)],
+                        "cannot write", "Permission denied")
     assert not list(out.iterdir())
     monkeypatch.setattr(Path, "mkdir", refused)
-    _one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(tmp_path / "new")],
-              f"cannot create the directory {tmp_path / 'new'}: Permission denied")
+    refused_in_one_line(capsys, ["export", str(analysed), "--format", fmt, "--out", str(tmp_path / "new")],
+                        f"cannot create the directory {tmp_path / 'new'}: Permission denied")
 
 
 def test_a_truncated_analysis_beside_good_results_is_one_line_naming_the_remedy(analysed, tmp_path, capsys):
@@ -158,7 +150,7 @@ def test_a_truncated_analysis_beside_good_results_is_one_line_naming_the_remedy(
     shutil.copy(analysed, campaign / "results.nc")
     whole = (analysed.parent / "analysis.nc").read_bytes()
     (campaign / "analysis.nc").write_bytes(whole[: len(whole) // 2])
-    _one_line(capsys, ["export", str(campaign / "results.nc"), "--out", str(tmp_path / "csv")],
-              f"{campaign / 'analysis.nc'}: cannot be read as a netCDF file", "is it complete?",
-              f"`twin campaign analyze {campaign / 'results.nc'} --force` writes it again")
+    refused_in_one_line(capsys, ["export", str(campaign / "results.nc"), "--out", str(tmp_path / "csv")],
+                        f"{campaign / 'analysis.nc'}: cannot be read as a netCDF file", "is it complete?",
+                        f"`twin campaign analyze {campaign / 'results.nc'} --force` writes it again")
     assert not (tmp_path / "csv").exists()  # before any work

@@ -6,34 +6,25 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from cli_helpers import refused_in_one_line
 
 from app.cli import main
-
-
-def _one_line(capsys, argv: list[str], *words: str) -> str:
-    """Run ``twin argv``: exit 2, one line on stderr holding ``words``, no traceback."""
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    for word in words:
-        assert word in err, err
-    return err
 
 
 def test_a_taken_token_name_is_one_line_and_the_first_token_stands(tmp_path, capsys):
     data = str(tmp_path / "data")
     assert main(["serve", "token", "create", "alice", "--role", "read", "--data", data]) == 0
     capsys.readouterr()
-    _one_line(capsys, ["serve", "token", "create", "alice", "--role", "admin", "--data", data],
-              "a token named 'alice' exists already", "revoke it first")
+    refused_in_one_line(capsys, ["serve", "token", "create", "alice", "--role", "admin", "--data", data],
+                        "a token named 'alice' exists already", "revoke it first")
     assert main(["serve", "token", "list", "--data", data]) == 0
     assert capsys.readouterr().out == "alice\tread\n"  # the refused one changed nothing
 
 
 @pytest.mark.parametrize("name", ["ali\nce", "tab\there", "", "x" * 101])
 def test_a_token_name_with_a_newline_or_out_of_bounds_is_one_line(tmp_path, capsys, name):
-    err = _one_line(capsys, ["serve", "token", "create", name, "--role", "read", "--data", str(tmp_path)],
-                    "a token name is 1-100 printable characters")
+    err = refused_in_one_line(capsys, ["serve", "token", "create", name, "--role", "read", "--data", str(tmp_path)],
+                              "a token name is 1-100 printable characters")
     assert name not in err or name == ""  # shown quoted (the newline as \n), a long one by its length
     assert main(["serve", "token", "list", "--data", str(tmp_path)]) == 0
     assert capsys.readouterr().out == ""

@@ -11,8 +11,8 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_helpers import refused_in_one_line
 
-from app.cli import main
 from campaigns.runner.files import CampaignError, campaign_file, check_output
 
 
@@ -33,15 +33,6 @@ def _snapshot(directory: Path) -> dict[str, bytes]:
     return {str(p.relative_to(directory)): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
 
 
-def _refused(capsys, argv: list[str], *words: str) -> str:
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "Traceback" not in err, err  # one line
-    for word in words:
-        assert word in err, err
-    return err
-
-
 CAMPAIGN_FILES = ["results.nc", "spec.json", ".lock", "chunks/0123456789abcdef/d000-r000000-000009.npz",
                   "analysis.nc"]
 
@@ -51,8 +42,8 @@ def test_simulate_never_writes_over_a_campaigns_files(campaign_dir, capsys, name
     before = _snapshot(campaign_dir)
     for option in ("--out", "--plot"):
         for force in ([], ["--force"]):
-            _refused(capsys, ["simulate", "ds1", option, str(campaign_dir / name), *force],
-                     str(campaign_dir / name), "even with --force")
+            refused_in_one_line(capsys, ["simulate", "ds1", option, str(campaign_dir / name), *force],
+                                str(campaign_dir / name), "even with --force")
     assert _snapshot(campaign_dir) == before
 
 
@@ -62,8 +53,8 @@ def test_analyze_never_writes_over_a_campaigns_files(campaign_dir, tmp_path, cap
     results.parent.mkdir()
     results.write_bytes(b"not read: the output is refused first")
     before = _snapshot(campaign_dir)
-    _refused(capsys, ["campaign", "analyze", str(results), "--out", str(campaign_dir / name), "--force"],
-             "no command writes over a campaign's own files")
+    refused_in_one_line(capsys, ["campaign", "analyze", str(results), "--out", str(campaign_dir / name), "--force"],
+                        "no command writes over a campaign's own files")
     assert _snapshot(campaign_dir) == before
 
 
@@ -76,35 +67,36 @@ def test_analyze_may_replace_its_own_analysis_with_force_only(campaign_dir, caps
 def test_replay_never_writes_over_a_campaigns_files(campaign_dir, capsys):
     before = _snapshot(campaign_dir)
     for name in ("results.nc", "spec.json", "analysis.nc"):
-        _refused(capsys, ["campaign", "replay", str(campaign_dir / "results.nc"), "--dataset", "ds1", "--run", "0",
-                          "--out", str(campaign_dir / name), "--force"], str(campaign_dir / name))
+        refused_in_one_line(capsys, ["campaign", "replay", str(campaign_dir / "results.nc"), "--dataset", "ds1",
+                                     "--run", "0", "--out", str(campaign_dir / name), "--force"],
+                            str(campaign_dir / name))
     assert _snapshot(campaign_dir) == before
 
 
 def test_replay_and_simulate_refuse_an_existing_file_without_force(tmp_path, capsys):
     existing = tmp_path / "run.nc"
     existing.write_bytes(b"an earlier run")
-    _refused(capsys, ["simulate", "ds1", "--out", str(existing)], "already exists; pass --force")
-    _refused(capsys, ["simulate", "ds1", "--plot", str(existing)], "already exists; pass --force")
-    _refused(capsys, ["campaign", "replay", str(tmp_path / "results.nc"), "--dataset", "ds1", "--run", "0",
-                      "--out", str(existing)], "already exists; pass --force")
+    refused_in_one_line(capsys, ["simulate", "ds1", "--out", str(existing)], "already exists; pass --force")
+    refused_in_one_line(capsys, ["simulate", "ds1", "--plot", str(existing)], "already exists; pass --force")
+    refused_in_one_line(capsys, ["campaign", "replay", str(tmp_path / "results.nc"), "--dataset", "ds1", "--run", "0",
+                                 "--out", str(existing)], "already exists; pass --force")
     assert existing.read_bytes() == b"an earlier run"
 
 
 def test_report_refuses_existing_files_and_a_file_for_its_directory(campaign_dir, tmp_path, capsys):
     (campaign_dir / "report.pdf").write_bytes(b"an earlier report")
-    _refused(capsys, ["report", str(campaign_dir / "results.nc"), "--out", str(campaign_dir)],
-             "report.pdf already exists; pass --force")
-    _refused(capsys, ["report", str(campaign_dir / "results.nc"), "--out", str(campaign_dir / "spec.json")],
-             "is not a directory")
+    refused_in_one_line(capsys, ["report", str(campaign_dir / "results.nc"), "--out", str(campaign_dir)],
+                        "report.pdf already exists; pass --force")
+    refused_in_one_line(capsys, ["report", str(campaign_dir / "results.nc"), "--out", str(campaign_dir / "spec.json")],
+                        "is not a directory")
     assert (campaign_dir / "report.pdf").read_bytes() == b"an earlier report"
 
 
 def test_accuracy_and_chapter5_refuse_an_earlier_studys_files(tmp_path, capsys):
     (tmp_path / "work_precision.nc").write_bytes(b"an earlier study")
-    _refused(capsys, ["accuracy", "--quick", "--out", str(tmp_path)], "work_precision.nc already exists")
+    refused_in_one_line(capsys, ["accuracy", "--quick", "--out", str(tmp_path)], "work_precision.nc already exists")
     (tmp_path / "fig5_6_efficiency_vs_force.png").write_bytes(b"an earlier figure")
-    _refused(capsys, ["chapter5", "--out", str(tmp_path)], "fig5_6_efficiency_vs_force.png already exists")
+    refused_in_one_line(capsys, ["chapter5", "--out", str(tmp_path)], "fig5_6_efficiency_vs_force.png already exists")
     assert (tmp_path / "work_precision.nc").read_bytes() == b"an earlier study"
 
 
