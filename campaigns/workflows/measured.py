@@ -508,10 +508,8 @@ def import_measured(path: str | Path, mapping: Mapping | str | Path) -> xr.Datas
         declared = FEATURES[name]
         data_vars[name] = ((), value, {"units": declared.unit, "long_name": declared.long_name + " (measured test)",
                                        "description": declared.description, "role": "feature"})
-    digest = hashlib.sha256()
-    with path.open("rb") as handle:  # in blocks: a long log is not held twice
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
+    with path.open("rb") as handle:  # streamed: a long log is not held twice
+        digest = hashlib.file_digest(handle, "sha256")
     return xr.Dataset(
         data_vars,
         coords={"time": ("time", instants, {"units": "s", "long_name": "acquisition instant from the start of the "
