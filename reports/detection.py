@@ -30,11 +30,23 @@ def backlash_requirement(analysis) -> tuple[float, str]:
 
 
 
+def swept(analysis) -> tuple[str, str, float, str]:
+    """The swept fault quantity as the analysis names it (``observability_condition``, a backlash when it names
+    none): its name, SI unit, display scale and display unit (``("backlash", "m", 1e6, "µm")``)."""
+    condition = str(analysis.attrs.get("observability_condition", "backlash"))
+    return SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+
+
+def minimum_detectable(quantity_name: str) -> str:
+    """The analysis's variable of the minimum detectable fault size (``minimum_detectable_preload_loss``); its 95 %
+    bounds are the same name with ``_ci``."""
+    return f"minimum_detectable_{quantity_name.replace(' ', '_')}"
+
+
 def sweep_quantity(analysis) -> tuple[str, np.ndarray, float, str]:
     """The swept fault quantity, its levels [SI], and its display scale and unit (µm for a backlash, N for a preload
     loss), as the analysis names them."""
-    condition = str(analysis.attrs.get("observability_condition", "backlash"))
-    quantity_name, _, scale, shown = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+    quantity_name, _, scale, shown = swept(analysis)
     name = f"sweep_{quantity_name.replace(' ', '_')}"
     return quantity_name, np.asarray(analysis[name].values, dtype=float), scale, shown
 
@@ -50,7 +62,7 @@ def _decision_label(analysis, feature: str, scale: float, shown: str, quantity_n
     """``backlash_feature: NO-GO, 1–2 µm (95 % bounds)``: the analysis's verdict and the bounds of the minimum
     detectable size, in the figure's legend (short: the legend has two columns on the page's width)."""
     verdict = str(analysis["requirement_verdict"].sel(feature=feature).item())
-    name = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
+    name = minimum_detectable(quantity_name) + "_ci"
     lower, upper = ((float(v) for v in analysis[name].sel(feature=feature).values) if name in analysis
                     else (math.nan, math.nan))
     decided = decision(verdict)
@@ -109,7 +121,7 @@ def detection_answer(analysis) -> tuple[bytes, str] | None:
     requirement_line = (f"requirement {number(requirement * scale)} {shown} ({literal(source.split(':')[0])})",
                         requirement * scale)
     if detected:
-        ci = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
+        ci = minimum_detectable(quantity_name) + "_ci"
         bounds = [(_decision_label(analysis, f, scale, shown, quantity_name),
                    *((float(v) * scale for v in analysis[ci].sel(feature=f).values) if ci in analysis
                      else (math.nan, math.nan)), f"C{k}") for k, (f, _) in enumerate(pairs)]

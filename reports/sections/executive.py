@@ -21,11 +21,11 @@ import math
 
 import numpy as np
 
-from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES, mean_text
+from campaigns.analysis.campaign_analysis import mean_text
 from campaigns.statistics.paired_comparison import worst_verdict
 from campaigns.workflows.diagnosis import p_text
 from reports.builder import SUMMARY_INFLUENCES, Builder
-from reports.detection import backlash_requirement, detection_answer
+from reports.detection import backlash_requirement, detection_answer, minimum_detectable, swept
 from reports.model import Callout, Paragraph
 from reports.outline import title
 from reports.phrases import NO_VERDICT, REANALYZE, decision, feature_words, plain_name, statement_tone, tone
@@ -92,8 +92,7 @@ def observability_decision(b: Builder, feature: str) -> Callout:
     """The decision on the detection requirement with one measured feature (the ideal-sensor reading beside it)."""
     a = b.analysis
     requirement, source = backlash_requirement(a)
-    condition = str(a.attrs.get("observability_condition", "backlash"))
-    quantity_name, unit, scale, shown = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+    quantity_name, unit, scale, shown = swept(a)
 
     def fault(value: float) -> str:  # in the fault quantity's own unit (µm for a backlash), as the analysis says it
         return f"{value * scale:.3g} {shown}" if math.isfinite(value) else "–"
@@ -102,7 +101,7 @@ def observability_decision(b: Builder, feature: str) -> Callout:
     source_words = source.removeprefix("Bertolino (2020) ").split(":")[0]
     what = (f"Detect a {fault(requirement)} {quantity_name} ({source_words}) with "
             f"{feature_words(b.results, feature)}")
-    bounds_name = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
+    bounds_name = minimum_detectable(quantity_name) + "_ci"
     lower, upper = ((float(v) for v in a[bounds_name].sel(feature=feature).values) if bounds_name in a
                     else (math.nan, math.nan))
     sweep = [str(s) for s in a["sweep_point"].values] if "sweep_point" in a.dims else []
@@ -261,8 +260,7 @@ def _question(b: Builder) -> str:
     spec = b.spec
     requirement, source = backlash_requirement(b.analysis)
     sweep = "sweep_point" in b.analysis.dims and b.analysis.sizes["sweep_point"] > 0
-    condition = str(b.analysis.attrs.get("observability_condition", "backlash"))
-    quantity_name, unit, _, _ = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+    quantity_name, unit, _, _ = swept(b.analysis)
     n_sampled, n_varying = len(b.parameters), len(b.varying)
     source = source.removeprefix("Bertolino (2020) ").split(":")[0]
     asks = (f"can the bench detect a {quantity_name} of {quantity(requirement, unit)} ({source}) with its sensors"

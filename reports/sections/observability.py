@@ -9,7 +9,7 @@ import numpy as np
 from campaigns.analysis.campaign_analysis import RESOLUTIONS
 from reports import figures
 from reports.builder import Builder
-from reports.detection import sweep_quantity
+from reports.detection import minimum_detectable, sweep_quantity
 from reports.model import Callout, Heading, Paragraph
 from reports.phrases import NO_VERDICT, tone
 from reports.units import number
@@ -84,7 +84,7 @@ def build(b: Builder):
         "is the figure on page 1."
     )
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
-    minimum = f"minimum_detectable_{quantity_name.replace(' ', '_')}"
+    minimum = minimum_detectable(quantity_name)
     for feature in b.features:
         if _resolution(a, feature, float(a[minimum].sel(feature=feature)) if minimum in a else math.nan) == (
                 "beyond_sweep"):
