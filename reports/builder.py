@@ -9,6 +9,7 @@ from reports.conditions import dataset_conditions
 from reports.figures import Group, Panel
 from reports.inputs import Inputs
 from reports.model import Figure, Table
+from reports.phrases import insufficient
 from reports.units import axis_label, display_scale
 
 #: Parameters shown in a tornado chart (the strongest by |Spearman ρ|): two charts fit on a page.
@@ -18,10 +19,6 @@ TORNADO_PARAMETERS = 10
 FALLBACK_MIN_OK_RUNS = 10
 #: Influences per feature in the executive summary.
 SUMMARY_INFLUENCES = 3
-#: Tone of each requirement verdict (CONTRACT.md: the analysis writes exactly one of these).
-VERDICT_TONES = {"met": "good", "not met": "bad", "undetermined": "info", "insufficient data": "muted"}
-#: Leading words of the fidelity audit in results written before its three-way verdict (issue 16).
-_LEGACY_AUDIT_TONES = {"passed": "good", "FLAGGED": "bad"}
 #: Parameter rows of a correlation heat map (with wrapped names, a page holds about this many).
 HEATMAP_PARAMETERS = 20
 #: Parameters in the scatter plots of a feature.
@@ -42,13 +39,6 @@ TRACE_PANELS = (
 )
 #: Variables of the nut-minus-screw signal of Eq. 9.12 (Fig. 9.11).
 NUT, SCREW = "nut1_position", "screw_equivalent_position"
-
-
-def statement_tone(statement: str) -> str:
-    """The tone of a stored statement from the verdict it starts with (``"not met: ..."``); ``"info"`` if none."""
-    head = statement.split(":", 1)[0].split(" (", 1)[0]
-    return VERDICT_TONES.get(head, _LEGACY_AUDIT_TONES.get(head, "info"))
-
 
 
 class Builder:
@@ -105,7 +95,7 @@ class Builder:
                 return None
         elif n >= self.min_ok_runs:
             return None
-        return f"insufficient data: {n} ok run(s) < {self.min_ok_runs}"
+        return insufficient(n, self.min_ok_runs)
 
     def true_of(self, feature: str) -> str | None:
         """The true-signal counterpart of a measured feature, if the campaign stored one."""

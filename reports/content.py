@@ -2,7 +2,8 @@
 
 :func:`build` turns the loaded inputs (:mod:`reports.inputs`) into one
 :class:`reports.model.Report`: the executive summary and the sections, one module each in
-:mod:`reports.sections` (shared state and chart limits: :mod:`reports.builder`). Every number shown is read from
+:mod:`reports.sections`, in the order and with the titles of :mod:`reports.outline` (shared state and chart
+limits: :mod:`reports.builder`). Every number shown is read from
 ``results.nc`` or ``analysis.nc`` (or the accuracy data set); nothing is simulated. Figures
 and tables are numbered in the order they appear, which both renderers keep.
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 from reports.builder import Builder
 from reports.inputs import Inputs
 from reports.model import Report, Section
+from reports.outline import SECTIONS
 from reports.sections import (
     comparison,
     control_robustness,
@@ -29,21 +31,24 @@ from reports.sections import (
     traces,
 )
 
-#: The sections in their order: the results first (the answer, then what it rests on), provenance and the long
-#: tables of the campaign's configuration last (issue 42).
-SECTION_TITLES = {
-    "observability": "Observability",
-    "control_robustness": control_robustness.TITLE,
-    "distributions": "Feature distributions",
-    "correlations": "Correlations",
-    "scatter": "Feature against the top-ranked parameters",
-    "traces": "Representative traces",
-    "failures": "Failed runs",
-    "fidelity": "Fidelity",
-    "model_form": model_form.TITLE,
-    "speed": "Speed and accuracy",
-    "summary": "Campaign and provenance",
+#: The function that builds each section of :data:`reports.outline.SECTIONS`, by key.
+BUILDERS = {
+    "comparison": comparison.build,
+    "observability": observability.build,
+    "measured": measured.build,
+    "control_robustness": control_robustness.build,
+    "distributions": distributions.build,
+    "correlations": correlations.build,
+    "scatter": scatter.build,
+    "traces": traces.build,
+    "failures": failures.build,
+    "fidelity": fidelity.build,
+    "model_form": model_form.build,
+    "speed": speed.build,
+    "summary": summary.build,
 }
+#: The titles of the sections every campaign report has, in their order.
+SECTION_TITLES = {entry.key: entry.title for entry in SECTIONS if not entry.needs}
 
 
 def build(inputs: Inputs, generated_at: str) -> Report:
@@ -62,29 +67,10 @@ def build(inputs: Inputs, generated_at: str) -> Report:
     """
     b = Builder(inputs)
     page_one = model_form.page_one(b, executive.build(b))  # first, so its data-set table is Table 1
-    # a comparison report opens with the comparison; measured tests follow the observability they are judged by
-    optional_first = [("comparison", comparison.build)] if inputs.comparison is not None else []
-    optional_measured = [("measured", measured.build)] if inputs.measured else []
-    titles = {**SECTION_TITLES, "measured": measured.TITLE,
-              **({"comparison": comparison.title(b)} if inputs.comparison is not None else {})}
-    sections = tuple(
-        Section(key, titles[key], tuple(make(b)))
-        for key, make in (
-            *optional_first,
-            ("observability", observability.build),
-            *optional_measured,
-            ("control_robustness", control_robustness.build),
-            ("distributions", distributions.build),
-            ("correlations", correlations.build),
-            ("scatter", scatter.build),
-            ("traces", traces.build),
-            ("failures", failures.build),
-            ("fidelity", fidelity.build),
-            ("model_form", model_form.build),
-            ("speed", speed.build),
-            ("summary", summary.build),
-        )
-    )
+    names = ({"design_a": inputs.comparison.name_a, "design_b": inputs.comparison.name_b}
+             if inputs.comparison is not None else {})
+    sections = tuple(Section(entry.key, entry.title.format(**names), tuple(BUILDERS[entry.key](b)))
+                     for entry in SECTIONS if not entry.needs or getattr(inputs, entry.needs))
     status = b.results["status"].values
     facts = (
         ("Campaign", f"{b.spec['name']}: {b.spec.get('description') or '–'}"),

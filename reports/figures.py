@@ -136,6 +136,12 @@ def _styled(draw):
     return wrapper
 
 
+def literal(text: str) -> str:
+    """Text of the user's (a spec's requirement source) drawn as written: matplotlib reads what stands between two $
+    as mathtext, and fails on some of it."""
+    return text.replace("$", r"\$")
+
+
 def _tidy_x(ax) -> None:
     """Few x ticks without an offset text (values come scaled by :func:`_scaled`), so tick labels never collide."""
     ax.xaxis.set_major_locator(MaxNLocator(5))

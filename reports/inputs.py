@@ -91,7 +91,7 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
         the analysis belongs to another campaign.
     """
     results_path = Path(results_path)
-    results = _open(results_path, "campaign results")
+    results = open_netcdf(results_path, "campaign results")
     spec = _check_results(results, results_path)
     files = [_describe("results", results_path)]
     if analysis_path is None and (results_path.parent / ANALYSIS_NAME).is_file():
@@ -103,18 +103,18 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
         analysis = analysis_dataset(results)
     else:
         analysis_path = Path(analysis_path)
-        analysis = _open(analysis_path, "campaign analysis")
+        analysis = open_netcdf(analysis_path, "campaign analysis")
         _check_analysis(analysis, analysis_path, results)
         files.append(_describe("analysis", analysis_path))
     accuracy = None
     if accuracy_path is not None:
         accuracy_path = Path(accuracy_path)
-        accuracy = _open(accuracy_path, "speed-versus-accuracy")
+        accuracy = open_netcdf(accuracy_path, "speed-versus-accuracy")
         _check_accuracy(accuracy, accuracy_path)
         files.append(_describe("accuracy", accuracy_path))
     measured = []
     for path in (Path(p) for p in measured_paths):
-        test = _open(path, "measured test")
+        test = open_netcdf(path, "measured test")
         if "measured_test" not in test.attrs:
             raise ReportError(path, "not a measured test (no measured_test attribute); make one with "
                                     "`twin measure import`")
@@ -128,11 +128,11 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
     comparison = None
     if against_path is not None:
         against_path = Path(against_path)
-        other = _open(against_path, "campaign results")
+        other = open_netcdf(against_path, "campaign results")
         _check_results(other, against_path)
         other_analysis = None
         if (against_path.parent / ANALYSIS_NAME).is_file():
-            other_analysis = _open(against_path.parent / ANALYSIS_NAME, "campaign analysis")
+            other_analysis = open_netcdf(against_path.parent / ANALYSIS_NAME, "campaign analysis")
             if other_analysis.attrs.get("source_spec_hash") != other.attrs.get("spec_hash"):
                 other_analysis = None
         from campaigns.workflows.design_comparison import compare  # lazy: only comparison reports need it
@@ -142,7 +142,9 @@ def load_inputs(results_path, analysis_path=None, accuracy_path=None, *, measure
     return Inputs(results, analysis, accuracy, spec, tuple(files), analysis_path is None, tuple(measured), comparison)
 
 
-def _open(path: Path, what: str) -> xr.Dataset:
+def open_netcdf(path: Path, what: str) -> xr.Dataset:
+    """A netCDF file loaded into memory; a missing, foreign or truncated file is one :class:`ReportError` naming it
+    and ``what`` it should have been (``"campaign results"``). Every input of a report is opened here."""
     if not path.exists():
         raise ReportError(path, f"{what} file not found")
     if not path.is_file():

@@ -23,6 +23,7 @@ import numpy as np
 from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES
 from reports.errors import ReportError
 from reports.model import Callout, Code, Figure, Heading, Paragraph, Report, Section, Table
+from reports.phrases import decision, tone
 from reports.units import display_scale, estimate_with_interval, quantity, quantity_range
 
 __all__ = ["build_search_report"]
@@ -106,9 +107,9 @@ def load_search(path: Path):
     ReportError
         Naming the file and every variable or attribute that is missing or malformed.
     """
-    from reports.inputs import _open  # lazy: xarray loads only when a report is built
+    from reports.inputs import open_netcdf  # lazy: xarray loads only when a report is built
 
-    search = _open(path, "procedure-search")
+    search = open_netcdf(path, "procedure-search")
     problems = []
     if "candidate" not in search.dims:
         problems.append("dimension 'candidate' missing")
@@ -252,10 +253,6 @@ class _Search:
 
 def build(search, path: Path, generated_at: str) -> Report:
     """The report model of a procedure search."""
-    # lazy: the campaign report's builder loads matplotlib and xarray
-    from reports.builder import VERDICT_TONES
-    from reports.sections.executive import DECISIONS
-
     s = _Search(search, path)
     requirement = amount(s.requirement, s.unit)
     source = _text(s.attrs.get("requirement_source", ""))
@@ -266,8 +263,8 @@ def build(search, path: Path, generated_at: str) -> Report:
 
     statement = _text(s.attrs["statement"])
     # the statement verbatim, after the decision (and the verdict, unless the statement starts with it)
-    decision = DECISIONS.get(verdict, verdict.upper()) + ("" if statement.startswith(verdict) else f" ({verdict})")
-    summary = [Callout(f"{decision} — {statement}", VERDICT_TONES.get(verdict, "info"))]
+    decided = decision(verdict) + ("" if statement.startswith(verdict) else f" ({verdict})")
+    summary = [Callout(f"{decided} — {statement}", tone(verdict))]
     procedure = "; ".join(f"{name} {cells[best]}" + (f" {unit}" if unit and cells[best] != NONE else "")
                           for name, unit, cells in knob_columns)
     summary.append(Paragraph(

@@ -17,7 +17,7 @@ from pydantic import BaseModel
 import campaigns
 from app.service.auth import COOKIE_NAME, identify, require
 from app.service.registry import FINAL_STATES
-from app.service.submission import SUBMITTED_NAME, input_dir, output_dir, prepare
+from app.service.submission import ANSWER_FIGURE, SUBMITTED_NAME, input_dir, output_dir, prepare
 from campaigns.runner.budget import estimate
 from campaigns.runner.spec import SpecError
 
@@ -29,6 +29,7 @@ FILES = {
     "analysis.nc": ("out", "analysis.nc", "application/x-netcdf"),
     "report.html": ("out", "report.html", "text/html; charset=utf-8"),
     "report.pdf": ("out", "report.pdf", "application/pdf"),
+    ANSWER_FIGURE: ("out", ANSWER_FIGURE, "image/png"),
     "spec": ("input", SUBMITTED_NAME, "text/plain; charset=utf-8"),
     "spec.json": ("out", "spec.json", "application/json"),
 }
@@ -297,8 +298,8 @@ def cancel_campaign(request: Request, campaign_id: str) -> dict:
             responses={**AUTHENTICATED, 404: {"description": "unknown campaign, a name not in the list, not written "
                                                              "yet, or not a regular file of the campaign", **_ERROR}})
 def get_file(request: Request, campaign_id: str, name: str):
-    """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``spec`` (as submitted),
-    ``spec.json`` (canonical) (role ``read``). Any other name is 404."""
+    """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``detection.png`` (the report's page-1
+    figure), ``spec`` (as submitted), ``spec.json`` (canonical) (role ``read``). Any other name is 404."""
     caller(request)
     if name not in FILES:
         raise HTTPException(404, f"no file {name!r}; available names: {', '.join(FILES)}")
@@ -309,7 +310,7 @@ def get_file(request: Request, campaign_id: str, name: str):
         raise HTTPException(404, f"{name} of campaign {campaign_id} does not exist (yet)")
     download = name if name != "spec" else f"{record['name']}.toml"
     headers = {"Content-Security-Policy": REPORT_POLICY} if name == "report.html" else {}
-    inline = name in ("report.html", "report.pdf", "spec", "spec.json")
+    inline = name in ("report.html", "report.pdf", ANSWER_FIGURE, "spec", "spec.json")
     return FileResponse(path, media_type=media, filename=download, headers=headers,
                         content_disposition_type="inline" if inline else "attachment")
 

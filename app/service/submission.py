@@ -35,6 +35,9 @@ from twin.parameters import available_parameter_sets
 BUILTIN_SPECS = Path(campaigns.__file__).parent / "specs"
 SUBMITTED_NAME = "submitted.toml"
 SPEC_NAME = "spec.toml"
+#: The answer in a picture, the report's page-1 figure (reports.detection.detection_answer), which the runner draws
+#: beside the results for the campaign page.
+ANSWER_FIGURE = "detection.png"
 #: What a scene or parameter-set name may look like in a submitted spec (no path, no file name).
 _BARE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_-]*$")
 #: Deepest nesting of tables and arrays accepted: the built-in specs nest 4 deep; far deeper is an attack on the

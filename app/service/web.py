@@ -1,9 +1,9 @@
 """The web page: server-rendered HTML (Jinja2) with a little JavaScript that polls the JSON API.
 
 Pages: the campaign list (state, progress bar), the submit form (validation errors beside the spec),
-a campaign page (verdict statements of the analysis, live progress, failures, links to the report and
-the data files), and the login form. A browser signs in by pasting a token into the login form; the
-server answers with an HttpOnly, SameSite=Strict cookie holding it (see :mod:`app.service.auth`).
+a campaign page (verdict statements of the analysis with the report's page-1 figure, live progress, failures,
+links to the report and the data files), and the login form. A browser signs in by pasting a token into the login
+form; the server answers with an HttpOnly, SameSite=Strict cookie holding it (see :mod:`app.service.auth`).
 """
 
 from __future__ import annotations

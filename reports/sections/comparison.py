@@ -4,28 +4,23 @@
 from __future__ import annotations
 
 from campaigns.workflows.design_comparison import CONFIDENCE, MIN_RUNS, describe_shift, failure_text
-from reports.builder import VERDICT_TONES, Builder
+from reports.builder import Builder
 from reports.model import Callout, Paragraph
-from reports.sections.executive import feature_words, plain_name
+from reports.phrases import feature_words, plain_name, tone
 
 
 def _feature(b: Builder, feature: str) -> str:
     """A feature in the words of page 1; its true-signal twin as the same feature with ideal sensors (glossary)."""
     measured = feature.removesuffix("_true")
     if measured != feature and measured in b.results:
-        return f"{feature_words(b, measured)}, ideal sensors"
-    return feature_words(b, feature)
+        return f"{feature_words(b.results, measured)}, ideal sensors"
+    return feature_words(b.results, feature)
 
 
 def _requirement(b: Builder, what: str) -> str:
     """A compared verdict's subject with its feature in words (``backlash_feature: minimum detectable ...``)."""
     feature, sep, rest = what.partition(": ")
     return f"{_feature(b, feature)}: {rest}" if sep and feature in b.results else what
-
-
-def title(b: Builder) -> str:
-    c = b.inputs.comparison
-    return f"{c.name_b} against {c.name_a}"
 
 
 def build(b: Builder):
@@ -59,4 +54,4 @@ def build(b: Builder):
                   [not v.changed for v in c.verdicts])
     for v in (v for v in c.verdicts if v.changed):
         yield Callout(f"{_requirement(b, v.what)}: {v.verdict_a} in {c.name_a}, {v.verdict_b} in {c.name_b}.",
-                      VERDICT_TONES.get(v.verdict_b, "info"))
+                      tone(v.verdict_b))

@@ -15,10 +15,8 @@ import numpy as np
 from campaigns.analysis.margins import decibels, margin_values
 from reports import figures
 from reports.model import Callout, Paragraph
+from reports.phrases import tone
 
-TITLE = "Control robustness"
-#: Tone of each verdict (as the other sections).
-_TONES = {"met": "good", "not met": "bad", "undetermined": "info", "insufficient data": "muted"}
 #: Figures of merit drawn against their limits: (metric, axis label, limit field, limit side).
 _DRAWN = (
     ("phase_margin", "phase margin [°]", "phase_margin_min", "below"),
@@ -93,7 +91,7 @@ def build(b):
     )
     for verdict, statement in zip(analysis["margin_limit_verdict"].values, analysis["margin_limit_statement"].values,
                                   strict=True):
-        yield Callout(str(statement), _TONES.get(str(verdict), "info"))
+        yield Callout(str(statement), tone(str(verdict)))
     yield b.figure(
         "control-robustness-margins",
         "Loop margins of every run (dots, one column per data set; black bar: median) against the design limits "

@@ -10,26 +10,9 @@ import numpy as np
 from reports import figures
 from reports.builder import HEATMAP_PARAMETERS, TORNADO_PARAMETERS, Z95, Builder
 from reports.model import Callout, Paragraph
+from reports.phrases import INSUFFICIENT
+from reports.ranking import largest_first, rank_order
 from reports.units import number, quantity, quantity_range
-
-
-def rank_order(values: np.ndarray) -> np.ndarray:
-    """Indices of the finite entries, strongest magnitude first (ties in parameter order)."""
-    finite = np.flatnonzero(np.isfinite(values))
-    return finite[np.argsort(-np.abs(values[finite]), kind="stable")]
-
-
-def largest_first(values: np.ndarray) -> np.ndarray:
-    """Indices of the finite entries, largest (signed) first (ties in parameter order)."""
-    finite = np.flatnonzero(np.isfinite(values))
-    return finite[np.argsort(-values[finite], kind="stable")]
-
-
-def ranked_over_datasets(analysis, feature: str) -> np.ndarray:
-    """Parameter indices by their largest |Spearman ρ| in any data set (parameters without one left out)."""
-    rho = np.abs(analysis["spearman"].sel(feature=feature).transpose("parameter", "dataset").values)
-    strongest = np.array([row[np.isfinite(row)].max() if np.isfinite(row).any() else np.nan for row in rho])
-    return rank_order(strongest)
 
 
 def build(b: Builder):
@@ -85,7 +68,7 @@ def build(b: Builder):
                     band=Z95 / math.sqrt(n - 1) if n > 1 else None,
                     xlabel=f"Spearman correlation with {feature} [–]",
                     title=f"{feature}, {name}",
-                    muted=reason and f"insufficient data (n = {n})",
+                    muted=reason and f"{INSUFFICIENT} (n = {n})",
                 ),
             )
     for feature in b.features:

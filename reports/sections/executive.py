@@ -21,24 +21,17 @@ import math
 
 import numpy as np
 
-from campaigns.analysis.campaign_analysis import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES, mean_text
+from campaigns.analysis.campaign_analysis import mean_text
 from campaigns.statistics.paired_comparison import worst_verdict
 from campaigns.workflows.diagnosis import p_text
-from reports.builder import SUMMARY_INFLUENCES, VERDICT_TONES, Builder, statement_tone
-from reports.figures import Points, detection, level_axis
+from reports.builder import SUMMARY_INFLUENCES, Builder
+from reports.detection import backlash_requirement, detection_answer, minimum_detectable, swept
 from reports.model import Callout, Paragraph
-from reports.sections.correlations import rank_order
-from reports.sections.fidelity import AUTO_INTEGRATOR
-from reports.units import axis_label, display_scale, number, quantity, quantity_range
+from reports.outline import title
+from reports.phrases import NO_VERDICT, REANALYZE, decision, feature_words, plain_name, statement_tone, tone
+from reports.ranking import rank_order
+from reports.units import quantity, quantity_range
 
-#: The decision words of each verdict.
-DECISIONS = {"met": "GO", "not met": "NO-GO", "undetermined": "UNDETERMINED", "insufficient data": "NO DATA"}
-#: Features in words (a feature not listed is named by its stored long name).
-FEATURE_WORDS = {
-    "backlash_feature": "the backlash feature f_b (Eq. 9.12)",
-    "backlash_hysteresis": "the backlash hysteresis",
-    "drag_torque_feature": "the drag torque",
-}
 #: Design limits in words: limit -> (what, unit symbol, comparison words).
 LIMIT_WORDS = {
     "phase_margin": ("Phase margin at least {value:g}°", "below it"),
@@ -71,30 +64,6 @@ GLOSSARY = {
 }
 
 
-def backlash_requirement(analysis) -> tuple[float, str]:
-    """The requirement the observability verdict is about, as the analysis states it."""
-    if "requirement" in analysis.attrs:
-        return float(analysis.attrs["requirement"]), str(analysis.attrs.get("requirement_source", ""))
-    if "minimum_detectable_backlash" in analysis:
-        attrs = analysis["minimum_detectable_backlash"].attrs
-        return float(attrs.get("requirement", BACKLASH_REQUIREMENT)), str(attrs.get("requirement_source", "Table 9.3"))
-    return BACKLASH_REQUIREMENT, "Table 9.3"
-
-
-def verdicts(b: Builder, link: str):
-    """One callout per feature with the analysis's requirement statement, verbatim (the observability section)."""
-    a = b.analysis
-    if "requirement_statement" not in a or "requirement_verdict" not in a:
-        yield _no_verdict(link)
-        return
-    for feature in [str(f) for f in a["feature"].values]:
-        statement = str(a["requirement_statement"].sel(feature=feature).item())
-        verdict = str(a["requirement_verdict"].sel(feature=feature).item())
-        yield Callout(f"{feature}: {statement}", VERDICT_TONES.get(verdict, "info"), link)
-        if "within_unit_requirement_statement" in a:  # a within-unit campaign: the unit's own verdict beside it
-            statement = str(a["within_unit_requirement_statement"].sel(feature=feature).item())
-            verdict = str(a["within_unit_requirement_verdict"].sel(feature=feature).item())
-            yield Callout(f"{feature} within unit: {statement}", VERDICT_TONES.get(verdict, "info"), link)
 
 
 def within_unit_decision(b: Builder, feature: str) -> Callout | None:
@@ -105,25 +74,10 @@ def within_unit_decision(b: Builder, feature: str) -> Callout | None:
         return None
     verdict = str(a["within_unit_requirement_verdict"].sel(feature=feature).item())
     statement = str(a["within_unit_requirement_statement"].sel(feature=feature).item())
-    return Callout(f"{DECISIONS.get(verdict, verdict.upper())} — within unit (the same unit tested as it wears), "
-                   f"{feature_words(b, feature)}: {statement}", VERDICT_TONES.get(verdict, "info"), "observability")
+    return Callout(f"{decision(verdict)} — within unit (the same unit tested as it wears), "
+                   f"{feature_words(b.results, feature)}: {statement}", tone(verdict), "observability")
 
 
-def _no_verdict(link: str) -> Callout:
-    return Callout("Requirement verdict: not available. This analysis.nc holds no requirement_verdict / "
-                   "requirement_statement (written by an older analysis); re-run `twin campaign analyze` on the "
-                   "results to obtain the verdict with its bounds and sample size.", "info", link)
-
-
-def feature_words(b: Builder, feature: str) -> str:
-    return FEATURE_WORDS.get(feature, str(b.results[feature].attrs.get("long_name", feature)))
-
-
-def plain_name(parameter: str) -> str:
-    """``sensors.linear_encoder_phase_asymmetry`` -> ``linear encoder phase asymmetry (sensors)``."""
-    group, _, key = parameter.rpartition(".")
-    words = key.replace("_", " ")
-    return f"{words} ({group})" if group else words
 
 
 def _runs_text(runs: float, reason: str, n: int) -> str:
@@ -138,8 +92,7 @@ def observability_decision(b: Builder, feature: str) -> Callout:
     """The decision on the detection requirement with one measured feature (the ideal-sensor reading beside it)."""
     a = b.analysis
     requirement, source = backlash_requirement(a)
-    condition = str(a.attrs.get("observability_condition", "backlash"))
-    quantity_name, unit, scale, shown = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+    quantity_name, unit, scale, shown = swept(a)
 
     def fault(value: float) -> str:  # in the fault quantity's own unit (µm for a backlash), as the analysis says it
         return f"{value * scale:.3g} {shown}" if math.isfinite(value) else "–"
@@ -147,8 +100,8 @@ def observability_decision(b: Builder, feature: str) -> Callout:
     verdict = str(a["requirement_verdict"].sel(feature=feature).item())
     source_words = source.removeprefix("Bertolino (2020) ").split(":")[0]
     what = (f"Detect a {fault(requirement)} {quantity_name} ({source_words}) with "
-            f"{feature_words(b, feature)}")
-    bounds_name = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
+            f"{feature_words(b.results, feature)}")
+    bounds_name = minimum_detectable(quantity_name) + "_ci"
     lower, upper = ((float(v) for v in a[bounds_name].sel(feature=feature).values) if bounds_name in a
                     else (math.nan, math.nan))
     sweep = [str(s) for s in a["sweep_point"].values] if "sweep_point" in a.dims else []
@@ -167,18 +120,18 @@ def observability_decision(b: Builder, feature: str) -> Callout:
         text = (f"{smallest.capitalize()} lies between {fault(lower)} and {upper_text} (95 % bounds), "
                 f"and the requirement lies between them: {n} runs per sweep level cannot tell yet. "
                 + (_runs_text(runs, reason, n) if "runs_to_decide" in a else
-                   "This analysis.nc does not state the runs that would decide it (re-run `twin campaign analyze`)."))
+                   f"This analysis.nc does not state the runs that would decide it ({REANALYZE})."))
     elif not sweep:
         text = "The spec has no observability sweep, so no detection verdict is sought."
     else:
         text = (f"{n} ok runs per sweep level; " + (f"{runs:.0f} are needed before any verdict."
                                                      if math.isfinite(runs) else "too few for any verdict."))
-    text = f"{DECISIONS.get(verdict, verdict.upper())} — {what}: {text}"
+    text = f"{decision(verdict)} — {what}: {text}"
     true = b.true_of(feature)
     if true is not None and true in a["feature"].values:
         true_verdict = str(a["requirement_verdict"].sel(feature=true).item())
-        text += f" With ideal sensors: {DECISIONS.get(true_verdict, true_verdict.upper())}."
-    return Callout(text, VERDICT_TONES.get(verdict, "info"), "observability")
+        text += f" With ideal sensors: {decision(true_verdict)}."
+    return Callout(text, tone(verdict), "observability")
 
 
 def limit_decisions(analysis) -> list[Callout]:
@@ -204,8 +157,8 @@ def limit_decisions(analysis) -> list[Callout]:
         what = words.format(value=thresholds[limit]) + f" in every loop ({loops})"
         if not all(v in analysis for v in ("margin_limit_counts", "margin_limit_fraction", "margin_limit_fraction_ci")):
             pick = next(i for i, v in zip(rows, verdicts, strict=True) if v == worst)  # an older analysis: quote it
-            out.append(Callout(f"{DECISIONS.get(worst, worst.upper())} — {what}: "
-                               f"{analysis['margin_limit_statement'].values[pick]}.", VERDICT_TONES.get(worst, "info"),
+            out.append(Callout(f"{decision(worst)} — {what}: "
+                               f"{analysis['margin_limit_statement'].values[pick]}.", tone(worst),
                                "control_robustness"))
             continue
         counts, fractions = analysis["margin_limit_counts"].values, analysis["margin_limit_fraction"].values
@@ -237,7 +190,7 @@ def limit_decisions(analysis) -> list[Callout]:
             text = observed + more + "."
         else:
             text = f"{n} runs with the margin; too few for any verdict."
-        out.append(Callout(f"{DECISIONS.get(worst, worst.upper())} — {what}: {text}", VERDICT_TONES.get(worst, "info"),
+        out.append(Callout(f"{decision(worst)} — {what}: {text}", tone(worst),
                            "control_robustness"))
     return out
 
@@ -247,7 +200,7 @@ def _influences(b: Builder, feature: str) -> str:
     analysis withholds the index: ``first_order_index_flag``), else |Spearman ρ| (labelled)."""
     a = b.analysis
     parameters = [str(p) for p in a["parameter"].values]
-    words = feature_words(b, feature)
+    words = feature_words(b.results, feature)
     sufficient = [d for d in b.datasets if b.insufficient(d, feature) is None]
     if not sufficient:
         return (f"What moves {words}: insufficient data in every data set (fewer than {b.min_ok_runs} ok runs); "
@@ -307,8 +260,7 @@ def _question(b: Builder) -> str:
     spec = b.spec
     requirement, source = backlash_requirement(b.analysis)
     sweep = "sweep_point" in b.analysis.dims and b.analysis.sizes["sweep_point"] > 0
-    condition = str(b.analysis.attrs.get("observability_condition", "backlash"))
-    quantity_name, unit, _, _ = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
+    quantity_name, unit, _, _ = swept(b.analysis)
     n_sampled, n_varying = len(b.parameters), len(b.varying)
     source = source.removeprefix("Bertolino (2020) ").split(":")[0]
     asks = (f"can the bench detect a {quantity_name} of {quantity(requirement, unit)} ({source}) with its sensors"
@@ -340,7 +292,8 @@ def _audit_summary(audit: str) -> str:
     if not head or not items or not all("/" in item for item in items):
         return audit
     datasets = sorted({item.split("/")[0] for item in items})
-    return f"{head}: {len(items)} data-set/feature pair(s) in {', '.join(datasets)} (listed in the Fidelity section)"
+    return (f"{head}: {len(items)} data-set/feature pair(s) in {', '.join(datasets)} (listed in the "
+            f"{title('fidelity')} section)")
 
 
 def build(b: Builder):
@@ -350,7 +303,7 @@ def build(b: Builder):
     yield Paragraph("Decisions, one line per requirement (GO: met, NO-GO: not met, UNDETERMINED: the runs cannot tell "
                     "yet, with the runs that would decide it; each links to its section):")
     if "requirement_statement" not in a or "requirement_verdict" not in a:
-        yield _no_verdict("observability")
+        yield Callout(NO_VERDICT, "info", "observability")
     else:
         for feature in b.measured:
             yield observability_decision(b, feature)
@@ -364,14 +317,14 @@ def build(b: Builder):
         sentence = c.sentence
         for feature in sorted(b.results.data_vars, key=len, reverse=True):  # the longest first: f_true before f
             if b.results[feature].attrs.get("role") == "feature":
-                sentence = sentence.replace(f" is {feature} in ", f" is {feature_words(b, feature)} in ")
+                sentence = sentence.replace(f" is {feature} in ", f" is {feature_words(b.results, feature)} in ")
         changes = ", ".join(plain_name(p) for p in c.design_changes)
         yield Callout(sentence + (f" The designs differ in: {changes}." if changes else ""), "info", "comparison")
     for found in b.inputs.measured:
         healthy = any(f is not None and f.healthy for f in found.fault.values())
         verdict = found.verdict
         for feature in found.features:  # the feature in words, as everywhere on page 1
-            verdict = verdict.replace(f"{feature} = ", f"{feature_words(b, feature)} = ")
+            verdict = verdict.replace(f"{feature} = ", f"{feature_words(b.results, feature)} = ")
         yield Callout(f"Measured test {found.test}: {verdict}.", "good" if healthy else "info", "measured")
     rows, muted = [], []
     cells = _measured_cells(b)
@@ -386,7 +339,7 @@ def build(b: Builder):
         muted.append(bool(reasons))
     common = b.conditions.common_text()
     measured = ("; Measured test: where each measured test given to the report lies in the data set's runs "
-                "(§ Measured tests)" if b.inputs.measured
+                f"(§ {title('measured')})" if b.inputs.measured
                 else "; Measured test: none given (`twin report RESULTS --measured TEST.nc` places a bench test "
                      "here)")
     yield b.table(
@@ -407,119 +360,6 @@ def build(b: Builder):
                   + (" (left out of every statistic)." if n_failed else "."),
                   "bad" if n_failed else "good", "failures")
     audit = _audit_summary(str(results.attrs.get("fidelity_audit", "not recorded in results.nc")))
-    checked = ("automatic model simplification and integrator against full fidelity with RK4"
-               if (b.spec.get("solver") or {}).get("integrator") == AUTO_INTEGRATOR
-               else "automatic model simplification against full fidelity")
-    yield Callout(f"Model check, fidelity audit ({checked}): {audit}.", statement_tone(audit), "fidelity")
+    yield Callout(f"Model check, fidelity audit (automatic model simplification against full fidelity): {audit}.",
+                  statement_tone(audit), "fidelity")
     yield b.table("Terms used on this page.", ("Term", "Meaning"), list(GLOSSARY.items()))
-
-
-def sweep_quantity(analysis) -> tuple[str, np.ndarray, float, str]:
-    """The swept fault quantity, its levels [SI], and its display scale and unit (µm for a backlash, N for a preload
-    loss), as the analysis names them."""
-    condition = str(analysis.attrs.get("observability_condition", "backlash"))
-    quantity_name, _, scale, shown = SWEEP_QUANTITIES.get(condition, SWEEP_QUANTITIES["backlash"])
-    name = f"sweep_{quantity_name.replace(' ', '_')}"
-    return quantity_name, np.asarray(analysis[name].values, dtype=float), scale, shown
-
-
-def _pairs(analysis) -> list[tuple[str, str | None]]:
-    """Each measured feature with its ideal-sensor counterpart (``<feature>_true``) when the analysis holds it."""
-    features = [str(f) for f in analysis["feature"].values]
-    return [(f, f + "_true" if f + "_true" in features else None)
-            for f in features if not (f.endswith("_true") and f.removesuffix("_true") in features)]
-
-
-def _decision_label(analysis, feature: str, scale: float, shown: str, quantity_name: str) -> str:
-    """``backlash_feature: NO-GO, 1–2 µm (95 % bounds)``: the analysis's verdict and the bounds of the minimum
-    detectable size, in the figure's legend (short: the legend has two columns on the page's width)."""
-    verdict = str(analysis["requirement_verdict"].sel(feature=feature).item())
-    name = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
-    lower, upper = ((float(v) for v in analysis[name].sel(feature=feature).values) if name in analysis
-                    else (math.nan, math.nan))
-    decision = DECISIONS.get(verdict, verdict.upper())
-    if not (math.isfinite(lower) or math.isfinite(upper)):
-        return f"{feature}: {decision}"
-    high = f"{number(upper * scale)} {shown}" if math.isfinite(upper) else "beyond the sweep"
-    return f"{feature}: {decision}, {number(lower * scale)}–{high} (95 % bounds)"
-
-
-def detection_answer(analysis) -> tuple[bytes, str] | None:
-    """The answer to the detection requirement in a picture, with its caption: ``(png, caption)``, or None when the
-    analysis has no sweep (or predates the verdict).
-
-    Detection probability against fault size, each measured feature's points with their 95 % intervals per sweep level
-    (its ideal-sensor reading beside it, open squares), the power target, the requirement, and each feature's verdict
-    with the 95 % bounds of its minimum detectable size (a bar above the points). Below the detection floor the
-    detection probabilities are withheld, and the picture shows each level's feature mean with its t interval
-    instead. Page 1 of the report draws it, and so can the service's campaign page: it needs ``analysis.nc`` alone.
-    """
-    if "sweep_point" not in analysis.dims or "requirement_verdict" not in analysis:
-        return None
-    quantity_name, levels, scale, shown = sweep_quantity(analysis)
-    requirement, source = backlash_requirement(analysis)
-    power = float(analysis.attrs.get("detection_power", 0.95))
-    fa = float(analysis.attrs.get("false_alarm_rate", 0.05))
-    sweep = [str(s) for s in analysis["sweep_point"].values]
-    pairs = _pairs(analysis)
-    if not sweep or not pairs:
-        return None
-    n = min(int(analysis["n_used"].sel(dataset=d, feature=f)) for d in sweep for f, _ in pairs)
-    x = levels * scale
-    units = (str(analysis["feature_units"].sel(feature=pairs[0][0]).item()) if "feature_units" in analysis.coords
-             else "m")
-    factor, unit = display_scale(units, analysis["feature_mean"].sel(feature=[f for f, _ in pairs]).values)
-    probability = analysis["sweep_detection_probability"]
-    detected = bool(np.isfinite(probability.values).any())
-    series = []
-    for k, (feature, true) in enumerate(pairs):
-        for name, filled in ((feature, True), (true, False)):
-            if name is None:
-                continue
-            label = name if filled else f"{name} (ideal sensors)"
-            if detected:
-                y = probability.sel(feature=name).values
-                ci = (analysis["sweep_detection_probability_ci"].sel(feature=name).values
-                      if "sweep_detection_probability_ci" in analysis else np.full((len(sweep), 2), math.nan))
-                series.append(Points(label, x, y, ci[:, 0], ci[:, 1], f"C{k}", filled))
-            elif "feature_mean_ci" in analysis:
-                cell = analysis.sel(feature=name, dataset=sweep)
-                series.append(Points(label, x, cell["feature_mean"].values * factor,
-                                     *(cell["feature_mean_ci"].values.T * factor), f"C{k}", filled))
-    if not series:
-        return None
-    where = ("; a logarithmic axis cannot show the reference level 0, which is left out" if level_axis(x) == "log"
-             and (x == 0).any() else "")
-    requirement_line = (f"requirement {number(requirement * scale)} {shown} ({source.split(':')[0]})",
-                        requirement * scale)
-    if detected:
-        ci = f"minimum_detectable_{quantity_name.replace(' ', '_')}_ci"
-        bounds = [(_decision_label(analysis, f, scale, shown, quantity_name),
-                   *((float(v) * scale for v in analysis[ci].sel(feature=f).values) if ci in analysis
-                     else (math.nan, math.nan)), f"C{k}") for k, (f, _) in enumerate(pairs)]
-        png = detection(series, power=power, false_alarm_rate=fa, requirement=requirement_line, bounds=bounds,
-                        xlabel=axis_label(quantity_name, shown))
-        caption = (f"Detection probability against {quantity_name}: the share of each sweep level's runs flagged by "
-                   f"the threshold that flags {fa:.0%} of the reference's runs, with its 95 % interval (bootstrap, "
-                   "widened to the exact binomial interval of the count), per measured feature (filled) and with "
-                   f"ideal sensors (open); {n} ok runs per level or more. The bar above the points is each "
-                   f"feature's minimum detectable {quantity_name} within its 95 % bounds, named with the verdict: "
-                   "GO where the bar ends at or below the requirement line, NO-GO where it starts at or above it. "
-                   "Points are the levels that were run, drawn side by side; nothing is drawn between them, where no "
-                   f"run was made{where} (its detection probability is the false-alarm rate by construction).")
-        return png, caption
-    # below the detection floor: no detection probability, but each level's mean with its interval (issue 42)
-    floor = int(analysis.attrs.get("min_detection_runs", 59))
-    reference = next(d for d, level in zip(sweep, levels, strict=True) if level == 0.0)
-    bands = tuple((f"{f}: mean of the reference {reference}, 95 % interval",
-                   *(float(v) * factor for v in analysis["feature_mean_ci"].sel(feature=f, dataset=reference).values),
-                   f"C{k}") for k, (f, _) in enumerate(pairs))
-    png = detection(series, power=math.nan, false_alarm_rate=math.nan, requirement=requirement_line, bounds=[],
-                    xlabel=axis_label(quantity_name, shown), ylabel=axis_label("feature mean", unit), bands=bands)
-    caption = (f"NO DATA for a detection verdict: {n} ok runs per sweep level, {floor} needed for a detection "
-               "threshold. Instead, each level's feature mean with its 95 % Student t interval (flagged: below "
-               f"{int(analysis.attrs.get('min_ok_runs', 20))} runs the interval rests on a normal shape so few runs "
-               "cannot check), per measured feature (filled) and with ideal sensors (open); the band of the feature's "
-               "colour is the reference's mean: a level whose interval clears it is told apart from the reference on "
-               f"average, which is not yet detection in a single test{where} (its mean is the band).")
-    return png, caption

@@ -5,12 +5,13 @@ from __future__ import annotations
 import re
 from collections import Counter
 
-from reports.builder import Builder, statement_tone
+from reports.builder import Builder
 from reports.model import Callout, Paragraph
+from reports.phrases import statement_tone
 
-#: twin.simulation's names, spelled here because a report reads results files and never imports the twin: the
-#: opt-in automatic integrator, and the default a spec's JSON carries when nothing else is asked for.
-AUTO_INTEGRATOR = "auto"
+#: The integrator a spec's JSON carries when nothing else is asked for (campaigns.runner.spec), spelled here because a
+#: report reads results files and never imports the twin. What solved each run is what the run recorded
+#: (results.nc ``integrator``).
 DEFAULT_INTEGRATOR = "rk4"
 
 #: One feature's part of a ``fidelity_audit_<data set>`` attribute (campaigns.bench.fidelity_audit.summary_attrs; the
@@ -92,8 +93,8 @@ def build(b: Builder):
 
 
 def _step_in_micro(label: str) -> str:
-    """A solver label as results.nc stores it (twin.engine.solver_choice.solver_label, ASCII "rk4 at 62.5 us"), in the
-    report's unit spelling ("rk4 at 62.5 µs")."""
+    """A solver label as results.nc stores it (twin.simulation.solver_label, ASCII "rk4 at 62.5 us"), in the report's
+    unit spelling ("rk4 at 62.5 µs")."""
     return re.sub(r"(\d) us$", r"\1 µs", label)
 
 
@@ -109,18 +110,10 @@ def _integrators(b: Builder):
                                        *([f"not recorded: {unrecorded}"] if unrecorded else [])])))
     if not rows:
         yield Paragraph(f"The campaign asked for integrator '{requested}'; which method solved each run is not "
-                        "recorded in this results.nc (written before the automatic integrator, or by a run "
-                        "function that does not report it).")
+                        "recorded in this results.nc (written before the runs recorded it, or by a run function that "
+                        "does not report it).")
         return
-    yield Paragraph(
-        f"The campaign asked for integrator '{requested}'. "
-        + ("With 'auto' each run is first solved by the implicit drive-period step (imex_euler at 125 µs) with the "
-           "premise that both nuts stay held on a flank checked at every step; a run whose nuts are released for "
-           "longer than the premise allows is solved again from the start by RK4 with the same noise: at the drive "
-           "period if that run stays stable and its local-error estimate never exceeds the tolerance (not tried "
-           "where a mode is beyond RK4's reach at that step from the start, e.g. the full-fidelity current loop), "
-           "else at 62.5 µs (twin.engine.solver_choice, docs/accuracy.md). " if requested == AUTO_INTEGRATOR else "")
-        + "The table counts the method and step that solved each run."
-    )
+    yield Paragraph(f"The campaign asked for integrator '{requested}'. The table counts the method and step that "
+                    "solved each run.")
     yield b.table("Integrator that solved the runs, per data set (method and step: runs).", ("Data set", "Integrator"),
                   rows)

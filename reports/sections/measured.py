@@ -8,8 +8,6 @@ from reports.builder import Builder
 from reports.model import Callout, Paragraph
 from reports.units import quantity
 
-TITLE = "Measured tests"
-
 
 def build(b: Builder):
     yield Paragraph(

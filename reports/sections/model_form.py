@@ -13,10 +13,10 @@ from weakref import WeakKeyDictionary
 
 from campaigns.analysis import model_form
 from campaigns.analysis.campaign_analysis import printed_estimate
-from reports.builder import VERDICT_TONES, Builder
+from reports.builder import Builder
 from reports.model import Callout, Paragraph, Table
+from reports.phrases import INSUFFICIENT, VERDICT_TONES
 
-TITLE = "Model-form study"
 #: Tone of the page-1 sentence: a changed verdict is a finding against the conclusions' robustness.
 _CHANGED_TONE = VERDICT_TONES["not met"]
 
@@ -60,7 +60,7 @@ def _cell(table, variant: str, dataset: str, feature: str, runs: int) -> str:
     if status == "not_run":
         return "–"
     if status == "insufficient_data":
-        return f"insufficient data (n = {int(cell['n_variant'])}, {int(cell['n_baseline'])})"
+        return f"{INSUFFICIENT} (n = {int(cell['n_variant'])}, {int(cell['n_baseline'])})"
     lower, upper = (float(v) for v in cell["mean_shift_ci"].values)
     unit = str(table["feature_units"].sel(feature=feature).item())
     n = min(int(cell["n_variant"]), int(cell["n_baseline"]))

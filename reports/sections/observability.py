@@ -9,8 +9,9 @@ import numpy as np
 from campaigns.analysis.campaign_analysis import RESOLUTIONS
 from reports import figures
 from reports.builder import Builder
+from reports.detection import minimum_detectable, sweep_quantity
 from reports.model import Callout, Heading, Paragraph
-from reports.sections.executive import sweep_quantity, verdicts
+from reports.phrases import NO_VERDICT, tone
 from reports.units import number
 
 
@@ -66,7 +67,7 @@ def build(b: Builder):
             )
     yield Heading("Minimum detectable backlash")
     # the verdict is the analysis's sentence, verbatim (with its bounds and n); the report adds only facts of the curve
-    yield from verdicts(b, "")
+    yield from _verdicts(b)
     if "sweep_point" not in a.dims or "requirement_verdict" not in a:
         yield Callout("Not available: the campaign spec has no observability sweep ([observability] sweep), so the "
                       "minimum detectable fault size cannot be compared with a requirement.")
@@ -83,7 +84,7 @@ def build(b: Builder):
         "is the figure on page 1."
     )
     probability = {f: a["sweep_detection_probability"].sel(feature=f).values for f in b.features}
-    minimum = f"minimum_detectable_{quantity_name.replace(' ', '_')}"
+    minimum = minimum_detectable(quantity_name)
     for feature in b.features:
         if _resolution(a, feature, float(a[minimum].sel(feature=feature)) if minimum in a else math.nan) == (
                 "beyond_sweep"):
@@ -105,6 +106,22 @@ def build(b: Builder):
             "clears the reference's is what the bench can observe.",
             figures.distributions(b.distribution_panels(feature, sweep)),
         )
+
+
+def _verdicts(b: Builder):
+    """One callout per feature with the analysis's requirement statement, verbatim."""
+    a = b.analysis
+    if "requirement_statement" not in a or "requirement_verdict" not in a:
+        yield Callout(NO_VERDICT, "info")
+        return
+    for feature in [str(f) for f in a["feature"].values]:
+        statement = str(a["requirement_statement"].sel(feature=feature).item())
+        verdict = str(a["requirement_verdict"].sel(feature=feature).item())
+        yield Callout(f"{feature}: {statement}", tone(verdict))
+        if "within_unit_requirement_statement" in a:  # a within-unit campaign: the unit's own verdict beside it
+            statement = str(a["within_unit_requirement_statement"].sel(feature=feature).item())
+            verdict = str(a["within_unit_requirement_verdict"].sel(feature=feature).item())
+            yield Callout(f"{feature} within unit: {statement}", tone(verdict))
 
 
 def _resolution(analysis, feature: str, minimum: float) -> str:

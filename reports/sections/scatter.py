@@ -6,7 +6,7 @@ from reports import figures
 from reports.builder import SCATTER_PARAMETERS, Builder
 from reports.figures import Line, Panel
 from reports.model import Callout, Paragraph
-from reports.sections.correlations import ranked_over_datasets
+from reports.ranking import ranked_over_datasets
 from reports.units import axis_label, display_scale
 
 

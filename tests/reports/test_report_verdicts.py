@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -489,3 +490,41 @@ def test_an_interval_reads_in_the_unit_that_shows_it():
     assert quantity_range(1.04e-7, 4.44e-7, "m") == "100–440 nm"
     assert quantity_range(0.0, 0.0, "m") == "0–0 m"
     assert quantity_range(0.2, 0.5, "1") == "0.2–0.5"
+
+
+@pytest.mark.parametrize("verdict", ["met", "not met", "undetermined", "insufficient data"])
+def test_each_decision_line_of_page_one_gives_its_n(verdict):
+    """Issue 42: page 1 has one line per requirement, each with the runs it rests on (60 ok runs per sweep level here),
+    and the answer in a picture right below the detection decisions."""
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=50, sensitivity_boot=20)
+    analysis["requirement_verdict"] = ("feature", np.array([verdict, "met"], dtype=object))
+    page = executive(results, analysis)
+    lines = [c for c in page if isinstance(c, Callout) and " — " in c.text
+             and c.text.split(" — ", 1)[0] in ("GO", "NO-GO", "UNDETERMINED", "NO DATA")]
+    detection = [c for c in lines if " — Detect a " in c.text]
+    assert len(detection) == 1  # f; its ideal-sensor reading f_true on the same line
+    assert all(re.search(r"\b60 (ok )?runs per sweep level\b", c.text) for c in detection), detection
+    figure = next(k for k, block in enumerate(page) if isinstance(block, Figure))
+    assert page[figure].key == "detection-sweep" and page.index(detection[0]) == figure - 1
+
+
+def test_a_separation_matrix_that_reads_one_number_is_a_sentence():
+    """Issue 42: 7 × 7 cells of 1.00 say nothing a sentence does not; a matrix with any other cell is drawn."""
+    from reports.sections import observability
+
+    results = results_of()
+    analysis = analysis_dataset(results, n_boot=20, sensitivity_boot=10)
+    pairs = len(NAMES) * (len(NAMES) - 1)
+    analysis["detection_probability"] = xr.ones_like(analysis["detection_probability"])
+    analysis["overlap"] = xr.zeros_like(analysis["overlap"]).where(
+        analysis["dataset"] != analysis["reference"], 1.0)  # 1 on the diagonal, by definition
+    blocks = _section_blocks(observability, results, analysis)
+    texts = [b.text for b in blocks if isinstance(b, Paragraph)]
+    assert any(f"every one of the {pairs} pairs of distinct data sets reads 1.00" in t for t in texts)
+    assert any(f"every one of the {pairs} pairs of distinct data sets reads 0.00" in t for t in texts)
+    assert not [b for b in blocks if isinstance(b, Figure) and b.key.startswith(("separation-", "overlap-"))]
+    analysis["detection_probability"] = analysis["detection_probability"].where(
+        (analysis["dataset"] != "b0") | (analysis["reference"] != "b2"), 0.99)
+    keys = [b.key for b in _section_blocks(observability, results, analysis) if isinstance(b, Figure)]
+    assert "separation-f" in keys and "overlap-f" not in keys

@@ -10,8 +10,9 @@ import pytest
 import xarray as xr
 from service_helpers import SPEC, client, twin, wait_final
 
-from app.service.submission import BUILTIN_SPECS
+from app.service.submission import ANSWER_FIGURE, BUILTIN_SPECS
 from campaigns.analysis.campaign_analysis import summary
+from reports.detection import detection_answer
 
 
 def test_health_needs_no_token_and_the_api_needs_one(service):
@@ -148,10 +149,15 @@ def test_a_small_thesis_campaign_runs_to_done_and_matches_the_cli(service, tmp_p
     assert files["spec"].read_text() == text
     assert files["report.pdf"].read_bytes().startswith(b"%PDF")
     assert "<html" in files["report.html"].read_text()[:500].lower()
-    # the verdict lines shown are the analysis's own, verbatim
+    # the verdict lines shown are the analysis's own, verbatim, with the caption of the report's page-1 figure
     with xr.open_dataset(files["analysis.nc"]) as analysis:
         statements, warnings = summary(analysis)
-    assert record["summary"] == {"statements": statements, "warnings": warnings} and statements
+        answer = detection_answer(analysis.load())
+    caption = answer[1] if answer is not None else ""
+    assert record["summary"] == {"statements": statements, "warnings": warnings, "figure_caption": caption}
+    assert statements
+    figure = reader.get(f"/api/v1/campaigns/{campaign_id}/files/{ANSWER_FIGURE}")
+    assert (figure.status_code, figure.content) == ((200, answer[0]) if answer is not None else (404, figure.content))
 
     # the CLI on the same spec and runs (its extends resolved beside it, as the service does)
     local_spec = tmp_path / "cli-spec" / "small_thesis.toml"

@@ -76,6 +76,10 @@ def test_submit_through_the_form_watch_the_bar_open_the_report(service, tmp_path
         page.wait_for_selector("#report-link", timeout=budget_ms)  # the page reloads when the campaign is done
         assert page.inner_text("[data-field=state]") == "done"
         assert page.locator("#verdicts li").count() == 4  # one verdict line per feature of the spec
+        # the report's page-1 figure, loaded by the browser as the page's own image (the login cookie, img-src 'self')
+        drawn = ("() => { const i = document.querySelector('#answer img'); "
+                 "return !!i && i.complete && i.naturalWidth > 0; }")
+        wait_until(lambda: _evaluate(page, drawn), what="the page-1 figure drawn on the campaign page")
         accessible(page)
         page.screenshot(path=str(tmp_path / "campaign.png"), full_page=True)
         campaign_page = page.url
