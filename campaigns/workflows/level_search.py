@@ -13,17 +13,17 @@ draws the reference's uncertain values and noise of run ``i`` (common random num
 Its numbers therefore depend on the spec and its fault size only, never on when or after which other levels it was
 added, nor on its position in the spec; the final campaign (fixed levels, then the added ones by size) is stored and
 analysed as any other (:func:`store`). The added levels differ from the reference, and from each other, only in the
-fault: for a model whose feature grows with the fault run by run, the detected fraction grows with the level, which
-keeps the crossing in one bracket. The analysis's bootstrap resamples every data set on its own, as if the levels
-were independent; their positive correlation then widens its bounds (conservative), which the known-answer tests
-(tests/campaigns/test_level_search.py) measure.
+fault: for a model whose feature grows with the fault run by run, their detected fractions (the same runs against
+the same threshold) never fall as the level grows, so one crossing is bracketed. The analysis's bootstrap resamples
+every data set on its own, as if the levels were independent; their positive correlation then widens its bounds
+(conservative), which the known-answer tests (tests/campaigns/test_level_search.py) measure.
 
 **Where the next level goes.** The evidence is always the measured levels: the verdict and the bounds are those of
 :func:`campaigns.analysis.campaign_analysis.bootstrap_minimum_detectable` (the bracket of the interpolated estimate:
-the last level not detected with the power and the first detected; bounds: sweep levels at the confidence). While
-that bracket is wider than the resolution a level is added inside it: ``bisection`` at its middle, ``monotone_fit``
-where a probit curve fitted to every level's detected count (maximum likelihood, slope kept positive) crosses the
-power, kept at least half the resolution from both ends (:func:`next_level`). The fit only places levels.
+the last level not detected with the power and the first detected; bounds: sweep levels at the confidence). After
+the requirement, a level goes inside that bracket while it is wider than the resolution, then into the widest gap
+inside the bounds wider than it (:func:`next_level`): ``bisection`` at the middle, ``monotone_fit`` where a probit
+curve fitted to every level's detected count predicts the crossing or a bound. The fit only places levels.
 
 **Looks (stretch).** ``stages`` lists the runs per level of each look; every sweep level grows to the next stage
 while the verdict is undetermined. The verdict's confidence holds over the looks by Bonferroni: each of the ``K``
@@ -65,13 +65,13 @@ from campaigns.runner.spec import MAX_RUNS_PER_DATASET, CampaignSpec, read_spec,
 from campaigns.runner.storage import ChunkStore
 from twin.errors import InputError
 
-METHODS = ("bisection", "monotone_fit")
 #: Spawn-key tag of the search's bootstrap streams (one per look and step), far from the data-set indices and from
 #: campaigns.analysis.campaign_analysis's tags.
 SEARCH_STREAM = 1_000_043
 #: Prefix of an added level's data-set name (``added_b1_25um``, ``added_loss150N``).
 PREFIX = "added"
-#: Most levels a search may add: each costs a stage of runs; 30 bisections split a sweep's gap by 1e9.
+#: Most levels a search may add (a typing slip beyond it: each costs a level's runs, and 30 bisections split a
+#: sweep's gap by 1e9).
 MAX_LEVELS = 30
 #: File beside results.nc with every look and step of the search (levels, runs, bracket, bounds, verdict).
 LOG_NAME = "level_search.json"
@@ -88,12 +88,13 @@ class Settings(BaseModel):
     """What the search aims at and may spend.
 
     ``feature``: the feature whose minimum detectable fault size is searched. ``resolution`` [SI, the fault's unit]:
-    the widest bracket of adjacent levels around the estimate that ends the search (None: only the requirement
-    level is added). ``method``: :data:`METHODS`. ``max_levels``: levels the search may add (the requirement's
-    included). ``stages``: runs per level at each look (empty: the spec's ``runs_per_dataset``, one look).
-    ``runs``: the most runs the search may execute, the fixed sweep levels' included (None: no cap beyond the
-    levels and stages). ``confidence``: of the verdict over all looks. ``n_boot``, ``seed``: the bootstrap of each
-    look.
+    the widest gap of adjacent levels around the estimate and inside its bounds that ends the search
+    (:func:`next_level`; None: only the requirement level is added). ``method``: ``bisection`` or ``monotone_fit``
+    (:func:`next_level`; bisection by measurement, docs/level_search.md). ``max_levels``: levels the search may
+    add (the requirement's included). ``stages``: runs per level at each look (empty: the spec's
+    ``runs_per_dataset``, one look). ``runs``: the most runs the search may execute, the fixed sweep levels'
+    included (None: no cap beyond the levels and stages). ``confidence``: of the verdict over all looks.
+    ``n_boot``, ``seed``: the bootstrap of each look.
     """
 
     model_config = ConfigDict(extra="forbid")
@@ -141,7 +142,7 @@ class Sweep:
                      float(requirement), {n: abs(v - values[reference]) for n, v in values.items()})
 
     def level_name(self, size: float) -> str:
-        quantity, _, scale, unit = SWEEP_QUANTITIES[self.condition]
+        _, _, scale, unit = SWEEP_QUANTITIES[self.condition]
         text = f"{size * scale:.6g}".replace(".", "_").replace("+", "")
         stem = "b" if self.condition == "backlash" else "loss"
         return f"{PREFIX}_{stem}{text}{'um' if unit == 'µm' else unit}"

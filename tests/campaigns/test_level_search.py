@@ -235,3 +235,22 @@ def test_the_probit_fit_recovers_a_known_curve_and_its_crossing():
     assert fit == pytest.approx((-1.645, 5e6), rel=1e-4)
     assert probit_level(fit, POWER) == pytest.approx((stats.norm.ppf(POWER) + 1.645) / 5e6, rel=1e-4)
     assert math.isnan(probit_level(None, POWER))
+
+
+def test_a_preload_loss_sweep_adds_levels_below_the_healthy_preload(tmp_path):
+    """A preload sweep from its healthy reference (1000 N): a loss L is the preload 1000 N - L, named by the loss;
+    the synthetic feature falls by L / stiffness (2e8 N/m), so the true minimum detectable loss is the closed form
+    of the backlash over 5 nm/N, 211 N at sigma = 0.25 µm, and the bounds hold it."""
+    path = write_spec(tmp_path, 0.25, 11)
+    text = path.read_text().replace('sweep = ["b0", "b5"]', 'sweep = ["p1000", "p0"]\ncondition = "preload"\n'
+                                    'reference = "p1000"\nrequirement = 200.0\nrequirement_source = "a test"')
+    for old, new in (('"b0"\nconditions = { backlash = 0.0 }', '"p1000"\nconditions = { preload = 1000.0 }'),
+                     ('"b5"\nconditions = { backlash = 5e-6 }', '"p0"\nconditions = { preload = 0.0 }')):
+        text = text.replace(old, new)
+    path.write_text(text)
+    result = run_search(path, resolution=100.0)
+    assert result.added[0] == "added_loss200N"
+    added = {d.name: d for d in result.spec.datasets}["added_loss200N"]
+    assert added.conditions == {"preload": 800.0} and added.seeds_from == "p1000"
+    low, high = result.last.bounds
+    assert low <= true_minimum(0.25) / 5e-9 <= high and result.resolved
