@@ -203,6 +203,28 @@ def plan_problems(spec: CampaignSpec, sweep: Sweep | None, settings: Settings) -
     return problems
 
 
+@dataclass
+class Step:
+    """One evaluation of the sweep: the look (0-based) and its runs per level, the levels ``{name: size}`` and the
+    one just ``added``, what the bootstrap at the look's ``confidence`` found (estimate, bracket, bounds, each level's
+    detection probability with its standard error, in the order of ``levels``), the ok runs ``used`` per level, the
+    verdict and the runs executed so far."""
+
+    look: int
+    runs_per_level: int
+    levels: dict[str, float]
+    added: str | None
+    estimate: float
+    bracket: tuple[float, float]
+    bounds: tuple[float, float]
+    probability: list[float]
+    probability_se: list[float]
+    used: list[int]
+    confidence: float
+    verdict: str
+    runs_used: int
+
+
 def probit_fit(sizes, flagged, runs) -> tuple[float, float] | None:
     """``(a, b)`` of the probit curve ``p(x) = Phi(a + b x)``, ``b > 0``, fitted by maximum likelihood to ``flagged``
     of ``runs`` at each fault size ``x`` [SI]; None when the fit fails. A monotone fit of detection against fault
@@ -283,31 +305,11 @@ def next_level(method: str, step: Step, resolution: float, power: float = POWER)
 
 
 @dataclass
-class Step:
-    """One evaluation of the sweep: the look, the levels and runs so far, and what the bootstrap found."""
-
-    look: int
-    runs_per_level: int
-    levels: dict[str, float]
-    added: str | None
-    estimate: float
-    bracket: tuple[float, float]
-    bounds: tuple[float, float]
-    probability: list[float]
-    probability_se: list[float]
-    used: list[int]
-    confidence: float
-    verdict: str
-    runs_used: int
-
-
-@dataclass
 class Result:
-    """A finished search: the final campaign (raw spec data and validated spec), every step, the verdict with its
-    bounds at the look confidence, whether the bracket reached the resolution, why the search stopped, the runs
-    used, and the run records ``{(data set, run): record}`` (for :func:`store`)."""
+    """A finished search: the final campaign's validated spec, the sweep, the settings, every step (the last holds the
+    verdict with its bounds at the look confidence), why the search stopped, and the run records ``{(data set, run):
+    record}`` (for :func:`store`)."""
 
-    data: dict
     spec: CampaignSpec
     sweep: Sweep
     settings: Settings
@@ -484,7 +486,7 @@ def search(spec_path: str | Path, settings: Settings, *, run_function: RunFuncti
             "; levels within the resolution around the estimate and inside its bounds"
             if settings.resolution is not None else "")
     final = _with_levels(data, sweep, added, last.runs_per_level)
-    return Result(final, validate_spec(final, catalog), sweep, settings, steps, stop, executor.records)
+    return Result(validate_spec(final, catalog), sweep, settings, steps, stop, executor.records)
 
 
 def _next_size(step: Step, sweep: Sweep, settings: Settings) -> tuple[float | None, str]:

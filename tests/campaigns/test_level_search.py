@@ -254,3 +254,14 @@ def test_a_preload_loss_sweep_adds_levels_below_the_healthy_preload(tmp_path):
     assert added.conditions == {"preload": 800.0} and added.seeds_from == "p1000"
     low, high = result.last.bounds
     assert low <= true_minimum(0.25) / 5e-9 <= high and result.resolved
+
+
+def test_the_search_stops_within_its_budgets_and_says_which(tmp_path):
+    """A run budget of the fixed sweep, the requirement and one more level (4 x 59 runs), or one level to add: the
+    search stops there, the reason named, the runs reported."""
+    path = write_spec(tmp_path, 0.25, 5)
+    result = run_search(path, resolution=0.1e-6, runs=4 * 59)
+    assert result.runs_used == 4 * 59 and result.stop_reason.startswith("run budget: another level of 59 runs")
+    assert not result.resolved and "236 runs in all" in statement(result)
+    result = run_search(path, resolution=0.1e-6, max_levels=7)  # the fewest the plan check lets through
+    assert len(result.added) == 7 and result.stop_reason == "level budget: max_levels = 7 levels added"
