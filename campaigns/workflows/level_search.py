@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from scipy import optimize, stats
 
 from campaigns.analysis.campaign_analysis import (
@@ -108,6 +108,16 @@ class Settings(BaseModel):
     confidence: float = Field(default=0.95, gt=0.5, lt=1.0)
     n_boot: int = Field(default=1000, ge=100, le=100_000)
     seed: int = Field(default=0, ge=0)
+
+    @classmethod
+    def checked(cls, **fields) -> Settings:
+        """The settings from user input (the CLI's options): every invalid field in one :class:`LevelSearchError`,
+        ``field: what is allowed (got value)``."""
+        try:
+            return cls(**fields)
+        except ValidationError as exc:
+            raise LevelSearchError([f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']} (got {e['input']!r})"
+                                    for e in exc.errors()]) from None
 
 
 def look_confidence(confidence: float, looks: int) -> float:

@@ -8,8 +8,8 @@ backlash has the closed form ``(z(1 - FALSE_ALARM_RATE) + z(POWER)) s`` (a shift
 
 Rates over seeds: each test runs a few dozen searches with fixed seeds and allows the count of misses that a true
 miss rate of 5 % exceeds with less than 1 % probability (binomial), so it fails when the rate is worse than stated,
-not on an unlucky seed. The runs of a search are few (59-320 per level) and the bootstrap small (200 replicates):
-the module takes about 30 s on two shared cores.
+not on an unlucky seed. The runs of a search are few (59-320 per level) and the bootstrap small (200 replicates),
+so the module stays fast enough for CI (its cost: docs/level_search.md).
 """
 
 from __future__ import annotations
@@ -265,3 +265,11 @@ def test_the_search_stops_within_its_budgets_and_says_which(tmp_path):
     assert not result.resolved and "236 runs in all" in statement(result)
     result = run_search(path, resolution=0.1e-6, max_levels=7)  # the fewest the plan check lets through
     assert len(result.added) == 7 and result.stop_reason == "level budget: max_levels = 7 levels added"
+
+
+def test_invalid_settings_are_one_error_naming_each_field():
+    with pytest.raises(LevelSearchError) as error:
+        Settings.checked(feature=FEATURE, resolution=-1e-6, method="golden", max_levels=99)
+    fields = [p.split(":")[0] for p in error.value.problems]
+    assert fields == ["resolution", "method", "max_levels"]
+    assert "greater than 0 (got -1e-06)" in error.value.problems[0]
