@@ -211,6 +211,11 @@ def preload_curve(params=None, backlash: float = 5.0e-5, peak_displacement: floa
         attrs={"backlash": backlash, "loaded_balls": float(c[K.LOADED_BALLS])})
 
 
+def _loaded(ds: xr.Dataset) -> bool:
+    """Whether the run applies an external force (the cylinder's, ``chapter7_backlash_force``)."""
+    return json.loads(ds.attrs["scene_conditions"])["cylinder"] == "attached"
+
+
 def chapter7_study(params=None, runs: dict[str, xr.Dataset] | None = None) -> xr.Dataset:
     """Every Sec. 7.9.3 measurement: per scene its backlash, the reversals (:func:`reversals`, variables and
     dimension prefixed by the scene), the loop width before the external force (and after it, where there is one);
@@ -225,7 +230,7 @@ def chapter7_study(params=None, runs: dict[str, xr.Dataset] | None = None) -> xr
         out[f"{scene}_backlash"] = xr.DataArray(json.loads(ds.attrs["scene_conditions"])["backlash"],
                                                 attrs={"units": "m"})
         out[f"{scene}_loop_width"] = xr.DataArray(loop_width(ds, end=FORCE_START), attrs={"units": "m"})
-        if "external_force" in ds and float(np.abs(ds.external_force).max()) > 0.0:
+        if _loaded(ds):
             out[f"{scene}_loop_width_loaded"] = xr.DataArray(loop_width(ds, start=FORCE_END + 0.02),
                                                              attrs={"units": "m"})
     return out
@@ -300,17 +305,17 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def run_chapter7(directory: str | Path, params=None) -> xr.Dataset:
-    """Run the study, write its figures and ``chapter7.nc`` (the measurements) in ``directory``; return the
-    measurements, with the figures' paths in ``attrs["figures"]``."""
+def run_chapter7(directory: str | Path, params=None, scenes=SCENES) -> xr.Dataset:
+    """Run the study on ``scenes``, write its figures and ``chapter7.nc`` (the measurements) in ``directory``;
+    return the measurements, with the figures' paths in ``attrs["figures"]``."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     params = params if params is not None else twin.load_parameters("bench")
-    runs = {scene: backlash_run(scene, params) for scene in SCENES}
+    runs = {scene: backlash_run(scene, params) for scene in scenes}
     out = chapter7_study(params, runs)
     paths = [_figure_backlash(scene, ds, reversals(ds), directory) for scene, ds in runs.items()]
-    paths += [_figure_loops({s: runs[s] for s in SCENES[:2]}, directory), _figure_preload(preload_curve(params),
-                                                                                       directory)]
+    unloaded = {scene: ds for scene, ds in runs.items() if not _loaded(ds)}
+    paths += [_figure_loops(unloaded, directory), _figure_preload(preload_curve(params), directory)]
     out.attrs["figures"] = [str(p) for p in paths]
     out.to_netcdf(directory / "chapter7.nc")
     return out
