@@ -11,10 +11,12 @@ TABLE_9_4 = {  # data set: (backlash [m], preload [N], external force [N])
     "ds1": (80e-6, 1000.0, 0.0), "ds2": (80e-6, 0.0, 0.0), "ds3": (0.0, 0.0, 4000.0), "ds4": (0.0, 0.0, 0.0),
     "ds5": (0.0, 1000.0, 0.0), "ds6": (5e-6, 0.0, 0.0), "ds7": (40e-6, 0.0, 0.0),
 }
+#: The thesis's Sec. 7.9.3 backlash runs, reproduced as scenes (docs/validation.md, chapter 7).
+CHAPTER_7 = {"chapter7_backlash", "chapter7_backlash_300um", "chapter7_backlash_force"}
 
 
 def test_shipped_scenes():
-    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4}
+    assert set(twin.list_scenes()) == {"nominal", *TABLE_9_4, *CHAPTER_7}
 
 
 @pytest.mark.parametrize("name", sorted(TABLE_9_4))
