@@ -68,9 +68,9 @@ class Solver:
 
     def __post_init__(self):
         problems = []
-        if self.integrator not in INTEGRATORS and not self.reference:
-            problems.append(f"integrator: {self.integrator!r} is not one of "
-                            f"{', '.join([*INTEGRATORS, *REFERENCE_METHODS])}")
+        methods = (*INTEGRATORS, *REFERENCE_METHODS)
+        if not (isinstance(self.integrator, str) and self.integrator in methods):
+            problems.append(f"integrator: {self.integrator!r} is not one of {', '.join(methods)}")
         if self.dt is not None and not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt)
                                         and 0 < self.dt <= MAX_DT):
             problems.append(f"dt: {self.dt!r} must be None or a step in (0, {MAX_DT:g}] s")

@@ -14,6 +14,7 @@ from twin.layout import SIGNAL_META, STATE_META, K, S
 from twin.physics.ball_screw import contact_geometry, helix_angle, stiffness_at
 from twin.physics.groove import groove_radius
 from twin.physics.hertz import FORMULA_ISO, FORMULA_THESIS, ball_groove_stiffness, equivalent_modulus
+from twin.solver import DEFAULT_SOLVER, split_solver
 
 REQUIRED = ["position_demand", "nut1_position", "nut2_position", "screw_angle", "screw_equivalent_position",
             "motor_current", "motor_torque", "winding_temperature", "preload_force", "external_force"]
@@ -71,6 +72,18 @@ def test_bad_options_listed_before_running():
         twin.simulate("nominal", save="dataset")
     with pytest.raises(OptionError, match="solver: expected a twin.Solver, got dict"):
         twin.simulate("nominal", solver={"integrator": "rk4"})
+    with pytest.raises(OptionError, match=r"integrator: \['rk4'\] is not one of rk4"):
+        twin.Solver(["rk4"])
+
+
+def test_a_flat_table_of_options_splits_into_the_solver_and_the_rest():
+    """A campaign spec's ``[solver]`` table (what ``campaigns.bench.adapter`` passes on): the fields of
+    :class:`twin.Solver` make the solver, the others stay ``simulate``'s keywords; the solver left out is the
+    default one, so a table without solver fields runs as a bare call does."""
+    solver, rest = split_solver({"integrator": "imex_euler", "dt": 1.25e-4, "output_dt": 2e-3, "fidelity": "full"})
+    assert solver == twin.Solver("imex_euler", dt=1.25e-4) and rest == {"output_dt": 2e-3, "fidelity": "full"}
+    assert split_solver({"fidelity": "auto"}) == (twin.Solver(), {"fidelity": "auto"})
+    assert twin.Solver() == DEFAULT_SOLVER and hash(twin.Solver("rk4", dt=6.25e-5)) == hash(twin.Solver(dt=6.25e-5))
 
 
 def test_same_inputs_same_numbers():
