@@ -17,7 +17,7 @@ from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import split_targets
-from twin.simulation import DEFAULT_INTEGRATOR, solver_label
+from twin.solver import DEFAULT_SOLVER, solver_label
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
@@ -83,6 +83,16 @@ def cmd_scenes(args) -> int:
     return 0
 
 
+#: The ``twin simulate`` options that are fields of :class:`twin.Solver`: one given makes the run's solver, one left
+#: out (``None``) takes the object's default, so the defaults have one home.
+SOLVER_OPTIONS = ("integrator", "dt")
+
+
+def _solver(args) -> twin.Solver:
+    """The run's solver from the command line (checked when it is made: an :class:`twin.OptionError`)."""
+    return twin.Solver(**{name: getattr(args, name) for name in SOLVER_OPTIONS if getattr(args, name) is not None})
+
+
 def _check_bounds(**values) -> None:
     """The command line's numbers against the campaign spec's physical bounds (:data:`campaigns.runner.spec.BOUNDS`),
     every problem at once, before any work."""
@@ -120,16 +130,13 @@ def cmd_simulate(args) -> int:
     from campaigns.runner.files import check_output, write_netcdf
 
     _check_bounds(dt=args.dt, duration=args.duration)
+    solver = _solver(args)
     for path in (args.out, args.plot):  # before the run: a refused file costs nothing
         if path is not None:
             check_output(path, force=args.force)
     scene, params = _scene_and_params(args)
     if args.duration is not None:
         scene = scene.with_duration(args.duration)
-    options = {"integrator": args.integrator, "throw": False, "fidelity": args.fidelity, "outputs": args.outputs,
-               "rng": args.seed}
-    if args.dt is not None:
-        options["dt"] = args.dt
     if args.explain_fidelity:
         from twin.fidelity import resolve_fidelity
         from twin.scenes import CYLINDER_STATES, ZERO_PROCEDURES
@@ -141,7 +148,8 @@ def cmd_simulate(args) -> int:
         print(f"  cylinder = {scene.condition('cylinder')}: {CYLINDER_STATES[scene.condition('cylinder')]}")
         print(f"fidelity of scene {scene.name}:")
         print(resolve_fidelity(scene, params, args.fidelity, args.outputs).explain())
-    ds = twin.simulate(scene, params, **options)
+    ds = twin.simulate(scene, params, solver=solver, fidelity=args.fidelity, outputs=args.outputs, rng=args.seed,
+                       throw=False)
     print(f"scene {scene.name}: status {ds.attrs['status']}"
           + (f" ({ds.attrs['failure_reason']} at t = {ds.attrs['t_reached']:.4g} s)" if ds.attrs["status"] != "ok"
              else "")
@@ -551,11 +559,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a parameter (e.g. motor.inertia=1.6e-4, reducer.backlash='3 mrad') or a scene "
                         "condition (scene.backlash=2e-5 or '20 um', scene.zero_procedure=preloaded, "
                         "scene.cylinder=detached); a number alone is in SI units")
-    p.add_argument("--integrator", default=DEFAULT_INTEGRATOR, choices=sorted(INTEGRATORS),
-                   help="default rk4 at 62.5 us; auto (opt-in): imex_euler where the nuts stay held on a flank, "
-                        "else rk4 at the 125 us drive period where that is stable, else at 62.5 us (twin.simulate, "
-                        "docs/accuracy.md)")
-    p.add_argument("--dt", type=float, help="integration step [s] (not with --integrator auto)")
+    p.add_argument("--integrator", choices=sorted(INTEGRATORS),
+                   help=f"fixed-step method (default {DEFAULT_SOLVER.integrator}; twin.Solver, docs/accuracy.md)")
+    p.add_argument("--dt", type=float, help="integration step [s] (default: the method's step at the run's "
+                                            "fidelity, twin.Solver.step)")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
     p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",
                    help="subsystem fidelity (see `twin fidelity levels`; default auto: the cheapest the scene allows)")

@@ -67,13 +67,13 @@ def run_campaign_pipeline(
                                                      announce=announce))
     wrote("results", outputs.results)
     if analyze:
-        announce("analysis", "correlations with bootstrap intervals, separation, observability (about 10-60 s)")
+        announce("analysis", "correlations with bootstrap intervals, separation, observability")
         outputs.analysis = campaigns.analyze(outputs.results)
         wrote("analysis", outputs.analysis)
     if report:
         from reports import build_report  # lazy: figures and typst cost start-up time; only reports need them
 
-        announce("report", "figures, HTML and PDF (about 30-90 s)")
+        announce("report", "figures, HTML and PDF")
         outputs.reports = build_report(outputs.results, out_dir=out)
         for kind, path in outputs.reports.items():
             wrote(kind, path)

@@ -49,11 +49,11 @@ def main() -> None:
     # RK4 at the drive period), as a campaign runs it
     for integrator, dt, plant in (("rk4", 6.25e-5, "full"), ("semi_implicit_euler", 3.125e-5, "full"),
                                   ("rk4", None, "auto")):
-        base = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments("ideal", plant))
-        step = twin.simulate(scene, duration=0.01, integrator=integrator, dt=dt,
-                             fidelity=instruments("ideal", plant)).attrs["dt"]
+        solver = twin.Solver(integrator, dt=dt)
+        base = median_wall(scene, args.repeats, solver=solver, fidelity=instruments("ideal", plant))
+        step = twin.simulate(scene, duration=0.01, solver=solver, fidelity=instruments("ideal", plant)).attrs["dt"]
         for level in ("quantized", "full"):
-            wall = median_wall(scene, args.repeats, integrator=integrator, dt=dt, fidelity=instruments(level, plant))
+            wall = median_wall(scene, args.repeats, solver=solver, fidelity=instruments(level, plant))
             print(f"{integrator:20s} dt={step:.4g} {plant:4s} plant  ideal {base:.3f} s   {level:9s} {wall:.3f} s   "
                   f"overhead {100 * (wall / base - 1):5.1f} %")
 

@@ -27,6 +27,7 @@ import time
 from machine import header
 
 import twin
+from twin.solver import split_solver
 
 TARGET = 0.040  # s of CPU per sample of a 10 s thesis run in a lane group (issue 32)
 THESIS_DATASETS = ("ds1", "ds2", "ds3", "ds4", "ds5", "ds6", "ds7")
@@ -47,12 +48,13 @@ def cpu_per_sample(dataset: str, lanes: int, duration: float, seed: int, **optio
     """CPU seconds per sample of ``lanes`` runs of ``dataset`` (one group, or one run for one lane)."""
     scene, params = _inputs(dataset)
     runs = [(scene, params, seed + k) for k in range(lanes)]
+    solver, options = split_solver({**options, "lanes": lanes})
     start = time.process_time()
     if lanes == 1:
-        twin.simulate_features(scene, params, rng=seed, duration=duration, outputs=THESIS_OUTPUTS, throw=False,
-                               **options)
+        twin.simulate(scene, params, solver=solver, save="features", rng=seed, duration=duration,
+                      outputs=THESIS_OUTPUTS, throw=False, **options)
     else:
-        twin.simulate_batch(runs, lanes=lanes, duration=duration, outputs=THESIS_OUTPUTS, throw=False, **options)
+        twin.simulate_batch(runs, solver=solver, duration=duration, outputs=THESIS_OUTPUTS, throw=False, **options)
     return (time.process_time() - start) / lanes
 
 

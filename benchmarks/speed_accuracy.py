@@ -17,9 +17,9 @@ from machine import header
 from single_run import THESIS_DATASETS, THESIS_OUTPUTS
 
 import twin
-import twin.simulation
 from app.studies.control_baseline import compare
 from twin.fidelity import full_plant
+from twin.solver import DEFAULT_DT, DEFAULT_LANES, DEFAULT_SOLVER
 
 
 def median_wall(scene, repeats=5, **options):
@@ -43,9 +43,9 @@ def main() -> None:
         args.reference_duration = 0.2
     header("speed against accuracy at the default configuration", args.quick)
     drive_period = twin.load_parameters().value("drive.speed_loop_sample_time")
-    print(f"# {os.cpu_count()} cores; default: {twin.simulation.DEFAULT_INTEGRATOR} at the {drive_period:g} s drive "
+    print(f"# {os.cpu_count()} cores; default: {DEFAULT_SOLVER.integrator} at the {drive_period:g} s drive "
           f"period at the automatic fidelity (quasi-static screw axial, ideal current loop), "
-          f"{twin.simulation.DEFAULT_DT:g} s where a faster mode is modelled (twin.simulation.default_step)")
+          f"{DEFAULT_DT:g} s where a faster mode is modelled (twin.Solver.step)")
     for name in ("nominal", "ds2"):
         full_duration = twin.load_scene(name).duration
         scene = twin.load_scene(name).with_duration(1.0 if args.quick else full_duration)
@@ -58,10 +58,10 @@ def main() -> None:
         ideal = full_plant()  # the solvers are compared on the plant, seen through ideal instruments
         fast, ds_fast = median_wall(scene, repeats=min(3, repeats), fidelity=ideal)
         start = time.perf_counter()
-        ds_ref = twin.simulate(scene, integrator="scipy_lsoda", rtol=1e-8, fidelity=ideal)
+        ds_ref = twin.simulate(scene, solver=twin.Solver("scipy_lsoda", rtol=1e-8), fidelity=ideal)
         slow = time.perf_counter() - start
         start = time.perf_counter()
-        ds_radau = twin.simulate(scene, integrator="scipy_radau", rtol=1e-8, fidelity=ideal)
+        ds_radau = twin.simulate(scene, solver=twin.Solver("scipy_radau", rtol=1e-8), fidelity=ideal)
         radau = time.perf_counter() - start
         print(f"{name:8s} {args.reference_duration:.1f} s, ideal instruments: default {fast:.3f} s; "
               f"scipy LSODA rtol 1e-8 {slow:.2f} s ({slow / fast:.0f}x), Radau rtol 1e-8 {radau:.2f} s "
@@ -72,13 +72,14 @@ def main() -> None:
         print(
             f"open-loop plant 0.05 s: {row['method']:50s} {row['wall_time']:.4f} s, max nut error {row['error']:.2e} m")
     # the thesis runs as a campaign runs them: a lane group per data set, the thesis outputs (automatic fidelity)
-    lanes, duration = twin.simulation.DEFAULT_LANES, 1.0 if args.quick else None
+    lanes, duration = DEFAULT_LANES, 1.0 if args.quick else None
     walls = []
     for name in THESIS_DATASETS[:2] if args.quick else THESIS_DATASETS:
         runs = [(name, None, seed) for seed in range(lanes)]
         twin.simulate_batch(runs[:1], duration=0.01, outputs=THESIS_OUTPUTS)  # compile
         start = time.perf_counter()
-        twin.simulate_batch(runs, lanes=lanes, duration=duration, outputs=THESIS_OUTPUTS, throw=False)
+        twin.simulate_batch(runs, solver=twin.Solver(lanes=lanes), duration=duration, outputs=THESIS_OUTPUTS,
+                            throw=False)
         scale = twin.load_scene(name).duration / (duration or twin.load_scene(name).duration)
         walls.append((time.perf_counter() - start) / lanes * scale)  # per full-length run
     per_run = statistics.mean(walls)

@@ -2,7 +2,7 @@
 
 Per scene (the nominal scene at the default settings; with ``--datasets`` also the thesis data sets at the thesis
 campaign's fidelity), a lane group of runs at the default method and step (RK4; 62.5 us at full fidelity, the 125 us
-drive period at the campaign's automatic fidelity: ``twin.simulation.default_step``) is recorded step by step
+drive period at the campaign's automatic fidelity: ``twin.Solver.step``) is recorded step by step
 (``step_costs.recorded_group``). Measured on it, per lane (per Monte Carlo sample):
 
 * ``t_rhs``: CPU of one right-hand side (``twin.engine.plant.rhs``) over the recorded states and inputs, in a compiled
@@ -46,7 +46,7 @@ from step_costs import FIDELITY, OUTPUTS, empty_pass, median_cpu, recorded_group
 import twin
 from twin.engine.linearize import RK4_STABILITY, jacobian, largest_stable_step
 from twin.engine.plant import rhs, work_rows
-from twin.simulation import DEFAULT_INTEGRATOR, DEFAULT_LANES
+from twin.solver import DEFAULT_LANES, DEFAULT_SOLVER
 
 TARGET_DURATION = 10.0          # s of simulated time the single-run target is stated for (issue 16)
 CAMPAIGN_TARGET = 25.0          # runs/s on 2 workers (issue 32)
@@ -93,10 +93,10 @@ def admissible_step(limit: float, drive_period: float) -> float:
 
 def explicit_cross_check(name: str, duration: float | None, step: float, default_step: float) -> None:
     """The linear analysis checked by the nonlinear run: RK4 at ``step`` against the default, same scene and noise."""
-    options = {"integrator": DEFAULT_INTEGRATOR, "duration": duration, "fidelity": FIDELITY.get(name, "auto"),
+    options = {"duration": duration, "fidelity": FIDELITY.get(name, "auto"),
                "outputs": OUTPUTS.get(name, THESIS_OUTPUTS), "throw": False}
-    default = twin.simulate(name, **options)
-    coarse = twin.simulate(name, dt=step, **options)
+    default = twin.simulate(name, solver=DEFAULT_SOLVER, **options)
+    coarse = twin.simulate(name, solver=twin.Solver(DEFAULT_SOLVER.integrator, dt=step), **options)
     change = (f"f_b true {1e6 * (float(coarse.backlash_feature_true) - float(default.backlash_feature_true)):+.4f} um "
               f"against {default_step * 1e6:g} us" if coarse.attrs["status"] == default.attrs["status"] == "ok" else
               coarse.attrs["failure_reason"] or default.attrs["failure_reason"])
@@ -105,7 +105,7 @@ def explicit_cross_check(name: str, duration: float | None, step: float, default
 
 
 def scene_floor(name: str, duration: float | None, instants: int, repeats: int, lanes: int) -> dict:
-    recorded = recorded_group(name, duration, DEFAULT_INTEGRATOR, None, lanes)
+    recorded = recorded_group(name, duration, DEFAULT_SOLVER.integrator, None, lanes)
     run, model, n = recorded.run, recorded.model, recorded.n
     args = (recorded.trajectory, recorded.inputs, recorded.c, model.levels, model.force_table, run.dt,
             work_rows(lanes))
@@ -132,8 +132,8 @@ def scene_floor(name: str, duration: float | None, instants: int, repeats: int, 
     }
     lam = floor["worst_mode"]
     print(f"\n'{name}' ({floor['states']} states, screw axial {run.fidelity.level('screw_axial')}, "
-          f"{floor['duration']:g} s recorded at {DEFAULT_INTEGRATOR} {run.dt * 1e6:g} us in {lanes} lanes; figures per "
-          f"sample and {TARGET_DURATION:g} s)")
+          f"{floor['duration']:g} s recorded at {DEFAULT_SOLVER.integrator} {run.dt * 1e6:g} us in {lanes} lanes; "
+          f"figures per sample and {TARGET_DURATION:g} s)")
     print(f"  measured per lane: right-hand side {1e9 * t_rhs:.0f} ns; run_loop {1e9 * per_step:.0f} ns per step, of "
           f"which {1e9 * outside:.0f} ns outside the four right-hand sides; {floor['per_run']:.3f} s CPU per sample")
     print(f"  RK4 stable step over {len(modes)} instants: min {1e6 * floor['limit_min']:.1f} us (t = "

@@ -33,13 +33,14 @@ from twin.engine.integrators import INTEGRATORS, Workspace, step
 from twin.engine.plant import internal_forces, measurands
 from twin.layout import N_INPUTS, N_MEMORY, N_SIGNALS, N_STATES, M
 from twin.parameters import load_parameters
+from twin.solver import DEFAULT_LANES, DEFAULT_SOLVER, Solver
 
 DRIVE_PERIOD = load_parameters().value("drive.speed_loop_sample_time")
 #: The cases profiled: (scene, integrator, step; None: the default step). The nominal scene as `twin.simulate` runs
 #: it by default (every output: full fidelity, RK4 at 62.5 us), a thesis data set as a thesis campaign runs it (its
 #: outputs set the automatic fidelity: the quasi-static screw axial, RK4 at the drive period), and the nominal scene
 #: with the linearly implicit step at the drive period (it integrates the full model's screw-axial mode).
-CASES = (("nominal", simulation.DEFAULT_INTEGRATOR, None), ("ds1", simulation.DEFAULT_INTEGRATOR, None),
+CASES = (("nominal", DEFAULT_SOLVER.integrator, None), ("ds1", DEFAULT_SOLVER.integrator, None),
          ("nominal", "imex_euler", DRIVE_PERIOD))
 OUTPUTS = {"nominal": None}
 FIDELITY = {"nominal": "full"}
@@ -176,10 +177,10 @@ def recorded_group(scene_name: str, duration: float, integrator: str, dt: float 
     held inputs after every step (``trajectory``, ``inputs``: one ``[row, lane]`` block per step)."""
     prepared = []
     for seed in range(lanes):
-        run = simulation._validated(scene_name, None, integrator, dt, simulation.DEFAULT_OUTPUT_DT, duration,
-                                    FIDELITY.get(scene_name, "auto"), OUTPUTS.get(scene_name, THESIS_OUTPUTS),
-                                    seed, "thesis", 1e-10)
-        prepared.append(simulation._prepared(run, seed, True, record=False))
+        run = simulation._validated(scene_name, None, Solver(integrator, dt=dt), simulation.DEFAULT_OUTPUT_DT,
+                                    duration, FIDELITY.get(scene_name, "auto"), OUTPUTS.get(scene_name, THESIS_OUTPUTS),
+                                    seed, "thesis")
+        prepared.append(simulation._prepared(run, seed, record=False))
     run, model = prepared[0].run, prepared[0].model
     x0 = np.ascontiguousarray(np.stack([p.model.initial_state for p in prepared], axis=1))
     c = np.ascontiguousarray(np.stack([p.model.constants for p in prepared], axis=1))
@@ -188,7 +189,7 @@ def recorded_group(scene_name: str, duration: float, integrator: str, dt: float 
     n = run.n_steps
     trajectory, inputs = np.zeros((n, N_STATES, lanes)), np.zeros((n, N_INPUTS, lanes))
     workspace = Workspace(N_STATES, lanes)
-    record_trajectory(INTEGRATORS[run.integrator], x0.copy(), c, model.levels, model.position_table,
+    record_trajectory(INTEGRATORS[run.solver.integrator], x0.copy(), c, model.levels, model.position_table,
                       model.force_table, model.active, model.pairs, run.dt, run.speed_every, run.position_every,
                       parameters, np.zeros((ins.N_INSTRUMENTS, ins.STATE_ROW, lanes)), noise,
                       np.zeros((N_MEMORY, lanes)), *workspace.arrays(), trajectory, inputs)
@@ -204,7 +205,7 @@ def run_loop_cpu(group: SimpleNamespace, repeats: int) -> float:
         start = time.process_time()
         solve_group([p.model for p in group.prepared], [p.instruments for p in group.prepared], n_steps=group.n,
                     dt=run.dt, speed_every=run.speed_every, position_every=run.position_every, output_every=0,
-                    jacobian_every=run.position_every, method=INTEGRATORS[run.integrator],
+                    jacobian_every=run.position_every, method=INTEGRATORS[run.solver.integrator],
                     tolerance=group.prepared[0].tolerance)
         return time.process_time() - start
 
@@ -215,7 +216,7 @@ def run_loop_cpu(group: SimpleNamespace, repeats: int) -> float:
 def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt: float | None, lanes: int) -> None:
     group = recorded_group(scene_name, duration, integrator, dt, lanes)
     run, model, trajectory, n = group.run, group.model, group.trajectory, group.n
-    method = INTEGRATORS[run.integrator]
+    method = INTEGRATORS[run.solver.integrator]
     c, ft, levels, x0 = group.c, model.force_table, model.levels, group.x0
     u = np.ascontiguousarray(group.inputs[-1])
     output = np.zeros((n // run.output_every + 1, N_SIGNALS, lanes))
@@ -253,7 +254,7 @@ def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt:
     ]
     print(f"\n'{scene_name}' ({run.fidelity.level('encoders')} encoders, screw axial "
           f"{run.fidelity.level('screw_axial')}, {model.active.size} states), {lanes} lanes, {run.scene.duration:g} s "
-          f"= {n} steps of {run.integrator} at {run.dt * 1e6:g} us; run_loop {total:.3f} s CPU "
+          f"= {n} steps of {run.solver.integrator} at {run.dt * 1e6:g} us; run_loop {total:.3f} s CPU "
           f"({1e9 * total / n:.0f} ns per step, {1e9 * total / n / lanes:.0f} per lane)")
     print(f"{'part':42s} {'ns/call':>9s} {'calls':>8s} {'ns/step':>8s} {'/lane':>7s} {'share':>7s}")
     accounted = 0.0
@@ -270,7 +271,7 @@ def profile(scene_name: str, duration: float, repeats: int, integrator: str, dt:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--lanes", type=int, default=simulation.DEFAULT_LANES)
+    parser.add_argument("--lanes", type=int, default=DEFAULT_LANES)
     parser.add_argument("--quick", action="store_true", help="0.5 s of each scene, one pass (seconds)")
     args = parser.parse_args()
     duration, repeats = (0.5, 1) if args.quick else (10.0, args.repeats)

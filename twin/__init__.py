@@ -2,7 +2,7 @@
 
 Pipeline: parameter set + scene -> bench model -> simulation engine -> sensors -> features.
 
-The public names (``twin.simulate``, ``twin.load_parameters``, ...) are imported on first use
+The public names (``twin.simulate``, ``twin.Solver``, ``twin.load_parameters``, ...) are imported on first use
 (lazy: start-up cost; ``import twin`` or ``import twin.scenes`` must not load xarray and the compiled
 engine). Importing ``sensors`` first keys numba's on-disk cache on the source before any function of
 either package is compiled (:mod:`numerics.compiled_cache`; no stale machine code).
@@ -14,8 +14,9 @@ import sensors  # noqa: F401  (keys the compiled-code cache; see the docstring)
 
 _EXPORTS = {
     "simulate": "twin.simulation",
-    "simulate_features": "twin.simulation",
     "simulate_batch": "twin.simulation",
+    "RunSummary": "twin.simulation",
+    "Solver": "twin.solver",
     "InputError": "twin.errors",
     "OptionError": "twin.errors",
     "ParameterError": "twin.errors",

@@ -51,7 +51,8 @@ class SceneError(InputError):
 
 
 class OptionError(InputError):
-    """A simulation option is invalid."""
+    """A simulation option is invalid: a field of :class:`twin.Solver` (raised when it is made) or an argument of
+    :func:`twin.simulate` (raised before the run)."""
 
     def __init__(self, problems: list[str]):
         super().__init__("simulation options", problems)

@@ -1,4 +1,8 @@
-"""``simulate``: the single entry point that runs one bench test (and ``simulate_batch``, many, in lock-step lanes)."""
+"""``simulate``: the single entry point that runs one bench test (and ``simulate_batch``, many, in lock-step lanes).
+
+How a run is integrated is one :class:`twin.solver.Solver` argument; the entries hold what is run (scene,
+parameters, duration, fidelity, outputs, curvature, noise) and what is saved (signals or features alone).
+"""
 
 from __future__ import annotations
 
@@ -24,36 +28,17 @@ from twin.fidelity import Fidelity, resolve_fidelity
 from twin.layout import BOUND_REASONS, N_MEMORY, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, M, S, Signal
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
+from twin.solver import DEFAULT_DT as DEFAULT_DT  # noqa: F401  (campaigns.runner.budget reads it here; home: twin.solver)
+from twin.solver import DEFAULT_SOLVER, Solver
 
-DEFAULT_INTEGRATOR = "rk4"
-#: The step of the full model [s]: RK4's stability limit along a run with both nuts loaded is 109 us, set by the
-#: screw's axial mode (the ``dynamic`` screw-axial level) and, at full fidelity, 122 us by the analog current loop
-#: (docs/accuracy.md); 62.5 us divides the drive period.
-DEFAULT_DT = 6.25e-5
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
-#: Lanes of a group (:func:`simulate_batch`): a multiple of the vector width (4 doubles with AVX2, 8 with AVX-512)
-#: that fills two registers; the results do not depend on it.
-DEFAULT_LANES = 8
+#: What :func:`simulate` returns: the recorded signals with the features (an xarray Dataset), or the status and
+#: scalar features alone (a :class:`RunSummary`, no signals recorded: a Monte Carlo campaign's runs).
+SAVES = ("signals", "features")
 #: A run's time axis: seconds from the start of the test procedure, a plain quantity (no reference date: a CF time
 #: unit, "s since <date>", would have every netCDF reader turn the test's 10 s into dates of 1970).
 TIME_ATTRS = {"units": "s", "long_name": "time since the start of the test procedure"}
-
-
-def solver_label(integrator: str, dt: float) -> str:
-    """How results, reports and statements name the solver of a run: the method and, for a fixed-step method of the
-    compiled loop, its step (``"rk4 at 125 us"``); an adaptive reference method by its name alone."""
-    return integrator if integrator in REFERENCE_METHODS or not integrator else f"{integrator} at {dt * 1e6:g} us"
-
-
-def default_step(integrator: str, fidelity: Fidelity, drive_period: float) -> float:
-    """The step [s] a method takes when none is given: RK4 at the drive period where neither of the two modes beyond
-    its reach there is modelled (the screw's axial mode at the ``quasi_static`` screw-axial level, the analog
-    current loop at the ``ideal`` current-loop level), else :data:`DEFAULT_DT` (docs/accuracy.md, "The default")."""
-    if (integrator == "rk4" and fidelity.level("screw_axial") == "quasi_static"
-            and fidelity.level("current_loop") == "ideal"):
-        return drive_period
-    return DEFAULT_DT
 
 
 def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
@@ -65,11 +50,10 @@ def _steps_per(period: float, dt: float, what: str, problems: list[str]) -> int:
 
 
 def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
-             integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None, output_dt: float = DEFAULT_OUTPUT_DT,
+             solver: Solver = DEFAULT_SOLVER, save: str = "signals", output_dt: float = DEFAULT_OUTPUT_DT,
              duration: float | None = None, fidelity: str | Mapping[str, str] = "auto",
              outputs: Sequence[str] | None = None, rng: np.random.Generator | int | None = None,
-             curvature: str = "thesis", rtol: float = 1e-10, local_error_guard: bool = True,
-             throw: bool = True) -> xr.Dataset:
+             curvature: str = "thesis", throw: bool = True) -> xr.Dataset | RunSummary:
     """Run one bench test.
 
     Parameters
@@ -78,17 +62,15 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         Test procedure or the name/path of one (see :func:`twin.list_scenes`).
     params : ParameterSet, str or None
         Parameter set or its name/path; ``None`` is the built-in ``"bench"`` set.
-    integrator : {"rk4", "semi_implicit_euler", "rosenbrock_w2", "imex_euler", "scipy_radau", "scipy_lsoda",
-                  "scipy_bdf", "scipy_rk45"}
-        A fixed-step method of the compiled loop (default ``rk4``) or a ``scipy_*`` adaptive method of the
-        reference path (:mod:`twin.engine.reference`), which ignores ``dt``. ``imex_euler`` integrates the screw's
-        axial mode implicitly and needs the ``dynamic`` screw-axial level.
-    dt : float, optional
-        Integration step [s]; must divide the speed- and position-loop periods. Default: :func:`default_step`
-        (RK4 at the 125 us drive period at the campaign's fidelity, 62.5 us where the screw's axial mode or the
-        analog current loop is modelled).
+    solver : Solver
+        How the run is integrated (:class:`twin.Solver`: method, step, tolerance, guard); default ``Solver()``,
+        RK4 at its default step.
+    save : {"signals", "features"}
+        ``"signals"`` (default) returns the xarray Dataset below; ``"features"`` returns a :class:`RunSummary`
+        (status, reason, ``t_reached``, fidelity and every scalar feature) without recording the signals: the
+        same numbers as the Dataset's, bit for bit.
     output_dt : float
-        Spacing of the recorded signals [s]; a multiple of ``dt``.
+        Spacing of the recorded signals [s]; a multiple of the step (default 1 ms, the acquisition period).
     duration : float, optional
         Override of the scene's duration [s].
     fidelity : "auto", "full" or mapping
@@ -107,11 +89,6 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
         ``None`` uses seed 0. Same generator state, same noise.
     curvature : {"thesis", "iso"}
         Groove curvature formulas (Eqs. 3.20/3.27 or 3.21/3.28).
-    rtol : float
-        Relative tolerance of the ``scipy_*`` reference path.
-    local_error_guard : bool
-        The finite-but-wrong guard (:func:`twin.engine.loop.local_error`); switch it off
-        only to demonstrate what it catches.
     throw : bool
         If True, a diverged run raises :class:`twin.SimulationFailed`; if False it
         is returned as data: ``attrs["status"] != "ok"`` with ``failure_reason``
@@ -119,62 +96,50 @@ def simulate(scene: Scene | str = "nominal", params: ParameterSet | str | None =
 
     Returns
     -------
-    xarray.Dataset
-        True and measured signals on ``time`` [s] with ``units`` attributes, the
+    xarray.Dataset or RunSummary
+        With ``save="signals"``: true and measured signals on ``time`` [s] with ``units`` attributes, the
         scalar features of :data:`twin.features.FEATURES` (``backlash_feature``,
         Eq. 9.12, and ``backlash_hysteresis`` on the measured encoder signals; ``*_true``
         on true signals), and run metadata in ``attrs``, among them the scene's
         ``zero_procedure`` and ``cylinder`` and every condition in ``scene_conditions`` (JSON).
+        With ``save="features"``: the :class:`RunSummary` of those attributes and features.
 
     Raises
     ------
     OptionError, SceneError, ParameterError
         On invalid input, before anything runs.
     """
-    run = _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol)
-    return _package(_thrown(_solved([_prepared(run, rng, local_error_guard, record=True)])[0], throw))
-
-
-def simulate_features(scene: Scene | str = "nominal", params: ParameterSet | str | None = None, *,
-                      integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None,
-                      output_dt: float = DEFAULT_OUTPUT_DT, duration: float | None = None,
-                      fidelity: str | Mapping[str, str] = "auto", outputs: Sequence[str] | None = None,
-                      rng: np.random.Generator | int | None = None, curvature: str = "thesis", rtol: float = 1e-10,
-                      local_error_guard: bool = True, throw: bool = True) -> RunSummary:
-    """:func:`simulate` without the Dataset: the run's scalar features and status, for callers that
-    need nothing else (a Monte Carlo campaign's runs). Same options, same numbers as ``simulate``."""
-    return simulate_batch([(scene, params, rng)], integrator=integrator, dt=dt, output_dt=output_dt,
-                          duration=duration, fidelity=fidelity, outputs=outputs, curvature=curvature, rtol=rtol,
-                          local_error_guard=local_error_guard, throw=throw)[0]
+    if save not in SAVES:
+        raise OptionError([f"save: {save!r} is not one of {', '.join(SAVES)}"])
+    run = _validated(scene, params, solver, output_dt, duration, fidelity, outputs, rng, curvature)
+    done = _thrown(_solved([_prepared(run, rng, record=save == "signals")])[0], throw)
+    return _package(done) if save == "signals" else _summary(done)
 
 
 def simulate_batch(runs: Sequence[tuple[Scene | str, ParameterSet | str | None, np.random.Generator | int | None]],
-                   *, integrator: str = DEFAULT_INTEGRATOR, dt: float | None = None,
-                   output_dt: float = DEFAULT_OUTPUT_DT, duration: float | None = None,
-                   fidelity: str | Mapping[str, str] = "auto", outputs: Sequence[str] | None = None,
-                   curvature: str = "thesis", rtol: float = 1e-10, local_error_guard: bool = True,
-                   throw: bool = True, lanes: int = DEFAULT_LANES) -> list[RunSummary]:
-    """:func:`simulate_features` of many runs ``(scene, params, rng)`` with the same options, advanced in lock-step
-    lanes: runs whose model configuration agrees (fidelity levels, integrated states, demand profiles) share
-    groups of up to ``lanes`` lanes. Each summary equals that of the run alone, bit for bit, whatever the
-    grouping (tests/engine/test_lanes.py). Returned in the order of ``runs``.
+                   *, solver: Solver = DEFAULT_SOLVER, output_dt: float = DEFAULT_OUTPUT_DT,
+                   duration: float | None = None, fidelity: str | Mapping[str, str] = "auto",
+                   outputs: Sequence[str] | None = None, curvature: str = "thesis",
+                   throw: bool = True) -> list[RunSummary]:
+    """:func:`simulate` of many runs ``(scene, params, rng)`` with the same options and ``save="features"``,
+    advanced in lock-step lanes: runs whose model configuration agrees (fidelity levels, integrated states, demand
+    profiles) share groups of up to ``solver.lanes`` lanes. Each summary equals that of the run alone, bit for bit,
+    whatever the grouping (tests/engine/test_lanes.py). Returned in the order of ``runs``.
 
     Raises
     ------
     OptionError, SceneError, ParameterError
         On invalid input of any run, before anything runs.
     """
-    if not (isinstance(lanes, int) and lanes >= 1):
-        raise OptionError([f"lanes: {lanes!r} must be an int >= 1"])
-    prepared = [_prepared(_validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng,
-                                     curvature, rtol), rng, local_error_guard, record=False)
+    prepared = [_prepared(_validated(scene, params, solver, output_dt, duration, fidelity, outputs, rng, curvature),
+                          rng, record=False)
                 for scene, params, rng in runs]
-    return [_summary(_thrown(done, throw)) for done in _solved(prepared, lanes)]
+    return [_summary(_thrown(done, throw)) for done in _solved(prepared, solver.lanes)]
 
 
 @dataclass(frozen=True)
 class RunSummary:
-    """What :func:`simulate_features` returns: the ``attrs`` and scalar features of :func:`simulate`'s Dataset."""
+    """What ``simulate(..., save="features")`` returns: the ``attrs`` and scalar features of its Dataset."""
 
     status: str             # attrs["status"]
     failure_reason: str     # attrs["failure_reason"]
@@ -192,10 +157,8 @@ class _Run:
     scene: Scene
     params: ParameterSet
     fidelity: Fidelity
-    integrator: str
-    reference: bool
-    dt: float
-    rtol: float
+    solver: Solver
+    dt: float  # the step the solver takes on this run [s] (Solver.step)
     curvature: str
     speed_sample_time: float
     speed_every: int
@@ -237,14 +200,14 @@ class _Simulated:
     rng: object
 
 
-def _prepared(run: _Run, rng, local_error_guard: bool, record: bool) -> _Prepared:
+def _prepared(run: _Run, rng, record: bool) -> _Prepared:
     """Build the run's model and instruments (the noise drawn from its generator)."""
     generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(
         DEFAULT_NOISE_SEED if rng is None else rng)
     model = build_model(run.scene, run.params, run.fidelity, curvature=run.curvature)
     instruments = build_instruments(run.params.values(), run.scene.condition("room_temperature"), run.fidelity.levels,
                                     generator, run.n_steps // run.position_every + 1, run.dt)
-    tolerance = local_error_tolerance() * (1.0 if local_error_guard else np.inf)
+    tolerance = local_error_tolerance() * (1.0 if run.solver.local_error_guard else np.inf)
     return _Prepared(run, model, instruments, rng, tolerance, record)
 
 
@@ -254,11 +217,11 @@ def _solved(prepared: list[_Prepared], lanes: int = 1) -> list[_Simulated]:
     done: list[_Simulated | None] = [None] * len(prepared)
     groups: dict[tuple, list[int]] = defaultdict(list)
     for k, p in enumerate(prepared):
-        if p.run.reference:
+        if p.run.solver.reference:
             done[k] = _reference(p)
         else:
             run = p.run
-            groups[(group_key(p.model), group_timing(p.instruments), run.integrator, run.dt, run.n_steps,
+            groups[(group_key(p.model), group_timing(p.instruments), run.solver.integrator, run.dt, run.n_steps,
                     run.speed_every, run.position_every, run.output_every if p.record else 0,
                     p.tolerance.tobytes())].append(k)
     for members in groups.values():
@@ -276,7 +239,7 @@ def _compiled(prepared: list[_Prepared]) -> list[_Simulated]:
     solved = solve_group([p.model for p in prepared], [p.instruments for p in prepared], n_steps=run.n_steps,
                          dt=run.dt, speed_every=run.speed_every, position_every=run.position_every,
                          output_every=run.output_every if prepared[0].record else 0,
-                         jacobian_every=run.position_every, method=INTEGRATORS[run.integrator],
+                         jacobian_every=run.position_every, method=INTEGRATORS[run.solver.integrator],
                          tolerance=prepared[0].tolerance)
     wall_time = (time.perf_counter() - start) / len(prepared)  # a lane's share of the group's wall time
     out = []
@@ -299,7 +262,7 @@ def _reference(p: _Prepared) -> _Simulated:
     start = time.perf_counter()
     status, bound, t_reached, rows, reason, solver_stats = run_reference(
         model, p.instruments, n_speed, run.speed_sample_time, run.position_every, run.output_every, output, memory,
-        REFERENCE_METHODS[run.integrator], run.rtol, x)
+        REFERENCE_METHODS[run.solver.integrator], run.solver.rtol, x)
     return _Simulated(run, model, x, output[:rows], memory, status, bound, reason or BOUND_REASONS[bound], t_reached,
                       solver_stats, time.perf_counter() - start, p.rng)
 
@@ -310,25 +273,20 @@ def _thrown(done: _Simulated, throw: bool) -> _Simulated:
     return done
 
 
-def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, outputs, rng, curvature, rtol) -> _Run:
-    """Load the inputs, check every option and resolve the fidelity; every problem in one :class:`OptionError`."""
+def _validated(scene, params, solver, output_dt, duration, fidelity, outputs, rng, curvature) -> _Run:
+    """Load the inputs, check every option against them and resolve the fidelity; every problem in one
+    :class:`OptionError`. The solver has checked its own fields when it was made (:class:`twin.Solver`)."""
+    if not isinstance(solver, Solver):
+        raise OptionError([f"solver: expected a twin.Solver, got {type(solver).__name__}"])
     scene = load_scene(scene)
     if not isinstance(params, ParameterSet):
         params = load_parameters("bench" if params is None else params)
     if duration is not None:
         scene = scene.with_duration(duration)
     problems: list[str] = []
-    reference = integrator in REFERENCE_METHODS
-    if integrator not in INTEGRATORS and not reference:
-        problems.append(f"integrator: {integrator!r} is not one of {', '.join([*INTEGRATORS, *REFERENCE_METHODS])}")
     speed_ts = params.value("drive.speed_loop_sample_time")
-    if not (isinstance(rtol, float) and 1e-14 <= rtol < 1e-2):
-        problems.append(f"rtol: {rtol!r} must be a float in [1e-14, 1e-2)")
     if curvature not in CURVATURE_FORMULAS:
         problems.append(f"curvature: {curvature!r} is not one of {', '.join(CURVATURE_FORMULAS)}")
-    if dt is not None and not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0 < dt <= 1e-3):
-        problems.append(f"dt: {dt!r} must be a step in (0, 1e-3] s")
-        dt = DEFAULT_DT
     resolved = None
     if curvature in CURVATURE_FORMULAS:
         try:
@@ -337,22 +295,16 @@ def _validated(scene, params, integrator, dt, output_dt, duration, fidelity, out
             problems += exc.problems
     if rng is not None and not isinstance(rng, (np.random.Generator, int)):
         problems.append(f"rng: expected a numpy Generator, an int seed or None, got {type(rng).__name__}")
-    if integrator == "imex_euler" and resolved is not None and resolved.level("screw_axial") != "dynamic":
-        problems.append("integrator: 'imex_euler' integrates the screw's axial mode implicitly and needs "
-                        "fidelity screw_axial = 'dynamic' (the resolved level is "
-                        f"{resolved.level('screw_axial')!r}); pass fidelity={{'screw_axial': 'dynamic'}}")
-    if dt is None:
-        dt = default_step(integrator, resolved, speed_ts) if resolved is not None else DEFAULT_DT
-    if reference:
-        dt = speed_ts  # the reference path restarts at each drive sample; dt is its sample grid
+    if resolved is not None:
+        problems += solver.conflicts(resolved)
+    dt = solver.step(resolved, speed_ts)
     speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
     position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period",
                                 problems)
     output_every = _steps_per(output_dt, dt, "output spacing output_dt", problems) if output_dt > 0 else 1
     if problems:
         raise OptionError(list(dict.fromkeys(problems)))
-    return _Run(scene, params, resolved, integrator, reference, dt, rtol, curvature, speed_ts, speed_every,
-                position_every, output_every)
+    return _Run(scene, params, resolved, solver, dt, curvature, speed_ts, speed_every, position_every, output_every)
 
 
 def _features(done: _Simulated) -> dict[str, float]:
@@ -368,7 +320,7 @@ def _features(done: _Simulated) -> dict[str, float]:
 
 def _summary(done: _Simulated) -> RunSummary:
     return RunSummary(STATUS_TEXT[done.status], done.reason, done.t_reached, done.run.fidelity.summary(),
-                      _features(done), done.run.integrator, done.run.dt)
+                      _features(done), done.run.solver.integrator, done.run.dt)
 
 
 def _package(done: _Simulated) -> xr.Dataset:
@@ -407,9 +359,10 @@ def _package(done: _Simulated) -> xr.Dataset:
             "scene_conditions": json.dumps(dict(scene.conditions)),
             "parameter_set": params.name,
             "screw_lead": params.value("ball_screw.lead"),
-            "integrator": run.integrator,
+            "integrator": run.solver.integrator,
             "dt": dt,
-            **({"rtol": run.rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}} if run.reference else {}),
+            **({"rtol": run.solver.rtol, **{f"solver_{k}": v for k, v in solver_stats.items()}}
+               if run.solver.reference else {}),
             "curvature": run.curvature,
             "fidelity": resolved.summary(),
             "fidelity_reasons": "\n".join(f"{k}: {v}" for k, v in resolved.reasons.items()),

@@ -13,7 +13,7 @@ import xarray as xr  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from app.studies.work_precision import DEFAULT_POINT, quantization_floor  # noqa: E402
-from twin.simulation import DEFAULT_DT, DEFAULT_INTEGRATOR  # noqa: E402
+from twin.solver import DEFAULT_DT, DEFAULT_SOLVER  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
                 "quantizers_on": "quantizers on (encoders, resolver, converters)"}
@@ -56,7 +56,7 @@ def work_precision_chart(study: xr.Dataset, path: str | Path | None = None,
                 label = method + (" (rtol ladder)" if np.isnan(runs.dt.values).all() else "")
                 ax.loglog(runs.wall_time.values[order], error, "o-", ms=4, lw=1.2, label=label)
                 previous = np.isclose(runs.dt.values[order], DEFAULT_DT, rtol=1e-9, atol=0.0)
-                if method == DEFAULT_INTEGRATOR and previous.any():  # ring the previous default, beside the new one
+                if method == DEFAULT_SOLVER.integrator and previous.any():  # ring the previous default beside the new
                     ax.loglog(runs.wall_time.values[order][previous], error[previous], "o", ms=12, mfc="none",
                               color="k", mec="k", mew=1.5,
                               label=f"the previous default: {method} at {DEFAULT_DT * 1e6:g} us, dynamic screw axial")

@@ -105,7 +105,8 @@ def run_point(dataset: str, seed: int, seal_threshold: float, guide_threshold: f
     varied = params.with_values({"pneumatics.friction_velocity_threshold": seal_threshold})
     start = time.process_time()
     with guide_threshold_set(guide_threshold):
-        ds = twin.simulate(dataset, varied, rng=seed, dt=dt, duration=duration, outputs=OUTPUTS, throw=False)
+        ds = twin.simulate(dataset, varied, solver=twin.Solver(dt=dt), rng=seed, duration=duration, outputs=OUTPUTS,
+                           throw=False)
     cpu = time.process_time() - start
     ok = ds.attrs["status"] == "ok"
     rest = at_rest_figures(ds) if ok else (math.nan,) * 3

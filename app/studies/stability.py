@@ -47,7 +47,7 @@ def loaded_scene(preload: float, force: float, duration: float = 0.25) -> twin.S
 
 def loaded_state(scene, params):
     """Model, state and held inputs at the end of a fine RK4 run of ``scene``."""
-    ds = twin.simulate(scene, params, integrator="rk4", dt=FINE_STEP, fidelity=STUDY_FIDELITY)
+    ds = twin.simulate(scene, params, solver=twin.Solver("rk4", dt=FINE_STEP), fidelity=STUDY_FIDELITY)
     model = build_model(scene, params, resolve_fidelity(scene, params, STUDY_FIDELITY))
     inputs = np.zeros(N_INPUTS)
     inputs[U.CURRENT_DEMAND] = float(ds.current_demand[-1])
@@ -58,7 +58,7 @@ def runs_ok(scene, params, method: str, n: int) -> bool:
     """Whether the closed-loop run at ``dt = 1 ms / n`` (speed loop sampled every step) ends ``ok``."""
     dt = POSITION_PERIOD / n
     probe = params.with_values({"drive.speed_loop_sample_time": dt})
-    ds = twin.simulate(scene, probe, integrator=method, dt=dt, fidelity=STUDY_FIDELITY, throw=False)
+    ds = twin.simulate(scene, probe, solver=twin.Solver(method, dt=dt), fidelity=STUDY_FIDELITY, throw=False)
     return ds.attrs["status"] == "ok"
 
 

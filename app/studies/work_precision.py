@@ -62,13 +62,13 @@ def errors(ds: xr.Dataset, reference: xr.Dataset) -> dict[str, float]:
     return result
 
 
-def timed(scene, repeats: int, **options) -> tuple[xr.Dataset, float]:
+def timed(scene, repeats: int, solver: twin.Solver, fidelity) -> tuple[xr.Dataset, float]:
     """Run once to compile (short), then the median wall time of ``repeats`` runs."""
-    twin.simulate(scene, duration=min(scene.duration, 0.01), throw=False, **options)
+    twin.simulate(scene, solver=solver, duration=min(scene.duration, 0.01), fidelity=fidelity, throw=False)
     times, ds = [], None
     for _ in range(repeats):
         start = time.perf_counter()
-        ds = twin.simulate(scene, throw=False, **options)
+        ds = twin.simulate(scene, solver=solver, fidelity=fidelity, throw=False)
         times.append(time.perf_counter() - start)
         if times[-1] > LONG_RUN:
             break
@@ -126,7 +126,7 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
     attrs = {"scene": scene.name, "duration": duration, "reference": f"{REFERENCE} rtol={REFERENCE_RTOL:g}",
              **environment()}
     for panel, fidelity in PANELS.items():
-        reference, reference_time = timed(scene, 1, integrator=REFERENCE, rtol=REFERENCE_RTOL, fidelity=fidelity)
+        reference, reference_time = timed(scene, 1, twin.Solver(REFERENCE, rtol=REFERENCE_RTOL), fidelity)
         attrs[f"{panel}_reference_wall_time"] = reference_time
         attrs[f"{panel}_reference_stats"] = ", ".join(f"{k[7:]}={v}" for k, v in reference.attrs.items()
                                                      if k.startswith("solver_"))
@@ -136,12 +136,11 @@ def run_study(scene: str | twin.Scene = "nominal", duration: float = 1.5, *, ste
         runs = ([(DEFAULT_POINT, np.nan, np.nan)] + [(m, dt, np.nan) for m in methods for dt in steps]
                 + [(b, np.nan, r) for b in baselines for r in tolerances])
         for k, (method, dt, rtol) in enumerate(runs, start=1):
-            options = {"integrator": method, "fidelity": fidelity}
             if method == DEFAULT_POINT:
-                options = {"integrator": "rk4", "fidelity": {**fidelity, "screw_axial": "quasi_static"}}
+                ds, wall = timed(scene, repeats, twin.Solver("rk4"), {**fidelity, "screw_axial": "quasi_static"})
             else:
-                options.update({"dt": dt} if np.isfinite(dt) else {"rtol": rtol})
-            ds, wall = timed(scene, repeats, **options)
+                solver = twin.Solver(method, dt=dt) if np.isfinite(dt) else twin.Solver(method, rtol=rtol)
+                ds, wall = timed(scene, repeats, solver, fidelity)
             metrics = errors(ds, reference)
             if method == DEFAULT_POINT:
                 method, dt = f"{DEFAULT_POINT} (rk4, quasi-static screw axial)", ds.attrs["dt"]

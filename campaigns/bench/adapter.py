@@ -22,7 +22,7 @@ from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
 from twin.scenes import CONDITIONS
 from twin.scenes.profiles import profile_values
-from twin.simulation import DEFAULT_LANES, solver_label
+from twin.solver import DEFAULT_LANES, solver_label, split_solver
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
@@ -221,15 +221,15 @@ def simulate_run(request: RunRequest) -> dict:
     """
     scene = run_scene(request)
     params = _parameters(request.parameters).with_values(request.parameter_values)
-    options = {k: v for k, v in request.solver.items() if v is not None}
+    solver, options = split_solver({k: v for k, v in request.solver.items() if v is not None})
     options.update(throw=False, rng=request.noise_rng(), outputs=list(request.outputs) or None)
-    if not request.trace_variables:  # scalars only: no Dataset to build (twin.simulate_features, same numbers)
-        summary = twin.simulate_features(scene, params, **options)
+    if not request.trace_variables:  # scalars only: no Dataset to build (save="features", same numbers)
+        summary = twin.simulate(scene, params, solver=solver, save="features", **options)
         return {"status": summary.status, "failure_reason": summary.failure_reason, "t_reached": summary.t_reached,
                 "features": {f: float(summary.features[f]) for f in request.features if f in summary.features},
                 "trace": None, "fidelity": summary.fidelity,
                 "integrator": solver_label(summary.integrator, summary.dt)}
-    ds = twin.simulate(scene, params, **options)
+    ds = twin.simulate(scene, params, solver=solver, **options)
     kept = [v for v in request.trace_variables if v in ds]
     return {
         "status": ds.attrs.get("status", "ok"),
@@ -253,12 +253,13 @@ def simulate_group(requests: list[RunRequest]) -> list[dict]:
             results[k] = simulate_run(request)
     if untraced:
         first = requests[untraced[0]]
-        options = {key: value for key, value in first.solver.items() if value is not None}
+        solver, options = split_solver({key: value for key, value in first.solver.items() if value is not None}
+                                       | {"lanes": len(untraced)})
         options.update(throw=False, outputs=list(first.outputs) or None)
         runs = [(run_scene(requests[k]),
                  _parameters(requests[k].parameters).with_values(requests[k].parameter_values),
                  requests[k].noise_rng()) for k in untraced]
-        for k, summary in zip(untraced, twin.simulate_batch(runs, lanes=len(runs), **options), strict=True):
+        for k, summary in zip(untraced, twin.simulate_batch(runs, solver=solver, **options), strict=True):
             request = requests[k]
             results[k] = {"status": summary.status, "failure_reason": summary.failure_reason,
                           "t_reached": summary.t_reached,
@@ -273,9 +274,9 @@ def _warm_up(request: RunRequest) -> None:
     """Load (or compile) the compiled loop with a 10 ms run of the request's configuration, before the
     run's clock starts (:func:`campaigns.runner.runs.warm_up`)."""
     # the warm-up lasts 10 ms whatever the run's own duration (a request may carry one in its solver options)
-    options = {k: v for k, v in request.solver.items() if v is not None and k != "duration"}
+    solver, options = split_solver({k: v for k, v in request.solver.items() if v is not None and k != "duration"})
     twin.simulate(_scene(request.scene).with_procedure(request.procedure), _parameters(request.parameters),
-                  throw=False, duration=0.01,
+                  solver=solver, throw=False, duration=0.01,
                   outputs=list(request.outputs) or None, **options)
 
 

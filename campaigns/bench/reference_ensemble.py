@@ -64,7 +64,7 @@ def reference_ensemble(scene: str | twin.Scene, params: twin.ParameterSet | None
     status, wall, runs = [], [], []
     for k, (dt, delta) in enumerate(members):
         member_scene = scene.with_conditions({"backlash": scene.condition("backlash") + delta}) if delta else scene
-        ds = twin.simulate(member_scene, params, integrator="rk4", dt=dt, throw=False, **options)
+        ds = twin.simulate(member_scene, params, solver=twin.Solver("rk4", dt=dt), throw=False, **options)
         status.append(ds.attrs["status"])
         wall.append(float(ds.attrs["wall_time"]))
         if ds.attrs["status"] == "ok":

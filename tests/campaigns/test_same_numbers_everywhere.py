@@ -52,9 +52,9 @@ if sys.argv[2] != "-":
     with tempfile.TemporaryDirectory() as tmp:
         golden.run_golden_campaign(pathlib.Path(tmp) / "out").to_netcdf(sys.argv[2])
 print(" ".join(float(s.features[f]).hex() for s in twin.simulate_batch(
-    [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)], lanes=3, duration=2.0)
+    [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)], solver=twin.Solver(lanes=3), duration=2.0)
     for f in ("backlash_feature", "backlash_feature_true")))
-print(float(twin.simulate_features("ds2", rng=3).features["backlash_feature"]).hex())
+print(float(twin.simulate("ds2", save="features", rng=3).features["backlash_feature"]).hex())
 """
 #: The lane group of the child, as the host computes it (in one group of the default 8 lanes).
 GROUP = [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)]
@@ -99,7 +99,7 @@ def _child(env: dict[str, str], campaign_out: Path | None) -> tuple[str, str]:
 @pytest.fixture(scope="module")
 def reference_feature() -> str:
     """The free-nut run's f_b in this process's own environment."""
-    return float(twin.simulate_features("ds2", rng=3).features["backlash_feature"]).hex()
+    return float(twin.simulate("ds2", save="features", rng=3).features["backlash_feature"]).hex()
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The default step (twin.simulation.default_step): RK4 at the 125 us drive period at the automatic fidelity, 62.5 us
+"""The default step (twin.Solver.step): RK4 at the 125 us drive period at the automatic fidelity, 62.5 us
 where a mode beyond RK4's reach at the drive period is modelled, and why.
 
 RK4's stability limit is ``2.785 / |lambda|`` on a real mode and ``2 sqrt(2) / |lambda|`` on an undamped
@@ -21,7 +21,7 @@ from twin.engine.model import build_model
 from twin.errors import OptionError
 from twin.fidelity import resolve_fidelity
 from twin.layout import N_INPUTS
-from twin.simulation import DEFAULT_DT, solver_label
+from twin.solver import DEFAULT_DT, solver_label
 
 DRIVE_PERIOD = twin.load_parameters().value("drive.speed_loop_sample_time")
 
@@ -43,17 +43,17 @@ def test_default_step_by_fidelity():
     without preload (the quasi-static level's condition); the method and step are reported with the run and named
     by solver_label."""
     assert DRIVE_PERIOD == 1.25e-4 and DEFAULT_DT == 0.5 * DRIVE_PERIOD
-    auto = twin.simulate_features("ds1", duration=0.05)
+    auto = twin.simulate("ds1", save="features", duration=0.05)
     assert "screw_axial=quasi_static" in auto.fidelity and "current_loop=ideal" in auto.fidelity
     assert (auto.integrator, auto.dt) == ("rk4", DRIVE_PERIOD)
     assert solver_label(auto.integrator, auto.dt) == "rk4 at 125 us"
     for fidelity in ("full", {"screw_axial": "dynamic"}, {"current_loop": "full"}):
-        summary = twin.simulate_features("ds1", duration=0.05, fidelity=fidelity)
+        summary = twin.simulate("ds1", save="features", duration=0.05, fidelity=fidelity)
         assert (summary.integrator, summary.dt) == ("rk4", DEFAULT_DT), fidelity
     assert solver_label("rk4", DEFAULT_DT) == "rk4 at 62.5 us"
     assert solver_label("scipy_lsoda", DRIVE_PERIOD) == "scipy_lsoda"  # an adaptive method has no step of its own
     ds = twin.simulate("ds1", duration=0.05, fidelity={"screw_axial": "dynamic"})
-    unpreloaded = twin.simulate_features("ds2", duration=0.05)  # the quasi-static level only under preload
+    unpreloaded = twin.simulate("ds2", save="features", duration=0.05)  # the quasi-static level only under preload
     assert "screw_axial=dynamic" in unpreloaded.fidelity and unpreloaded.dt == DEFAULT_DT
     assert (ds.attrs["integrator"], ds.attrs["dt"]) == ("rk4", DEFAULT_DT)
 
@@ -96,9 +96,9 @@ def test_the_default_step_agrees_with_half_of_it(scene_name):
     the drive period): the Eq. 9.12 feature on true signals within 0.01 um of RK4 at 62.5 us over 5 s, with a gap
     (ds1) and without (ds5). Measured 0.0001 um on both; with a free nut in a small gap (ds6, before the quasi-static
     level was restricted to preloaded scenes) 0.002 um, whose five times is the bound."""
-    default = twin.simulate_features(scene_name, duration=5.0)
+    default = twin.simulate(scene_name, save="features", duration=5.0)
     assert default.dt == DRIVE_PERIOD
-    half = twin.simulate_features(scene_name, duration=5.0, dt=DEFAULT_DT)
+    half = twin.simulate(scene_name, solver=twin.Solver(dt=DEFAULT_DT), save="features", duration=5.0)
     difference = default.features["backlash_feature_true"] - half.features["backlash_feature_true"]
     assert abs(difference) < 0.01e-6
 
@@ -107,8 +107,9 @@ def test_retired_and_restricted_integrators_are_refused_before_running():
     """The opt-in ``integrator="auto"`` is retired: an unknown method, named as such; ``imex_euler`` integrates the
     screw's axial mode implicitly and is refused at the quasi-static level, naming the fidelity it needs."""
     with pytest.raises(OptionError, match="integrator: 'auto' is not one of rk4"):
-        twin.simulate("ds5", duration=0.01, integrator="auto")
+        twin.simulate("ds5", solver=twin.Solver("auto"), duration=0.01)
     with pytest.raises(OptionError, match="needs fidelity screw_axial = 'dynamic'"):
-        twin.simulate("ds5", duration=0.01, integrator="imex_euler")
-    ok = twin.simulate_features("ds5", duration=0.01, integrator="imex_euler", fidelity={"screw_axial": "dynamic"})
+        twin.simulate("ds5", solver=twin.Solver("imex_euler"), duration=0.01)
+    ok = twin.simulate("ds5", solver=twin.Solver("imex_euler"), save="features", duration=0.01,
+                       fidelity={"screw_axial": "dynamic"})
     assert ok.status == "ok" and ok.dt == DEFAULT_DT

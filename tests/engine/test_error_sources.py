@@ -84,11 +84,11 @@ def test_lead_error_amplitudes_at_zero_add_exact_zeros_whatever_the_lane_mates(b
     phases_only = bench.with_values({"ball_screw.lead_travel_variation_phase": 2.0,
                                      "ball_screw.lead_per_revolution_phase": 5.0})
     scene = twin.load_scene("ds5")
-    alone = twin.simulate_features(scene, bench, duration=DURATION, rng=0)
-    assert _same_features(twin.simulate_features(scene, phases_only, duration=DURATION, rng=0).features,
+    alone = twin.simulate(scene, bench, save="features", duration=DURATION, rng=0)
+    assert _same_features(twin.simulate(scene, phases_only, save="features", duration=DURATION, rng=0).features,
                           alone.features)
-    grouped = simulate_batch([(scene, bench, 0), (scene, bench.with_values(LEAD_ERROR), 0)], duration=DURATION,
-                             lanes=2)
+    grouped = simulate_batch([(scene, bench, 0), (scene, bench.with_values(LEAD_ERROR), 0)],
+                             solver=twin.Solver(lanes=2), duration=DURATION)
     assert _same_features(grouped[0].features, alone.features)
     assert grouped[1].features["backlash_feature_true"] != alone.features["backlash_feature_true"]
 

@@ -188,7 +188,7 @@ def test_held_input_propagators_are_matrix_exponentials(bench, scene_factory, da
 @pytest.fixture(scope="module")
 def drive_period_runs():
     """The nominal scene (full fidelity: 24 states, 4 kN) for 0.3 s at the 125 us drive period, per method."""
-    return {method: twin.simulate("nominal", integrator=method, dt=DRIVE_PERIOD, duration=0.3, fidelity="full",
+    return {method: twin.simulate("nominal", solver=twin.Solver(method, dt=DRIVE_PERIOD), duration=0.3, fidelity="full",
                                   throw=False)
             for method in ("imex_euler", "rk4", "semi_implicit_euler")}
 
@@ -202,7 +202,7 @@ def test_stable_at_the_drive_period_where_explicit_methods_diverge(drive_period_
     imex = drive_period_runs["imex_euler"]
     assert imex.attrs["status"] == "ok"
     assert imex.attrs["max_local_error"] < 1.0
-    reference = twin.simulate("nominal", integrator="rk4", dt=7.8125e-6, duration=0.3, fidelity="full")
+    reference = twin.simulate("nominal", solver=twin.Solver("rk4", dt=7.8125e-6), duration=0.3, fidelity="full")
     scale = np.abs(reference.final_state.values) + np.max(np.abs(reference.final_state.values)) * 1e-6
     # positions and speeds of a loaded, moving chain; the stiff modes are damped, not resolved
     relative = np.abs(imex.final_state.values - reference.final_state.values) / scale
@@ -211,7 +211,7 @@ def test_stable_at_the_drive_period_where_explicit_methods_diverge(drive_period_
 
 def test_bit_reproducible(drive_period_runs):
     """Same inputs, same numbers: a second run equals the first to the last bit, signals and features."""
-    again = twin.simulate("nominal", integrator="imex_euler", dt=DRIVE_PERIOD, duration=0.3, fidelity="full")
+    again = twin.simulate("nominal", solver=twin.Solver("imex_euler", dt=DRIVE_PERIOD), duration=0.3, fidelity="full")
     first = drive_period_runs["imex_euler"]
     for name in ("nut1_position", "motor_current", "linear_encoder_position", "backlash_feature", "final_state"):
         np.testing.assert_array_equal(first[name].values, again[name].values)
@@ -225,9 +225,9 @@ def test_agrees_with_rk4_where_the_nuts_stay_held(scene_name):
     previous engine gave 0.007 and 0.0005 um); the bound is about three times the largest of these. (Where a nut
     leaves its flank the method's damping of the 3.8 kHz contact mode moves f_b by more: docs/accuracy.md.)"""
     fidelity = {"screw_axial": "dynamic"}
-    imex = twin.simulate_features(scene_name, duration=2.0, integrator="imex_euler", dt=DRIVE_PERIOD,
-                                  fidelity=fidelity)
-    rk4 = twin.simulate_features(scene_name, duration=2.0, fidelity=fidelity)
+    imex = twin.simulate(scene_name, solver=twin.Solver("imex_euler", dt=DRIVE_PERIOD), save="features",
+                         duration=2.0, fidelity=fidelity)
+    rk4 = twin.simulate(scene_name, save="features", duration=2.0, fidelity=fidelity)
     assert (imex.dt, rk4.dt) == (DRIVE_PERIOD, 0.5 * DRIVE_PERIOD)
     difference = imex.features["backlash_feature_true"] - rk4.features["backlash_feature_true"]
     assert abs(difference) < 0.02e-6

@@ -24,7 +24,7 @@ from twin.engine.plant import BALANCE_TOLERANCE, W
 from twin.fidelity import resolve_fidelity
 from twin.layout import K, S
 from twin.physics.ball_screw import nut_elastic_force
-from twin.simulation import simulate_batch, simulate_features
+from twin.simulation import simulate, simulate_batch
 
 DURATION = 1.2  # s: the first move of the nominal profile with its reversal, enough for every feature to be finite
 
@@ -63,7 +63,7 @@ def _same(a, b) -> bool:
 
 
 def _alone(scene, params, seed):
-    return simulate_features(scene, params, rng=np.random.default_rng(seed), throw=False)
+    return simulate(scene, params, save="features", rng=np.random.default_rng(seed), throw=False)
 
 
 @pytest.fixture(scope="module")
@@ -99,7 +99,7 @@ def test_the_runs_share_groups(alone):
 
 @pytest.mark.parametrize("lanes", [1, 3, 8, 16])
 def test_a_batch_gives_every_run_its_own_numbers_whatever_the_lane_count(alone, lanes):
-    batch = simulate_batch(_runs(), lanes=lanes, throw=False)
+    batch = simulate_batch(_runs(), solver=twin.Solver(lanes=lanes), throw=False)
     assert len(batch) == len(alone)
     for k, (summary, reference) in enumerate(zip(batch, alone, strict=True)):
         assert _same(summary, reference), f"run {k} at {lanes} lanes: {summary} != {reference}"
@@ -109,7 +109,7 @@ def test_a_batch_in_another_order_gives_the_same_numbers(alone):
     """Shuffled: each run gets other lane mates and another lane; results come back in the order given."""
     order = np.random.default_rng(5).permutation(len(alone))
     runs = _runs()
-    batch = simulate_batch([runs[k] for k in order], lanes=4, throw=False)
+    batch = simulate_batch([runs[k] for k in order], solver=twin.Solver(lanes=4), throw=False)
     for summary, k in zip(batch, order, strict=True):
         assert _same(summary, alone[k]), f"run {k}"
 
@@ -131,20 +131,20 @@ def test_a_failed_lane_keeps_its_reason_and_leaves_its_mates_alone(alone):
     assert 0.0 < failing_alone[0].t_reached < failing_alone[1].t_reached < DURATION
     mixed = [runs[0], (failing[0][0], failing[0][1], np.random.default_rng(2001)), runs[2],
              (failing[1][0], failing[1][1], np.random.default_rng(2003)), runs[4], runs[5]]
-    batch = simulate_batch(mixed, lanes=8, throw=False)
+    batch = simulate_batch(mixed, solver=twin.Solver(lanes=8), throw=False)
     assert _same(batch[1], failing_alone[0]) and _same(batch[3], failing_alone[1])
     for position, k in ((0, 0), (2, 2), (4, 4), (5, 5)):
         assert _same(batch[position], alone[k]), f"run {k}"
     with pytest.raises(twin.SimulationFailed, match="stroke limit"):
-        simulate_batch(mixed, lanes=8)
+        simulate_batch(mixed, solver=twin.Solver(lanes=8))
 
 
-def test_simulate_and_simulate_features_agree_on_a_lane_of_one():
-    """``simulate`` (the Dataset, one lane, recording) and ``simulate_features`` (no recording) give the same
-    features and status, bit for bit, for a sampled run."""
+def test_simulate_saving_signals_and_features_agree_on_a_lane_of_one():
+    """``simulate`` saving the signals (the Dataset, one lane, recording) and saving the features alone (no
+    recording) give the same features and status, bit for bit, for a sampled run."""
     scene, params, _ = _runs()[3]
     ds = twin.simulate(scene, params, rng=np.random.default_rng(7), throw=False)
-    summary = simulate_features(scene, params, rng=np.random.default_rng(7), throw=False)
+    summary = simulate(scene, params, save="features", rng=np.random.default_rng(7), throw=False)
     assert (summary.status, summary.failure_reason, summary.t_reached, summary.fidelity) == (
         ds.attrs["status"], ds.attrs["failure_reason"], ds.attrs["t_reached"], ds.attrs["fidelity"])
     assert (summary.integrator, summary.dt) == (ds.attrs["integrator"], ds.attrs["dt"])
@@ -291,8 +291,8 @@ def test_quasi_static_feature_agrees_with_the_dynamic_level(scene_name):
     (docs/accuracy.md). Beyond ~6 s ds4's dynamic level grows a self-excited 255 Hz oscillation in which the axial
     mode takes part (docs/accuracy.md), which the massless shaft cannot have: there the levels part by ~0.2 um at
     10 s, a difference of model, not of numerics, which the fidelity audit judges."""
-    features = {level: simulate_features(scene_name, dt=3.125e-5, duration=5.0, rng=1,
-                                         fidelity={"screw_axial": level}).features["backlash_feature_true"]
+    features = {level: simulate(scene_name, solver=twin.Solver(dt=3.125e-5), save="features", duration=5.0, rng=1,
+                                fidelity={"screw_axial": level}).features["backlash_feature_true"]
                 for level in ("dynamic", "quasi_static")}
     assert abs(features["dynamic"] - features["quasi_static"]) < 0.01e-6
     assert features["dynamic"] != features["quasi_static"]  # the levels are different models

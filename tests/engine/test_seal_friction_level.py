@@ -22,7 +22,7 @@ from twin.layout import K, S
 from twin.levels import SUBSYSTEMS
 from twin.physics import pneumatics as pn
 from twin.physics.friction import stribeck_friction
-from twin.simulation import simulate_batch, simulate_features
+from twin.simulation import simulate, simulate_batch
 
 ELASTO_PLASTIC = {"seal_friction": "elasto_plastic"}
 DURATION = 1.2  # s: the first move of the nominal profile with its reversal, enough for every feature to be finite
@@ -102,10 +102,10 @@ def test_a_piston_at_rest_is_held_by_the_seals_deflection():
 def test_a_free_nut_run_completes_at_the_drive_period():
     """ds4 (free nut, the seals holding the sled through the piston) at RK4 125 us: the presliding mode,
     sqrt(sigma_0 / m_p) = 1.2e3 rad/s, is far inside RK4's stability limit at that step (h w = 0.14)."""
-    run = simulate_features("ds4", fidelity=ELASTO_PLASTIC, dt=125e-6, rng=0)
+    run = simulate("ds4", solver=twin.Solver(dt=125e-6), save="features", fidelity=ELASTO_PLASTIC, rng=0)
     assert run.status == "ok" and "seal_friction=elasto_plastic" in run.fidelity
     assert all(math.isfinite(value) for value in run.features.values())
-    default = simulate_features("ds4", dt=125e-6, rng=0)
+    default = simulate("ds4", solver=twin.Solver(dt=125e-6), save="features", rng=0)
     assert run.features["backlash_feature"] != default.features["backlash_feature"]
 
 
@@ -124,9 +124,9 @@ def _runs():
 @pytest.mark.parametrize("lanes", [1, 4])
 def test_lanes_give_each_run_its_own_numbers_at_the_elasto_plastic_level(lanes):
     runs = _runs()
-    alone = [simulate_features(scene, params, fidelity=ELASTO_PLASTIC, rng=np.random.default_rng(3000 + k),
-                               throw=False) for k, (scene, params, _) in enumerate(runs)]
-    batch = simulate_batch(runs, lanes=lanes, fidelity=ELASTO_PLASTIC, throw=False)
+    alone = [simulate(scene, params, save="features", fidelity=ELASTO_PLASTIC, rng=np.random.default_rng(3000 + k),
+                      throw=False) for k, (scene, params, _) in enumerate(runs)]
+    batch = simulate_batch(runs, solver=twin.Solver(lanes=lanes), fidelity=ELASTO_PLASTIC, throw=False)
     for k, (summary, reference) in enumerate(zip(batch, alone, strict=True)):
         assert summary.status == reference.status == "ok", f"run {k}"
         assert summary.features.keys() == reference.features.keys()

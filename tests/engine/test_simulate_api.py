@@ -14,6 +14,7 @@ from twin.layout import SIGNAL_META, STATE_META, K, S
 from twin.physics.ball_screw import contact_geometry, helix_angle, stiffness_at
 from twin.physics.groove import groove_radius
 from twin.physics.hertz import FORMULA_ISO, FORMULA_THESIS, ball_groove_stiffness, equivalent_modulus
+from twin.solver import DEFAULT_SOLVER, split_solver
 
 REQUIRED = ["position_demand", "nut1_position", "nut2_position", "screw_angle", "screw_equivalent_position",
             "motor_current", "motor_torque", "winding_temperature", "preload_force", "external_force"]
@@ -56,10 +57,33 @@ def test_time_is_seconds_from_the_start_of_the_test(short_nominal):
 
 
 def test_bad_options_listed_before_running():
+    """The solver names every bad field of its own when it is made; ``simulate`` names every bad option of the run,
+    the step against the loop periods among them, before it starts; a ``save`` or a ``solver`` of the wrong kind
+    is refused by name."""
     with pytest.raises(OptionError) as info:
-        twin.simulate("nominal", integrator="euler_forward", dt=3e-5, curvature="flat")
+        twin.Solver("euler_forward", dt=-3e-5, rtol=1.0, local_error_guard="yes", lanes=0)
     text = str(info.value)
-    assert "integrator" in text and "dt" in text and "curvature" in text
+    assert all(f"{field}:" in text for field in ("integrator", "dt", "rtol", "local_error_guard", "lanes"))
+    with pytest.raises(OptionError) as info:
+        twin.simulate("nominal", solver=twin.Solver(dt=3e-5), curvature="flat")
+    text = str(info.value)
+    assert "dt: 3e-05 s must divide the speed-loop period" in text and "curvature" in text
+    with pytest.raises(OptionError, match="save: 'dataset' is not one of signals, features"):
+        twin.simulate("nominal", save="dataset")
+    with pytest.raises(OptionError, match="solver: expected a twin.Solver, got dict"):
+        twin.simulate("nominal", solver={"integrator": "rk4"})
+    with pytest.raises(OptionError, match=r"integrator: \['rk4'\] is not one of rk4"):
+        twin.Solver(["rk4"])
+
+
+def test_a_flat_table_of_options_splits_into_the_solver_and_the_rest():
+    """A campaign spec's ``[solver]`` table (what ``campaigns.bench.adapter`` passes on): the fields of
+    :class:`twin.Solver` make the solver, the others stay ``simulate``'s keywords; the solver left out is the
+    default one, so a table without solver fields runs as a bare call does."""
+    solver, rest = split_solver({"integrator": "imex_euler", "dt": 1.25e-4, "output_dt": 2e-3, "fidelity": "full"})
+    assert solver == twin.Solver("imex_euler", dt=1.25e-4) and rest == {"output_dt": 2e-3, "fidelity": "full"}
+    assert split_solver({"fidelity": "auto"}) == (twin.Solver(), {"fidelity": "auto"})
+    assert twin.Solver() == DEFAULT_SOLVER and hash(twin.Solver("rk4", dt=6.25e-5)) == hash(twin.Solver(dt=6.25e-5))
 
 
 def test_same_inputs_same_numbers():
@@ -73,13 +97,13 @@ def test_guard_reports_unstable_step_as_data():
     """A step beyond RK4's stability limit is caught and reported, not silent: the nominal scene asks for every
     output, so its automatic fidelity keeps the analog current loop, whose real mode limits RK4 to 122 us
     (tests/engine/test_default_step.py); 125 us is past it."""
-    ds = twin.simulate("nominal", dt=1.25e-4, throw=False, duration=1.0)
+    ds = twin.simulate("nominal", solver=twin.Solver(dt=1.25e-4), throw=False, duration=1.0)
     assert ds.attrs["status"] == "diverged"
     assert ds.attrs["failure_reason"]
     assert 0 < ds.attrs["t_reached"] < 1.0
     assert np.isnan(float(ds.backlash_feature_true))
     with pytest.raises(SimulationFailed, match="diverged"):
-        twin.simulate("nominal", dt=1.25e-4, duration=1.0)
+        twin.simulate("nominal", solver=twin.Solver(dt=1.25e-4), duration=1.0)
 
 
 def test_iso_curvature_selectable(bench):
@@ -134,19 +158,19 @@ def test_iso_curvature_selectable(bench):
     # share of f_b changes by 3e-5 of itself, below the feature's own numerical spread on this scene (6e-4 between
     # RK4 at 125, 62.5 and 31.25 us, measured), so only the change itself is asserted.
     lossless_screw = {"ball_groove_friction": "lumped", "screw_torsion": "rigid"}
-    a = twin.simulate_features(preloaded, duration=0.6, curvature="iso", fidelity=lossless_screw)
-    b = twin.simulate_features(preloaded, duration=0.6, curvature="thesis", fidelity=lossless_screw)
+    a = twin.simulate(preloaded, save="features", duration=0.6, curvature="iso", fidelity=lossless_screw)
+    b = twin.simulate(preloaded, save="features", duration=0.6, curvature="thesis", fidelity=lossless_screw)
     assert a.features["backlash_feature_true"] != b.features["backlash_feature_true"]
 
 
 @pytest.mark.parametrize(("scene", "options"), [
     ("ds2", {"duration": 0.3, "rng": 3}),
-    ("nominal", {"duration": 0.3, "dt": 1.25e-4}),  # diverges: NaN features, status and reason as data
+    ("nominal", {"duration": 0.3, "solver": twin.Solver(dt=1.25e-4)}),  # diverges: NaN features, status and reason
 ])
 def test_features_without_the_dataset_are_the_datasets(scene, options):
-    """``simulate_features`` returns exactly the scalars ``simulate`` puts in its Dataset, bit for bit."""
+    """``save="features"`` returns exactly the scalars ``simulate`` puts in its Dataset, bit for bit."""
     ds = twin.simulate(scene, throw=False, **options)
-    summary = twin.simulate_features(scene, throw=False, **options)
+    summary = twin.simulate(scene, save="features", throw=False, **options)
     assert (summary.status, summary.failure_reason, summary.t_reached, summary.fidelity) == (
         ds.attrs["status"], ds.attrs["failure_reason"], ds.attrs["t_reached"], ds.attrs["fidelity"])
     assert set(summary.features) == {name for name in ds.data_vars if not ds[name].dims}

@@ -83,7 +83,7 @@ MOTION = {"amplitude": 2e-3, "frequency": 2.0, "cycles": 2, "dwell": 0.2}
 def _hysteresis(backlash: float) -> float:
     scene = twin.load_scene("ds2").with_procedure(MOTION).with_conditions(
         {"backlash": backlash, "cylinder": "detached"})
-    return float(twin.simulate_features(scene, outputs=["backlash_hysteresis_true"]).features[
+    return float(twin.simulate(scene, save="features", outputs=["backlash_hysteresis_true"]).features[
         "backlash_hysteresis_true"])
 
 

@@ -39,10 +39,10 @@ def test_closed_loop_order_on_smooth_scene(bench, smooth_scene, method, steps):
     measured between 15.6 and 7.8 us: at 3.9 us its error (1e-8 relative, in the screw's axial speed, ~1e-11 m/s)
     reaches the level of the reference run's rounding over its 1.2 million steps (session 6)."""
     params = bench.with_values(SMOOTH)
-    reference = twin.simulate(smooth_scene, params, integrator="rk4", dt=2.44140625e-7,
+    reference = twin.simulate(smooth_scene, params, solver=twin.Solver("rk4", dt=2.44140625e-7),
                               fidelity=plant_fidelity(smooth_scene))
     errs = [
-        _final_error(twin.simulate(smooth_scene, params, integrator=method, dt=h,
+        _final_error(twin.simulate(smooth_scene, params, solver=twin.Solver(method, dt=h),
                                    fidelity=plant_fidelity(smooth_scene)), reference)
             for h in steps]
     slope = linregress(np.log(steps), np.log(errs)).slope
@@ -62,11 +62,11 @@ def test_observed_order_on_full_scene():
     the floor at 31 us (1.6e-6 at 31 us, 6.4e-7 at 16 us), so the order is measured on the lossless screw."""
     scene = twin.load_scene("nominal").with_duration(1.2).with_conditions({"zero_procedure": "preloaded"})
     fidelity = {**plant_fidelity(scene), "ball_groove_friction": "lumped"}
-    reference = twin.simulate(scene, integrator="rk4", dt=9.765625e-7, fidelity=fidelity)
+    reference = twin.simulate(scene, solver=twin.Solver("rk4", dt=9.765625e-7), fidelity=fidelity)
     # the valve spool's hysteresis play is a discrete switch (order 1-2 on its own states: 1.05e-5, 3.9e-6, 1.2e-6
     # in spool speed at 31, 16, 8 us since the power-consistent motor, measured); the order is read on the others
     spool = ("spool_position", "spool_speed")
-    errs = [_final_error(twin.simulate(scene, integrator="rk4", dt=h, fidelity=fidelity), reference, spool)
+    errs = [_final_error(twin.simulate(scene, solver=twin.Solver("rk4", dt=h), fidelity=fidelity), reference, spool)
             for h in (3.125e-5, 1.5625e-5, 7.8125e-6)]
     assert errs[0] / errs[1] > 8.0
     assert max(errs[1:]) < 1e-5
@@ -75,10 +75,10 @@ def test_observed_order_on_full_scene():
 def test_guard_catches_nan_blow_up():
     """RK4 at the 125 us drive period exceeds its stability limit (~1e-4 s): without the local-error
     check the state goes to NaN, and the guard stops the run there with that reason."""
-    ds = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), local_error_guard=False,
-                       throw=False)
+    ds = twin.simulate("ds2", solver=twin.Solver("rk4", dt=1.25e-4, local_error_guard=False),
+                       fidelity=plant_fidelity("ds2"), throw=False)
     assert ds.attrs["status"] == "diverged" and "non-finite" in ds.attrs["failure_reason"]
-    guarded = twin.simulate("ds2", integrator="rk4", dt=1.25e-4, fidelity=plant_fidelity("ds2"), throw=False)
+    guarded = twin.simulate("ds2", solver=twin.Solver("rk4", dt=1.25e-4), fidelity=plant_fidelity("ds2"), throw=False)
     assert "finite but wrong" in guarded.attrs["failure_reason"]
     assert guarded.attrs["t_reached"] < ds.attrs["t_reached"]  # caught before the NaN
 
@@ -87,27 +87,27 @@ def test_guard_catches_finite_but_wrong():
     """Semi-implicit Euler at 62.5 us on the loaded nominal scene is past its ~55 us limit: the run stays
     finite and ends 'ok' with a feature 5 um off (50.2 instead of 55.4 um). The step-doubling guard
     flags it."""
-    unguarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5,
-                              fidelity=plant_fidelity("nominal"),
-                              local_error_guard=False, throw=False)
-    right = twin.simulate("nominal", integrator="rk4", dt=3.125e-5, fidelity=plant_fidelity("nominal"))
+    unguarded = twin.simulate("nominal", solver=twin.Solver("semi_implicit_euler", dt=6.25e-5, local_error_guard=False),
+                              fidelity=plant_fidelity("nominal"), throw=False)
+    right = twin.simulate("nominal", solver=twin.Solver("rk4", dt=3.125e-5), fidelity=plant_fidelity("nominal"))
     assert unguarded.attrs["status"] == "ok"
     assert abs(float(unguarded.backlash_feature - right.backlash_feature)) > 1e-6
-    guarded = twin.simulate("nominal", integrator="semi_implicit_euler", dt=6.25e-5, fidelity=plant_fidelity("nominal"),
-                            throw=False)
+    guarded = twin.simulate("nominal", solver=twin.Solver("semi_implicit_euler", dt=6.25e-5),
+                            fidelity=plant_fidelity("nominal"), throw=False)
     assert guarded.attrs["status"] == "diverged" and "finite but wrong" in guarded.attrs["failure_reason"]
 
 
 def test_guard_quiet_on_stable_runs():
     for integrator, dt in (("rk4", 3.125e-5), ("semi_implicit_euler", 3.125e-5), ("rosenbrock_w2", 1.25e-4)):
-        ds = twin.simulate("ds1", integrator=integrator, dt=dt, duration=2.0)
+        ds = twin.simulate("ds1", solver=twin.Solver(integrator, dt=dt), duration=2.0)
         assert ds.attrs["status"] == "ok" and ds.attrs["max_local_error"] < 1.0
 
 
 def test_reference_path_matches_compiled_loop():
     """scipy Radau with the same sampled-data logic and RK4 agree on the feature to 1e-4 um."""
-    reference = twin.simulate("ds7", integrator="scipy_lsoda", rtol=1e-9, duration=0.6, fidelity=plant_fidelity("ds7"))
-    compiled = twin.simulate("ds7", integrator="rk4", duration=0.6, fidelity=plant_fidelity("ds7"))
+    reference = twin.simulate("ds7", solver=twin.Solver("scipy_lsoda", rtol=1e-9), duration=0.6,
+                              fidelity=plant_fidelity("ds7"))
+    compiled = twin.simulate("ds7", solver=twin.Solver("rk4"), duration=0.6, fidelity=plant_fidelity("ds7"))
     assert float(compiled.backlash_feature) == pytest.approx(float(reference.backlash_feature), abs=1e-10)
     assert reference.attrs["solver_nfev"] > 0 and reference.attrs["solver_steps"] > 0
 
@@ -119,7 +119,7 @@ def test_work_precision_round_trip_and_replot(tmp_path):
     assert np.all(study.wall_time > 0)
     # the default configuration (RK4, the quasi-static screw axial, its default step) is one point per panel, at
     # 62.5 us: the full plant's analog current loop (real mode -2.28e4 1/s, RK4 limit 122 us) rules out the drive
-    # period (twin.simulation.default_step; tests/engine/test_default_step.py)
+    # period (twin.Solver.step; tests/engine/test_default_step.py)
     default = study.where(study.method == f"{DEFAULT_POINT} (rk4, quasi-static screw axial)", drop=True)
     assert default.sizes["run"] == 2 and np.all(default.dt == 6.25e-5)
     study.to_netcdf(tmp_path / "work_precision.nc", engine="netcdf4")
