@@ -381,6 +381,24 @@ def cmd_campaign_replay(args) -> int:
     return 0 if identical else 1
 
 
+def cmd_campaign_bracket(args) -> int:
+    import campaigns
+    from campaigns.runner.storage import CampaignError
+    from campaigns.workflows.level_search import Settings, search, statement, store
+
+    settings = Settings.checked(feature=args.feature, resolution=args.resolution, method=args.method,
+                                max_levels=args.max_levels, stages=args.stages or [], runs=args.budget)
+    out = args.out or Path("out") / campaigns.load_spec(args.spec).name
+    if (out / "spec.json").exists():  # refused before the search's runs, not after them
+        raise CampaignError(f"{out}: holds a campaign already; a bracket search writes a new one: choose another --out")
+    result = search(args.spec, settings, runs=args.runs, progress=print)
+    print(statement(result))
+    path = store(result, out)
+    print(f"wrote {path}")
+    _print_analysis(path.with_name("analysis.nc"))
+    return 0
+
+
 def cmd_fidelity_levels(args) -> int:
     from twin.fidelity import SUBSYSTEMS
 
@@ -544,6 +562,15 @@ def cmd_chapter5(args) -> int:
     return 0
 
 
+def _run_counts(text: str) -> list[int]:
+    """``--stages 80,160,320``: runs per level at each look."""
+    try:
+        return [int(n) for n in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: runs per look as whole numbers separated by commas, "
+                                         "e.g. 80,160,320") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
     parser.add_argument("--version", action="version", version=f"%(prog)s {twin.__version__}")
@@ -627,6 +654,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="write the replayed run (netCDF)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
     p.set_defaults(func=cmd_campaign_replay)
+    p = campaign_sub.add_parser("bracket", help="add levels to a spec's fault sweep until the minimum detectable size "
+                                                "is bracketed to --resolution, the requirement tried first "
+                                                "(docs/level_search.md); runs in this process")
+    p.add_argument("spec", type=Path, help="campaign spec with an observability sweep, e.g. "
+                                           "campaigns/specs/backlash_bracket.toml")
+    p.add_argument("--feature", default="backlash_feature", help="feature searched (default backlash_feature)")
+    p.add_argument("--resolution", type=float, help="widest gap of levels around the estimate and inside its "
+                                                    "bounds [SI: m, or N for preload loss]; default: the "
+                                                    "requirement level only")
+    p.add_argument("--method", default="bisection", help="bisection (default) or monotone_fit")
+    p.add_argument("--max-levels", type=int, default=8, help="levels the search may add (default 8)")
+    p.add_argument("--stages", type=_run_counts,
+                   help="runs per level at each look, e.g. 80,160,320 (Bonferroni over the looks)")
+    p.add_argument("--budget", type=int, help="the most runs the search may execute")
+    p.add_argument("--runs", type=int, help="runs per level (overrides the spec; without --stages)")
+    p.add_argument("--out", type=Path, help="output directory (default: out/<spec name>)")
+    p.set_defaults(func=cmd_campaign_bracket)
 
     fidelity = sub.add_parser("fidelity", help="fidelity levels and the audit of the automatic choice")
     fidelity_sub = fidelity.add_subparsers(dest="fidelity_command", required=True)

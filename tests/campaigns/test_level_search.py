@@ -273,3 +273,19 @@ def test_invalid_settings_are_one_error_naming_each_field():
     fields = [p.split(":")[0] for p in error.value.problems]
     assert fields == ["resolution", "method", "max_levels"]
     assert "greater than 0 (got -1e-06)" in error.value.problems[0]
+
+
+def test_the_command_refuses_a_bad_plan_or_a_used_directory_in_one_line_before_any_run(tmp_path, capsys):
+    from app.cli import main
+    from tests.cli_helpers import refused_in_one_line
+
+    spec = "campaigns/specs/backlash_bracket.toml"
+    assert main(["campaign", "bracket", spec, "--out", str(tmp_path / "a"), "--resolution", "1e-12"]) == 2
+    err = capsys.readouterr().err  # the input-error form: one heading, one line per problem, no traceback
+    assert "resolution" in err and "finer than the sweep can resolve" in err and "Traceback" not in err, err
+    assert not (tmp_path / "a").exists()
+    used = tmp_path / "used"
+    used.mkdir()
+    (used / "spec.json").write_text("{}")
+    refused_in_one_line(capsys, ["campaign", "bracket", spec, "--out", str(used)], "holds a campaign already")
+    assert sorted(p.name for p in used.iterdir()) == ["spec.json"]  # nothing written there
