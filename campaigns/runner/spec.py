@@ -35,12 +35,12 @@ from pydantic import (
     model_validator,
 )
 
-from campaigns.analysis.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
 from campaigns.bench.adapter import BenchCatalog
 from campaigns.runner.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog, spelling_hint
 from campaigns.runner.control_limits import ControlLimits
 from campaigns.runner.distributions import Distribution, DistributionKind
 from campaigns.runner.ranges import resolve, shape_problems
+from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
 from twin.errors import InputError
 from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
@@ -377,7 +377,7 @@ def _unit_floor(count: int) -> int:
     if count < MIN_UNITS:
         raise ValueError(f"{count} units is below the floor of {MIN_UNITS}: with fewer, not even the largest unit "
                          f"bounds the {DESIGN_REVIEW_QUANTILE * 100:g}th-percentile unit the within-unit verdict is "
-                         "about with 95 % confidence (campaigns.analysis.within_unit.MIN_UNITS)")
+                         "about with 95 % confidence (campaigns.statistics.within_unit_floors.MIN_UNITS)")
     return count
 
 
@@ -385,7 +385,7 @@ def _repeat_floor(repeats: int) -> int:
     if repeats < MIN_REPEATS:
         raise ValueError(f"{repeats} repeats is below the floor of {MIN_REPEATS}: the check that the units share one "
                          "test-to-test scatter (Brown-Forsythe) needs 3 tests per unit and fault level "
-                         "(campaigns.analysis.within_unit.MIN_REPEATS)")
+                         "(campaigns.statistics.within_unit_floors.MIN_REPEATS)")
     return repeats
 
 

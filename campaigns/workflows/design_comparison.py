@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis.campaign_analysis import mean_shift
+from campaigns.statistics.intervals import mean_shift
 from campaigns.units import estimate_with_interval
 
 #: Confidence of every interval of the comparison.

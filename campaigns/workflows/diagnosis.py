@@ -43,7 +43,8 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES, printed_estimate
+from campaigns.analysis.vocabulary import SWEEP_QUANTITIES
+from campaigns.statistics.detection import printed_estimate
 from campaigns.units import quantity as shown_value  # fault_size's `quantity` is the fault's name
 from campaigns.units import quantity_range
 
