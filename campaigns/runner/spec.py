@@ -35,7 +35,6 @@ from pydantic import (
     model_validator,
 )
 
-from campaigns.bench.adapter import BenchCatalog
 from campaigns.runner.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog, spelling_hint
 from campaigns.runner.control_limits import ControlLimits
 from campaigns.runner.distributions import Distribution, DistributionKind
@@ -818,73 +817,10 @@ def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
     problems += [p for p in _row_problems(data, failed_rows, catalog) + cross_field_problems(data) if p not in problems]
     if problems:
         raise SpecError(problems)
-    found, spec._warnings = support_checks(spec, catalog)
+    found, spec._warnings = catalog.support_checks(spec) if catalog is not None else ([], [])
     if found:
         raise SpecError(found)
     return spec
-
-
-#: Relative round-off a sampled range may have beyond a bound it was written at (unit conversion of the bound).
-ROUND_OFF = 1e-9
-
-
-def support_checks(spec: CampaignSpec, catalog: Catalog | None) -> tuple[list[str], list[str]]:
-    """Every sampled range, and every data set's fixed parameter, against what its target allows, before anything
-    runs: ``(problems, warnings)``.
-
-    A problem: a range (uniform, truncated Gaussian: its bounds; a constant: its value; a Gaussian or lognormal:
-    its centre) outside the bounds of the parameter file or of the scene condition, which every run would fail on.
-    A warning: a Gaussian whose tail crosses a bound (the share of runs that would fail is given) or a centre more
-    than ``twin.parameters.PLAUSIBLE_FACTOR`` times away from the nominal (a unit or exponent slip, usually).
-    The bounds are the bench's (its parameter set and ``twin.scenes.CONDITIONS``); other models' catalogs are not
-    checked here.
-    """
-    if not isinstance(catalog, BenchCatalog):
-        return [], []
-    from twin import load_parameters  # lazy: only bench specs are checked against a parameter set
-
-    parameters = load_parameters(spec.base.parameters)
-    problems, warnings = [], []
-    for k, row in enumerate(spec.uncertainties):
-        d = row.distribution_resolved
-        conditions, _ = split_targets({d.target: None})
-        name = next(iter(conditions), None)
-        exact = ((lambda v, c=SCENE_CONDITIONS[name]: c.check(v)) if name in SCENE_CONDITIONS
-                 else (lambda v, p=parameters[d.target]: p.check(v) is None) if name is None else None)
-        # a range given as the bound itself (a sensor's Table 9.5 range) may land a last bit beyond it in SI units
-        check = exact and (lambda v, exact=exact: any(exact(v * (1.0 + e)) for e in (0.0, -ROUND_OFF, ROUND_OFF)))
-        if check is None or not SCENE_CONDITIONS.get(name, SCENE_CONDITIONS["backlash"]).numeric:
-            continue
-        allowed = (f"{SCENE_CONDITIONS[name].allowed}" if name is not None
-                   else f"{parameters[d.target].allowed()} {d.unit}")
-        if d.kind in ("uniform", "truncated_gaussian"):
-            edges = [("low", d.low), ("high", d.high)]
-        elif d.kind == "constant":
-            edges = [("value", d.value)]
-        else:
-            edges = [("centre", d.mean)]
-        for what, value in edges:
-            if not check(value):
-                problems.append(f"uncertainties[{k}]: {d.target}: the range's {what} {value:g} {d.unit} is outside "
-                                f"the allowed range {allowed}; every run drawing it would fail")
-        if d.kind == "gaussian" and check(d.mean) and d.sigma > 0:
-            for side in (-1.0, 1.0):
-                edge = d.mean + side * 3.0 * d.sigma
-                if not check(edge):
-                    warnings.append(f"uncertainties[{k}]: {d.target}: the Gaussian (mean {d.mean:g}, sigma {d.sigma:g} "
-                                    f"{d.unit}) reaches beyond the allowed range {allowed} within 3 sigma: its draws "
-                                    "beyond it fail (use truncated_gaussian to keep them inside)")
-                    break
-        centre = d.value if d.kind == "constant" else d.mean if math.isfinite(d.mean) else 0.5 * (d.low + d.high)
-        if name is None and (warning := parameters[d.target].implausible(centre)) is not None:
-            warnings.append(f"uncertainties[{k}]: {warning}")
-    for k, dataset in enumerate(spec.datasets):
-        for name, value in dataset.parameters.items():
-            if (problem := parameters[name].check(value)) is not None:
-                problems.append(f"datasets[{k}].parameters: {problem}; every run of the data set would fail")
-            elif (warning := parameters[name].implausible(value)) is not None:
-                warnings.append(f"datasets[{k}].parameters: {warning}")
-    return problems, warnings
 
 
 def _read_spec_file(path: Path) -> dict:
@@ -915,9 +851,8 @@ def read_spec(path: Path) -> dict:
     return read_inheriting(Path(path), "extends", _read_spec_file, _locate_parent)
 
 
-def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | None = None,
-              catalog: Catalog | None = None) -> CampaignSpec:
-    """Read and validate a campaign spec (TOML).
+def read_spec_data(path: str | Path, runs: int | None = None, *, timeout: float | None = None) -> dict:
+    """Read a campaign spec (TOML) with its overrides, not yet validated (:func:`validate_spec`).
 
     Parameters
     ----------
@@ -929,9 +864,25 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
         Override ``runs_per_dataset`` (the CLI's ``--runs``).
     timeout : float, optional
         Override ``execution.timeout`` [s] (the CLI's ``--timeout``).
-    catalog : Catalog, optional
-        The model's catalog. Default: :class:`campaigns.bench.adapter.BenchCatalog` for
-        the spec's ``base.parameters`` and ``base.scene``.
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed.
+    """
+    data = read_spec(Path(path))
+    if runs is not None:
+        data["runs_per_dataset"] = runs
+    if timeout is not None:
+        execution = data.get("execution")
+        data["execution"] = {**(execution if isinstance(execution, dict) else {}), "timeout": timeout}
+    return data
+
+
+def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | None = None,
+              catalog: Catalog) -> CampaignSpec:
+    """Read (:func:`read_spec_data`) and validate a campaign spec against a model's ``catalog``; the bench twin's
+    entry, which defaults to its catalog, is :func:`campaigns.bench.campaign.load_spec` (``campaigns.load_spec``).
 
     Returns
     -------
@@ -943,21 +894,4 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
     SpecError
         If the file cannot be read or parsed, or listing every validation problem.
     """
-    data = read_spec(Path(path))
-    if runs is not None:
-        data["runs_per_dataset"] = runs
-    if timeout is not None:
-        execution = data.get("execution")
-        data["execution"] = {**(execution if isinstance(execution, dict) else {}), "timeout": timeout}
-    if catalog is None:
-        base = data.get("base", {}) if isinstance(data.get("base"), dict) else {}
-        try:
-            catalog = BenchCatalog(base.get("parameters", "bench"), base.get("scene", "nominal"))
-        except InputError as exc:
-            structural = []
-            try:
-                validate_spec(data, None)
-            except SpecError as inner:
-                structural = inner.problems
-            raise SpecError([f"base: {p}" for p in exc.problems] + structural) from None
-    return validate_spec(data, catalog)
+    return validate_spec(read_spec_data(path, runs, timeout=timeout), catalog)
