@@ -35,14 +35,26 @@ from campaigns.analysis.margins import control_robustness
 from campaigns.analysis.observability import observability_analysis
 from campaigns.analysis.separation import separation
 from campaigns.analysis.settings import AnalysisSettings
-from campaigns.analysis.vocabulary import SWEEP_QUANTITIES, requirement_of, runs_text, stored_spec
+from campaigns.analysis.vocabulary import (
+    BACKLASH_REQUIREMENT,
+    SWEEP_QUANTITIES,
+    requirement_of,
+    runs_text,
+    stored_spec,
+)
 from campaigns.analysis.within_unit import within_unit_analysis
 from campaigns.runner.files import CONVENTIONS, atomic_write, cf_encoding
 from campaigns.statistics import sensitivity
 from campaigns.statistics.defaults import CONFIDENCE
+from campaigns.statistics.detection import RESOLUTIONS, printed_estimate
 from campaigns.statistics.order_statistics import floor_reason
 from campaigns.units import estimate_with_interval
 from campaigns.units import quantity as quantity_text
+
+#: What the report reads of the analysis besides the composer's own functions, from here (reports/: the verdict
+#: vocabulary, whose homes are campaigns.analysis.vocabulary and campaigns.statistics.detection).
+__all__ = ["ANALYSES", "BACKLASH_REQUIREMENT", "RESOLUTIONS", "SWEEP_QUANTITIES", "analysis_dataset", "analyze",
+           "attributes", "mean_text", "printed_estimate", "summary"]
 
 #: The analyses of :func:`analysis_dataset`, in the order their variables are merged.
 ANALYSES = (feature_statistics, correlations, separation, observability_analysis, within_unit_analysis,

@@ -28,19 +28,19 @@ from campaigns.runner.spec import CampaignSpec
 from campaigns.runner.storage import CampaignError
 
 #: Bytes of one chunk file besides its runs: the zip and .npy headers of its ~15 arrays, the provenance (JSON as
-#: 4-byte unicode) and the checksum. Measured 6.1 kB (synthetic model) and 6.9 kB (bench); rounded up.
+#: 4-byte unicode) and the checksum. The measured sizes of this and the figures below: docs/performance.md, "The
+#: figures behind the campaign code's constants"; each rounded up.
 CHUNK_FILE_BYTES = 8_000
 #: Bytes per run in a chunk file besides its numbers: status, failure reason, fidelity and integrator as
-#: fixed-width 4-byte unicode (the bench's fidelity line is ~250 characters). Measured ~1.1 kB (bench).
+#: fixed-width 4-byte unicode (the bench's fidelity line is ~250 characters).
 RUN_CHUNK_BYTES = 1_500
 #: Bytes per run in results.nc besides its numbers: status, failure reason, integrator and loop-margin note as
-#: variable-length strings (HDF5 heap entries), the status flag. Measured ~200 B (bench).
+#: variable-length strings (HDF5 heap entries), the status flag.
 RUN_RESULTS_BYTES = 400
 #: Bytes of a netCDF file besides its variables: the global attributes (the spec JSON, provenance, the fidelity
 #: audit's statements) and the HDF5 superblock.
 FILE_BYTES = 100_000
-#: Bytes of HDF5 metadata per netCDF variable (headers, attributes, chunk index). Measured 5.7 kB in a bench
-#: results.nc (70 variables, 400 kB without traces).
+#: Bytes of HDF5 metadata per netCDF variable (headers, attributes, chunk index).
 VARIABLE_BYTES = 7_000
 #: Variables of results.nc besides the sampled values, features, margins, traces and conditions (status, its flag,
 #: failure reason, integrator, t_reached, wall_time, the margin note, the coordinates).

@@ -59,9 +59,8 @@ from campaigns.runner.spec import BOUNDS, CampaignSpec
 from campaigns.runner.storage import ChunkStore, OutputLock
 from twin.scenes import split_targets
 
-#: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write. Measured
-#: 9 ms (1 worker) to 13 ms (2 workers sharing 2 cores with the driver) with one-run chunks of
-#: the synthetic model; rounded up.
+#: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write; an upper value of the
+#: measured one (docs/performance.md, "The figures behind the campaign code's constants").
 TASK_OVERHEAD = 0.02
 #: Largest fraction of the compute time the per-task overhead may take.
 OVERHEAD_TARGET = 0.05

@@ -50,10 +50,9 @@ from twin.tomlfiles import read_inheriting
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
 #: detection probability is at most 0.35 percentage points and that of a mean 0.7 % of the spread, far
 #: below the model's other uncertainties (the thesis study uses 1000). Beyond it the cost is out of
-#: proportion: the driver samples every run before anything is submitted (~0.3 ms per run with the
-#: 38-row Table 9.5, so 7 data sets x 20 000 runs take ~40 s) and keeps the samples in memory, and the
-#: bench's ~1 s per run makes 140 000 runs about 20 h on two workers. A larger study is several
-#: campaigns with different ``root_seed`` values.
+#: proportion: the driver samples every run before anything is submitted and keeps the samples in memory,
+#: and the wall time of the runs grows with them (docs/performance.md, "The figures behind the campaign code's
+#: constants"). A larger study is several campaigns with different ``root_seed`` values.
 MAX_RUNS_PER_DATASET = 20_000
 
 #: Physical bounds of the solver and execution fields, ``field: (low, high, unit, what it is and why the range)``,
@@ -67,8 +66,8 @@ BOUNDS = {
     "output_dt": (1.0e-4, 1.0, "s", "output spacing"),
     # the longest built-in test procedure is 10 s; a procedure 60 times longer is a mistake, not a test
     "duration": (1.0e-3, 600.0, "s", "simulated duration"),
-    # a bench run takes about 1.2 s, a full-fidelity one a few s; one hour of wall clock per run is far beyond
-    # any procedure, and the budget bounds what a hung run (and the compile warm-up's timed run) holds the queue
+    # one hour of wall clock per run is far beyond any procedure's run time (docs/performance.md), and the budget
+    # bounds what a hung run (and the compile warm-up's timed run) holds the queue
     "timeout": (1.0e-3, 3600.0, "s", "wall-clock budget of one run"),
     "runs_per_dataset": (1, MAX_RUNS_PER_DATASET, "", "runs per data set"),
     "fidelity_audit_runs": (0, MAX_RUNS_PER_DATASET, "", "runs per data set re-run at full fidelity"),
@@ -165,7 +164,7 @@ class Solver(_Strict):
     ``{subsystem = level}`` (see ``twin fidelity levels``).
     """
 
-    integrator: str = "rk4"  # or "auto" (opt-in: twin.engine.solver_choice), or any twin.simulate integrator
+    integrator: str = "rk4"  # or any other twin.simulate integrator
     dt: _bounded(float | None, "dt") = None
     output_dt: _bounded(float | None, "output_dt") = None
     fidelity: str | dict[str, str] = "auto"
