@@ -71,7 +71,7 @@ def analysis_dataset(results: xr.Dataset, **options) -> xr.Dataset:
     are computed at any n, each with the interval its method allows there.
     """
     settings = AnalysisSettings(**options)
-    parts = [analysis(results, settings) for analysis in ANALYSES]
+    parts = [analyse(results, settings) for analyse in ANALYSES]
     analysis = xr.merge([part.drop_attrs(deep=False) for part in parts], combine_attrs="override")
     analysis.attrs = attributes(results, settings) | parts[ANALYSES.index(within_unit_analysis)].attrs
     return analysis
