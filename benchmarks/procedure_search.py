@@ -34,8 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from campaigns import analyze, run_campaign  # noqa: E402
-from campaigns.analysis.within_unit import MIN_REPEATS, MIN_UNITS  # noqa: E402
 from campaigns.runner.synthetic import SYNTHETIC_CATALOG, procedure_effect, synthetic_run  # noqa: E402
+from campaigns.statistics.within_unit_floors import MIN_REPEATS, MIN_UNITS  # noqa: E402
 from campaigns.workflows.procedure_search import (  # noqa: E402
     DESIGN_STREAM,
     design,

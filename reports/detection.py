@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from campaigns.analysis.campaign_analysis import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
 from reports.figures import Points, detection, level_axis, literal
 from reports.phrases import decision
 from reports.units import axis_label, display_scale, number

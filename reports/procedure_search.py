@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES
+from campaigns.analysis.vocabulary import SWEEP_QUANTITIES
 from reports.errors import ReportError
 from reports.model import Callout, Code, Figure, Heading, Paragraph, Report, Section, Table
 from reports.phrases import decision, tone

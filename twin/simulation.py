@@ -28,7 +28,6 @@ from twin.fidelity import Fidelity, resolve_fidelity
 from twin.layout import BOUND_REASONS, N_MEMORY, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, M, S, Signal
 from twin.parameters import ParameterSet, load_parameters
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
-from twin.solver import DEFAULT_DT as DEFAULT_DT  # noqa: F401  (campaigns.runner.budget reads it here; home: twin.solver)
 from twin.solver import DEFAULT_SOLVER, Solver
 
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period

@@ -1,2 +1,3 @@
-"""Analyses of a campaign's results: correlations, separation, observability, within-unit detection, model form,
-control robustness."""
+"""Analyses of a campaign's results, each (results, settings) -> xarray.Dataset, and the composer that writes
+analysis.nc: feature statistics, correlations, separation, observability, within-unit detection, control robustness,
+model form."""

@@ -15,13 +15,13 @@ sensitivity ``|S|max`` of each control loop at the run's sampled parameters (var
 and, for each loop and limit over the whole campaign, a verdict on the limit: the fraction of runs
 beyond it, with its exact (Clopper-Pearson) 95 % interval, against the allowed fraction
 ``max_fraction_beyond``, decided by the analysis's verdict rule
-(:func:`campaigns.analysis.campaign_analysis.requirement_verdict`): ``met`` when the upper bound is within the allowed
+(:func:`campaigns.statistics.detection.requirement_verdict`): ``met`` when the upper bound is within the allowed
 fraction, ``not met`` when the lower bound is at or above it, ``undetermined`` otherwise, and
 ``insufficient data`` below ``min_ok_runs`` runs with the margin. The one-sentence statement of each
 verdict is stored in ``analysis.nc`` and printed verbatim by the CLI and the report.
 
-:func:`control_robustness` is called by :func:`campaigns.analysis.campaign_analysis.analysis_dataset`, which passes its
-correlation estimator and verdict rule (this module does not import the analysis: one direction only).
+:func:`control_robustness` is one of the analyses :func:`campaigns.analysis.campaign_analysis.analysis_dataset`
+composes.
 """
 
 from __future__ import annotations
@@ -33,7 +33,12 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from campaigns.analysis.settings import AnalysisSettings
+from campaigns.analysis.vocabulary import features_of
 from campaigns.runner.control_limits import ControlLimits
+from campaigns.statistics.correlation import bootstrap_correlation
+from campaigns.statistics.defaults import CONFIDENCE
+from campaigns.statistics.detection import MAX_RUNS_TO_DECIDE, requirement_verdict
 
 __all__ = ["ControlLimits", "LIMITS", "control_robustness", "limits_of", "statements"]
 
@@ -108,8 +113,6 @@ def _shown(value: float, limit: str) -> str:
     return _value(float(decibels(value)) if limit == "gain_margin" else value, LIMITS[limit][3])
 
 
-#: The largest number of runs :func:`fraction_runs_to_decide` reports.
-MAX_RUNS_TO_DECIDE = 1_000_000
 
 
 def _fraction_bounds(k: float, n: float, confidence: float) -> tuple[float, float]:
@@ -121,7 +124,7 @@ def _fraction_bounds(k: float, n: float, confidence: float) -> tuple[float, floa
     return lower, upper
 
 
-def fraction_runs_to_decide(k: int, n: int, allowed: float, confidence: float = 0.95) -> float:
+def fraction_runs_to_decide(k: int, n: int, allowed: float, confidence: float = CONFIDENCE) -> float:
     """The fewest runs at which an undetermined limit verdict would be decided if the observed fraction ``k/n`` held:
     the smallest ``N > n`` whose exact (Clopper-Pearson) interval around ``k N / n`` runs beyond the limit lies wholly
     within the allowed fraction (met) or wholly beyond it (not met). ``0 of 350`` runs beyond a 1 % limit: the upper
@@ -163,25 +166,14 @@ def limit_statement(verdict: str, loop: str, limit: str, threshold: float, k: in
             f"{_shown(worst, limit)} ({worst_where})")
 
 
-def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features: list[str], n_boot: int = 1000,
-                       confidence: float = 0.95, seed: int = 0, min_ok_runs: int = 20) -> xr.Dataset:
-    """The control-robustness statistics of a campaign's results (variables prefixed ``margin_``).
-
-    Parameters
-    ----------
-    results : xarray.Dataset
-        ``results.nc``; without margin variables (a campaign that did not run the bench) the result is empty.
-    correlate : callable
-        ``correlate(x, y, "spearman", n_boot=, confidence=, seed=) -> (estimate, lower, upper)``
-        (:func:`campaigns.analysis.campaign_analysis.bootstrap_correlation`).
-    verdict_rule : callable
-        ``verdict_rule(lower, upper, requirement) -> str``
-        (:func:`campaigns.analysis.campaign_analysis.requirement_verdict`).
-    features : list of str
-        Features to correlate the margins with.
-    n_boot, confidence, seed, min_ok_runs
-        As in :func:`campaigns.analysis.campaign_analysis.analysis_dataset`.
+def control_robustness(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
+    """The control-robustness statistics of a campaign's results (variables prefixed ``margin_``): the margins'
+    quantiles and worst runs, their Spearman correlation with each feature, and per loop and limit the fraction of
+    runs beyond it with its exact bounds and verdict (:func:`campaigns.statistics.detection.requirement_verdict`).
+    Without margin variables (a campaign that did not run the bench) the result is empty.
     """
+    features = features_of(results)
+    n_boot, confidence, seed, min_ok_runs = settings.n_boot, settings.confidence, settings.seed, settings.min_ok_runs
     margins = _margin_variables(results)
     if not margins:
         return xr.Dataset()
@@ -217,7 +209,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
                 x, y = values[d][used], results[feature].values[d][used]
                 if n_corr[d, m, f] < min_ok_runs or np.ptp(x) == 0.0 or np.ptp(y) == 0.0:
                     continue  # too few runs, or a constant margin (e.g. an infinite gain margin): no correlation
-                spearman[d, m, f], *spearman_ci[d, m, f] = correlate(
+                spearman[d, m, f], *spearman_ci[d, m, f] = bootstrap_correlation(
                     x, y, "spearman", n_boot=n_boot, confidence=confidence,
                     seed=np.random.SeedSequence(seed, spawn_key=(_MARGIN_STREAM, d, m, f)))
 
@@ -248,7 +240,7 @@ def control_robustness(results: xr.Dataset, *, correlate, verdict_rule, features
                 verdict, bounds = "insufficient data", (math.nan, math.nan)
             else:
                 bounds = _fraction_interval(k, n, confidence)
-                verdict = verdict_rule(*bounds, limits.max_fraction_beyond)
+                verdict = requirement_verdict(*bounds, limits.max_fraction_beyond)
             verdicts.append(verdict)
             sentences.append(limit_statement(verdict, loop, limit, threshold, k, n, bounds, limits.max_fraction_beyond,
                                              worst_value, worst_where, confidence=confidence, min_ok_runs=min_ok_runs))

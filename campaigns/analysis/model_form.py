@@ -8,12 +8,12 @@ ball-groove friction coefficient). From the campaign's results and analysis this
 module computes, per assumption and variant, per baseline data set and feature:
 
 * the shift of the feature's mean against the baseline with its t interval at the analysis's confidence
-  (:func:`campaigns.analysis.campaign_analysis.mean_shift`): of the run-by-run differences when the variant takes its
+  (:func:`campaigns.statistics.intervals.mean_shift`): of the run-by-run differences when the variant takes its
   baseline's seeds (``seeds_from``: run ``i`` of both is one unit with one noise record under two assumptions, common
   random numbers), else Welch's for independent samples. A shift is stated only where its interval excludes zero
   (``shift_status``);
 * the requirement verdict of the observability sweep with every sweep data set replaced by its variant, computed by
-  :func:`campaigns.analysis.campaign_analysis.observability_sweep` with the analysis's settings and bootstrap stream,
+  :func:`campaigns.analysis.observability.observability_sweep` with the analysis's settings and bootstrap stream,
   against the analysis's verdict (both in the vocabulary of :data:`campaigns.statistics.paired_comparison.VERDICTS`);
 
 and one sentence, :func:`headline`: the assumption that changes the most verdicts or, when none changes one, the one
@@ -30,14 +30,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis.campaign_analysis import (
-    _OBSERVABILITY_STREAM,
-    _used,
-    mean_shift,
-    observability_sweep,
-    printed_estimate,
-)
+from campaigns.analysis.observability import observability_sweep
+from campaigns.analysis.settings import OBSERVABILITY_STREAM
+from campaigns.analysis.vocabulary import used as ok_runs
 from campaigns.runner.files import write_netcdf
+from campaigns.statistics.detection import printed_estimate
+from campaigns.statistics.intervals import mean_shift
 
 #: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.
 SEPARATOR = "__"
@@ -154,7 +152,7 @@ def _variant_verdict(results: xr.Dataset, spec: dict, by_baseline: dict[str, str
     found = observability_sweep(
         swapped, feature, sweep, false_alarm_rate=settings["false_alarm_rate"], power=settings["power"],
         n_boot=settings["n_boot"], confidence=settings["confidence"], min_runs=settings["min_runs"],
-        seed=np.random.SeedSequence(settings["seed"], spawn_key=(_OBSERVABILITY_STREAM, f)),
+        seed=np.random.SeedSequence(settings["seed"], spawn_key=(OBSERVABILITY_STREAM, f)),
         condition=settings["condition"], reference=observability.get("reference"),
         requirement=settings["requirement"], requirement_source=settings["requirement_source"])
     return str(found["requirement_verdict"].item()), str(found["requirement_statement"].item())
@@ -181,7 +179,7 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     shift, bounds = np.full(shape, math.nan), np.full(shape + (2,), math.nan)
     status = np.full(shape, SHIFT_STATUS.index("not_run"), dtype=np.int8)
     n_variant, n_baseline = np.zeros(shape, dtype=np.int32), np.zeros(shape, dtype=np.int32)
-    used = {feature: _used(results, feature) for feature in features}
+    used = {feature: ok_runs(results, feature) for feature in features}
     for v in found:
         i, d = labels.index(v.label), baselines.index(v.baseline)
         for f, feature in enumerate(features):
@@ -281,7 +279,7 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
 
 def shown_quantities(values, half_width: float, unit: str, extra: int = 1) -> list[str]:
     """Values in the feature's display unit (µm for m) to the leading digit of the interval's half-width plus
-    ``extra`` digits: 0 for an estimate (rounded there, :func:`campaigns.analysis.campaign_analysis.printed_estimate`),
+    ``extra`` digits: 0 for an estimate (rounded there, :func:`campaigns.statistics.detection.printed_estimate`),
     1 for the bounds, so those of a narrow interval read apart. 3 significant digits for an interval of zero width."""
     scale, shown = (1e6, "µm") if unit == "m" else (1.0, unit)
     if not half_width > 0:

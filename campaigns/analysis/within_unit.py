@@ -1,6 +1,6 @@
 """Within-unit detection: the smallest fault growth a unit's own tests reveal while it wears (issue 29, part 2).
 
-The observability sweep of :mod:`campaigns.analysis.campaign_analysis` answers a between-unit question: every run draws
+The observability sweep of :mod:`campaigns.analysis.observability` answers a between-unit question: every run draws
 fresh tolerances, so its threshold separates one unknown unit from a population of healthy ones. A PHM bench tests the
 same unit repeatedly: that unit's fixed errors (encoder phase errors, sensitivities, lead error) stay fixed, and
 only test-to-test uncertainties (room temperature, supply pressure, the encoders' mounting phases, electrical noise)
@@ -14,7 +14,7 @@ The rule: a unit's threshold from its own baseline and a scatter pooled over uni
 The detection rule of the analysis, applied to one unit alone, sets the unit's threshold at the
 ``1 - false_alarm_rate`` quantile of its own baseline tests. Taken empirically from the unit's repeats, that
 quantile has a distribution-free confidence bound only from 59 repeats on
-(:func:`campaigns.analysis.campaign_analysis.detection_run_floor`), so a campaign would need ``U x L x 59`` runs. With
+(:func:`campaigns.statistics.order_statistics.detection_run_floor`), so a campaign would need ``U x L x 59`` runs. With
 the 5-20 repeats a bench affords, the empirical quantile lies between the unit's two largest tests, beyond which a fresh
 baseline test falls with expected probability ``2 / (R + 1)`` and ``1 / (R + 1)`` (``E[F(X_(r))] = r / (R + 1)``):
 a false-alarm rate well above the nominal one, and different for every unit.
@@ -33,9 +33,9 @@ bound carries the uncertainty of the unit's own baseline mean (the ``1 / n_u,0``
 Student quantile). A test at fault size ``l`` is flagged with probability
 ``Phi((|mean_u,l - mean_u,0| - t s_0 sqrt(1 + 1/n_u,0)) / s_l)``, with ``s_l`` the scatter at that level pooled over
 units the same way (the threshold on the side of the shift, as
-:func:`campaigns.analysis.campaign_analysis.detection_probability` judges by the medians), and the unit's minimum
+:func:`campaigns.statistics.detection.detection_probability` judges by the medians), and the unit's minimum
 detectable growth is where that probability reaches ``power``
-(:func:`campaigns.analysis.campaign_analysis.minimum_detectable`, the sweep levels bracketing it). With a known unit
+(:func:`campaigns.statistics.detection.minimum_detectable`, the sweep levels bracketing it). With a known unit
 mean and scatter it would be ``(z(1 - false_alarm_rate) + z(power)) sigma / k`` for a feature of sensitivity ``k`` per
 unit of fault; with the baseline mean of ``R`` repeats, the median unit's is ``(z(1 - false_alarm_rate) sqrt(1 + 1/R) +
 z(power)) sigma / k`` (many units: ``t`` tends to ``z``).
@@ -54,19 +54,19 @@ typical unit achieves; the **95th-percentile unit** is the design-review figure:
 unit built, and "95 % of units detect a growth of at most X, with 95 % confidence" is the 95/95 statement of
 qualification by statistics (Wilks 1941, Ann. Math. Stat. 12:91-96; Guba, Makai & Pal 2003, Reliab. Eng. Syst. Saf.
 80:217-232), the same 95 % as the power and the confidence of the between-unit verdict. The verdict is computed once,
-from that unit's bounds (:func:`campaigns.analysis.campaign_analysis.requirement_verdict`).
+from that unit's bounds (:func:`campaigns.statistics.detection.requirement_verdict`).
 
 The bounds resample units, not repeats: in a two-level design, resampling the top-level units with replacement and
 keeping each unit's tests intact reproduces both levels of variation, while resampling the repeats as well counts the
 within-unit variation twice (Davison & Hinkley 1997, *Bootstrap Methods and their Application*, Sec. 3.8; Ren et al.
 2010, J. Appl. Stat. 37:1487-1498). Each replicate recomputes the pooled scatters from its resampled units, so their
 uncertainty, shared by all units, enters the bounds. As in
-:func:`campaigns.analysis.campaign_analysis.bootstrap_minimum_detectable`, the bounds are sweep levels: order
+:func:`campaigns.statistics.detection.bootstrap_minimum_detectable`, the bounds are sweep levels: order
 statistics of the replicates' last level not detected and first level detected (``inf``: not reached), widened to
 contain the bracket of the estimate. A percentile bootstrap of an upper quantile never goes beyond the largest unit,
 which bounds the 95th-percentile unit with less than the stated confidence in small samples, so the bounds are also
 widened to the distribution-free order-statistic bounds of the quantile
-(:func:`campaigns.analysis.campaign_analysis.quantile_bound_rank`).
+(:func:`campaigns.statistics.order_statistics.quantile_bound_rank`).
 
 A unit's figure is that of its own threshold, set from its ``R`` baseline tests as the bench would set it in
 service, so the scatter of the baseline mean (``sigma / sqrt(R)``) is part of the units' true spread. Its detection
@@ -100,51 +100,32 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import (
+from campaigns.analysis.settings import WITHIN_UNIT_STREAM, AnalysisSettings
+from campaigns.analysis.vocabulary import (
     BACKLASH_REQUIREMENT,
-    CONFIDENCE,
-    FALSE_ALARM_RATE,
-    POWER,
     REQUIREMENT_SOURCE,
-    RESOLUTIONS,
     SWEEP_QUANTITIES,
-    _feature_units,
-    _used,
-    min_runs_for_quantile_bound,
+    feature_units,
+    features_of,
+    is_within_unit,
+    requirement_of,
+    stored_spec,
+    sweep_levels,
+)
+from campaigns.analysis.vocabulary import used as ok_runs
+from campaigns.statistics.defaults import CONFIDENCE, FALSE_ALARM_RATE, POWER
+from campaigns.statistics.detection import (
+    RESOLUTIONS,
     minimum_detectable,
     printed_estimate,
-    quantile_bound_rank,
     requirement_verdict,
-    sweep_levels,
     sweep_resolution,
 )
+from campaigns.statistics.order_statistics import quantile_bound_rank
+from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, UNIT_QUANTILES, unit_floor
 
-#: Quantile of the unit population the verdict is about: the 95th-percentile unit (the 95/95 design-review figure).
-DESIGN_REVIEW_QUANTILE = 0.95
-#: Quantiles of the unit population reported: the median unit and the design-review unit.
-UNIT_QUANTILES = (0.5, DESIGN_REVIEW_QUANTILE)
-#: Ok repeats a unit needs at every level: 2 for a residual, 3 for the Brown-Forsythe check of the shared scatter
-#: (the deviations of 2 repeats from their median are equal, so the test has no within-unit variation).
-MIN_REPEATS = 3
 #: Significance level of the checks of the shared test-to-test distribution (Bonferroni over the levels).
 CHECK_SIGNIFICANCE = 0.05
-
-
-def unit_floor(quantiles=UNIT_QUANTILES, confidence: float = CONFIDENCE) -> int:
-    """Units every population statistic needs: :data:`MIN_UNITS` for the default settings.
-
-    A quantile ``q`` of the per-unit figures has a distribution-free upper confidence bound among the units' order
-    statistics only from :func:`campaigns.analysis.campaign_analysis.min_runs_for_quantile_bound` ``(q, confidence)``
-    units on, and a lower one from ``(1 - q, confidence)`` units on (David & Nagaraja 2003, *Order Statistics*, 3rd
-    ed., Sec. 7.1); the 95th-percentile unit binds: 59 units, the largest of which bounds it at 95 % (Wilks 1941).
-    """
-    return max(max(min_runs_for_quantile_bound(q, confidence), min_runs_for_quantile_bound(1.0 - q, confidence))
-               for q in quantiles)
-
-
-#: Units with :data:`MIN_REPEATS` at every level needed before any population statistic or verdict
-#: (:func:`unit_floor`): 59 at 95 % confidence.
-MIN_UNITS = unit_floor()
 
 
 def _checked(levels, values) -> tuple[np.ndarray, np.ndarray]:
@@ -200,7 +181,7 @@ def _detection(n: np.ndarray, mean: np.ndarray, squares: np.ndarray, false_alarm
 
 
 def _first_detected(levels: np.ndarray, probability: np.ndarray, power: float) -> tuple[np.ndarray, np.ndarray]:
-    """The bracket of :func:`campaigns.analysis.campaign_analysis.minimum_detectable` for probabilities of shape (...,
+    """The bracket of :func:`campaigns.statistics.detection.minimum_detectable` for probabilities of shape (...,
     level, unit): the last level not detected and the first level detected (``levels[-1]`` and ``inf`` when none is)."""
     reached = probability >= power
     first = np.argmax(reached, axis=-2)
@@ -238,7 +219,7 @@ def unit_detection(levels, values, *, false_alarm_rate: float = FALSE_ALARM_RATE
         standard deviation [feature units] and its degrees of freedom; ``threshold_low``, ``threshold_high`` (U,);
         ``probability`` (L, U); ``estimate`` (U,) interpolated minimum detectable growth (``inf``: not reached) and
         ``bracket`` (U, 2) the sweep levels around it, from
-        :func:`campaigns.analysis.campaign_analysis.minimum_detectable`;
+        :func:`campaigns.statistics.detection.minimum_detectable`;
         ``equal_scatter_pvalue`` and ``normality_pvalue`` (L,), the checks of the shared distribution. Unused units
         and levels without a check get NaN.
     """
@@ -347,8 +328,8 @@ def population_detectable(levels, values, *, quantiles=UNIT_QUANTILES, false_ala
     dict
         ``units`` (:func:`unit_detection`), ``n_units_used``, ``min_units``, ``quantiles``, and per quantile (arrays
         over ``quantiles``): ``estimate`` (interpolated; NaN when not reached), ``printed`` (NaN unless resolved,
-        :func:`campaigns.analysis.campaign_analysis.printed_estimate`), ``bracket`` and ``bounds`` (Q, 2),
-        ``resolution`` (:func:`campaigns.analysis.campaign_analysis.sweep_resolution`, ``"insufficient_data"`` below
+        :func:`campaigns.statistics.detection.printed_estimate`), ``bracket`` and ``bounds`` (Q, 2),
+        ``resolution`` (:func:`campaigns.statistics.detection.sweep_resolution`, ``"insufficient_data"`` below
         the floor); ``verdict``.
     """
     levels, values = _checked(levels, values)
@@ -412,7 +393,7 @@ def within_unit_dataset(levels, values, *, feature_units: str = "1", condition: 
     feature_units : str
         Units of the feature (of the scatters and thresholds).
     condition : str
-        The swept condition (:data:`campaigns.analysis.campaign_analysis.SWEEP_QUANTITIES`): names the fault quantity
+        The swept condition (:data:`campaigns.analysis.vocabulary.SWEEP_QUANTITIES`): names the fault quantity
         ``<q>``.
     requirement_source : str
         Where the requirement comes from (stored, and named in the sentence).
@@ -522,8 +503,8 @@ def within_unit_statement(ds: xr.Dataset) -> str:
     """The sentence stating the within-unit verdict, from the numbers of :func:`within_unit_dataset` only.
 
     A value is printed only where the sweep resolves it (rounded to its bounds,
-    :func:`campaigns.analysis.campaign_analysis.printed_estimate`); otherwise the sweep levels around it are, as in
-    :func:`campaigns.analysis.campaign_analysis.requirement_statement`.
+    :func:`campaigns.statistics.detection.printed_estimate`); otherwise the sweep levels around it are, as in
+    :func:`campaigns.analysis.observability.requirement_statement`.
     """
     condition = ds.attrs["within_unit_condition"]
     quantity, unit, scale, shown = SWEEP_QUANTITIES[condition]
@@ -605,7 +586,7 @@ def unit_values(results: xr.Dataset, feature: str, datasets: list[str], conditio
         ``[units]``).
     feature : str
     datasets, condition, reference
-        The sweep (``observability`` of the spec; :func:`campaigns.analysis.campaign_analysis.sweep_levels`).
+        The sweep (``observability`` of the spec; :func:`campaigns.analysis.vocabulary.sweep_levels`).
 
     Returns
     -------
@@ -617,28 +598,19 @@ def unit_values(results: xr.Dataset, feature: str, datasets: list[str], conditio
     order = np.argsort(sizes, kind="stable")
     unit, repeat = results["unit"].values, results["repeat"].values
     values = np.full((len(datasets), int(unit.max()) + 1, int(repeat.max()) + 1), math.nan)
-    used = _used(results, feature)
+    used = ok_runs(results, feature)
     for level, d in enumerate(order):
         row = results[feature].sel(dataset=datasets[d]).values
         values[level, unit, repeat] = np.where(used.sel(dataset=datasets[d]).values, row, math.nan)
     return sizes[order], values, [datasets[d] for d in order]
 
 
-def within_unit_analysis(results: xr.Dataset, features: list[str], observability: dict, *, seed: int = 0,
-                         stream: int = 0, **options) -> xr.Dataset:
-    """:func:`within_unit_dataset` of every feature of a within-unit campaign, along a ``feature`` dimension.
+def within_unit_analysis(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
+    """:func:`within_unit_dataset` of every feature of a within-unit campaign, along a ``feature`` dimension; an empty
+    dataset for any other campaign.
 
-    Parameters
-    ----------
-    results : xarray.Dataset
-        The campaign's ``results.nc`` (with ``unit`` and ``repeat`` along ``run``).
-    features : list of str
-    observability : dict
-        The spec's ``observability`` table (sweep, condition, reference, requirement and its source).
-    seed, stream : int
-        The bootstrap of feature ``f`` draws from ``SeedSequence(seed, spawn_key=(stream, f))``.
-    **options
-        ``false_alarm_rate``, ``power``, ``n_boot``, ``confidence`` of :func:`within_unit_dataset`.
+    The bootstrap of feature ``f`` draws from ``SeedSequence(seed, spawn_key=(WITHIN_UNIT_STREAM, f))``; the
+    detection settings, ``n_boot`` and ``confidence`` are the analysis's.
 
     Returns
     -------
@@ -646,22 +618,28 @@ def within_unit_analysis(results: xr.Dataset, features: list[str], observability
         The variables of :func:`within_unit_dataset` with a ``feature`` dimension (the fault levels once, with the
         ``level_dataset`` coordinate naming each level's data set), and its settings as global attributes.
     """
+    spec = stored_spec(results)
+    if not is_within_unit(spec):
+        return xr.Dataset()
+    observability = spec["observability"]
+    features = features_of(results)
     condition = observability.get("condition", "backlash")
     stem = SWEEP_QUANTITIES[condition][0].replace(" ", "_")
-    requirement = {"requirement": observability.get("requirement") or BACKLASH_REQUIREMENT,
-                   "requirement_source": observability.get("requirement_source") or REQUIREMENT_SOURCE}
+    requirement, source = requirement_of(observability)
     per_feature = []
     for f, feature in enumerate(features):
         levels, values, names = unit_values(results, feature, observability["sweep"], condition,
                                             observability.get("reference"))
         per_feature.append(within_unit_dataset(
             levels, values, feature_units=str(results[feature].attrs.get("units", "1")), condition=condition,
-            seed=np.random.SeedSequence(seed, spawn_key=(stream, f)), **requirement, **options))
+            seed=np.random.SeedSequence(settings.seed, spawn_key=(WITHIN_UNIT_STREAM, f)), requirement=requirement,
+            requirement_source=source, false_alarm_rate=settings.false_alarm_rate, power=settings.power,
+            n_boot=settings.n_boot, confidence=settings.confidence))
     levels_name = f"within_unit_{stem}"
     combined = xr.concat([ds.drop_vars(levels_name) for ds in per_feature], dim="feature",
                          combine_attrs="override")
     combined[levels_name] = per_feature[0][levels_name]
-    in_feature_units = _feature_units([str(results[f].attrs.get("units", "1")) for f in features])
+    in_feature_units = feature_units([str(results[f].attrs.get("units", "1")) for f in features])
     for name in ("within_unit_scatter", "within_unit_threshold_low", "within_unit_threshold_high"):
         combined[name].attrs.pop("units")
         combined[name].attrs.update(in_feature_units)

@@ -1,4 +1,4 @@
-"""The bench twin as a campaign model: its catalog and the default run function.
+"""The bench twin as a campaign model: its catalog and its run model (:data:`simulate_run`).
 
 The campaign machinery (spec, sampling, runs, execution, storage, analysis) is a general
 runner; this module is where it meets the bench twin. The synthetic test model
@@ -7,7 +7,9 @@ runner; this module is where it meets the bench twin. The synthetic test model
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -20,9 +22,9 @@ from twin.engine.model import load_system_parameters
 from twin.errors import InputError
 from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
-from twin.scenes import CONDITIONS
+from twin.scenes import CONDITIONS, split_targets
 from twin.scenes.profiles import profile_values
-from twin.solver import DEFAULT_LANES, solver_label, split_solver
+from twin.solver import DEFAULT_DT, DEFAULT_LANES, solver_label, split_solver
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
@@ -73,7 +75,7 @@ MARGIN_NOTE = "loop_margins_note"
 def run_margins(request: RunRequest) -> tuple[dict[str, float], str]:
     """Loop margins of one run's parameter set (:func:`twin.control.margins.loop_margins`).
 
-    The run's parameters and scene conditions as :func:`simulate_run` builds them; the force loop
+    The run's parameters and scene conditions as :func:`simulate_one` builds them; the force loop
     only when the scene's cylinder is attached, linearised at the scene's peak force demand (the force
     it holds) with the scene's supply pressure and air temperature. Never raises: a loop that cannot be
     computed is NaN and the second return value says why (a property of the parameters, so a failed run
@@ -154,6 +156,65 @@ def margin_variables(spec, request_of, map_chunks=None) -> dict:
     return out
 
 
+#: Relative round-off a sampled range may have beyond a bound it was written at (unit conversion of the bound).
+BOUND_ROUND_OFF = 1e-9
+
+
+def support_checks(spec, parameter_set: str) -> tuple[list[str], list[str]]:
+    """Every sampled range, and every data set's fixed parameter, against what its target allows, before anything
+    runs: ``(problems, warnings)``.
+
+    A problem: a range (uniform, truncated Gaussian: its bounds; a constant: its value; a Gaussian or lognormal:
+    its centre) outside the bounds of the parameter file or of the scene condition, which every run would fail on.
+    A warning: a Gaussian whose tail crosses a bound (the share of runs that would fail is given) or a centre more
+    than ``twin.parameters.PLAUSIBLE_FACTOR`` times away from the nominal (a unit or exponent slip, usually).
+    The bounds are the bench's: its parameter set ``parameter_set`` and ``twin.scenes.CONDITIONS``.
+    """
+    parameters = _parameters(parameter_set)
+    problems, warnings = [], []
+    for k, row in enumerate(spec.uncertainties):
+        d = row.distribution_resolved
+        conditions, _ = split_targets({d.target: None})
+        name = next(iter(conditions), None)
+        exact = ((lambda v, c=CONDITIONS[name]: c.check(v)) if name in CONDITIONS
+                 else (lambda v, p=parameters[d.target]: p.check(v) is None) if name is None else None)
+        # a range given as the bound itself (a sensor's Table 9.5 range) may land a last bit beyond it in SI units
+        check = exact and (lambda v, exact=exact: any(exact(v * (1.0 + e))
+                                                      for e in (0.0, -BOUND_ROUND_OFF, BOUND_ROUND_OFF)))
+        if check is None or not CONDITIONS.get(name, CONDITIONS["backlash"]).numeric:
+            continue
+        allowed = (f"{CONDITIONS[name].allowed}" if name is not None
+                   else f"{parameters[d.target].allowed()} {d.unit}")
+        if d.kind in ("uniform", "truncated_gaussian"):
+            edges = [("low", d.low), ("high", d.high)]
+        elif d.kind == "constant":
+            edges = [("value", d.value)]
+        else:
+            edges = [("centre", d.mean)]
+        for what, value in edges:
+            if not check(value):
+                problems.append(f"uncertainties[{k}]: {d.target}: the range's {what} {value:g} {d.unit} is outside "
+                                f"the allowed range {allowed}; every run drawing it would fail")
+        if d.kind == "gaussian" and check(d.mean) and d.sigma > 0:
+            for side in (-1.0, 1.0):
+                edge = d.mean + side * 3.0 * d.sigma
+                if not check(edge):
+                    warnings.append(f"uncertainties[{k}]: {d.target}: the Gaussian (mean {d.mean:g}, sigma {d.sigma:g} "
+                                    f"{d.unit}) reaches beyond the allowed range {allowed} within 3 sigma: its draws "
+                                    "beyond it fail (use truncated_gaussian to keep them inside)")
+                    break
+        centre = d.value if d.kind == "constant" else d.mean if math.isfinite(d.mean) else 0.5 * (d.low + d.high)
+        if name is None and (warning := parameters[d.target].implausible(centre)) is not None:
+            warnings.append(f"uncertainties[{k}]: {warning}")
+    for k, dataset in enumerate(spec.datasets):
+        for name, value in dataset.parameters.items():
+            if (problem := parameters[name].check(value)) is not None:
+                problems.append(f"datasets[{k}].parameters: {problem}; every run of the data set would fail")
+            elif (warning := parameters[name].implausible(value)) is not None:
+                warnings.append(f"datasets[{k}].parameters: {warning}")
+    return problems, warnings
+
+
 class BenchCatalog:
     """Catalog of the bench twin for one parameter set and base scene.
 
@@ -195,6 +256,10 @@ class BenchCatalog:
     def nominal(self, target: str) -> tuple[float, str]:
         return lookup_nominal(target, self._parameters, self._conditions)
 
+    def support_checks(self, spec) -> tuple[list[str], list[str]]:
+        """The spec's sampled ranges and fixed parameters against the bench's bounds (:func:`support_checks`)."""
+        return support_checks(spec, spec.base.parameters)
+
 
 @lru_cache(maxsize=8)
 def _scene(name: str):
@@ -211,8 +276,8 @@ def _parameters(name: str):
     return twin.load_parameters(name)
 
 
-def simulate_run(request: RunRequest) -> dict:
-    """Default run function: one ``twin.simulate`` call (see :mod:`campaigns.runner.runs` for the contract).
+def simulate_one(request: RunRequest) -> dict:
+    """One run: one ``twin.simulate`` call (see :mod:`campaigns.runner.runs` for the contract).
 
     The run's noise generator goes to ``twin.simulate``; the compiled loop cannot
     be interrupted from inside, so the per-run timeout is the sandbox's kill
@@ -243,14 +308,14 @@ def simulate_run(request: RunRequest) -> dict:
 
 
 def simulate_group(requests: list[RunRequest]) -> list[dict]:
-    """:func:`simulate_run` of several runs of one data set at once: the untraced ones in the twin's lock-step lanes
+    """:func:`simulate_one` of several runs of one data set at once: the untraced ones in the twin's lock-step lanes
     (:func:`twin.simulate_batch`, the same numbers as each alone), the traced ones one by one (their Dataset).
     Raises if a request cannot be built (the caller then runs each alone and records its own failure)."""
     results: dict[int, dict] = {}
     untraced = [k for k, r in enumerate(requests) if not r.trace_variables]
     for k, request in enumerate(requests):
         if request.trace_variables:
-            results[k] = simulate_run(request)
+            results[k] = simulate_one(request)
     if untraced:
         first = requests[untraced[0]]
         solver, options = split_solver({key: value for key, value in first.solver.items() if value is not None}
@@ -280,19 +345,45 @@ def _warm_up(request: RunRequest) -> None:
                   outputs=list(request.outputs) or None, **options)
 
 
-simulate_run.warm_up = _warm_up
-simulate_run.run_group = simulate_group
-#: Runs a group takes at once: the twin's lane count (the results do not depend on it).
-simulate_run.lanes = DEFAULT_LANES
-#: Wall time of one 10 s data-set run, auto fidelity: 1.0-1.7 s measured on a loaded 2-core machine (2026-11).
-simulate_run.typical_run_seconds = 1.2
-#: Samples of a trace before decimation: 10 s at the 1 ms output spacing, both ends included.
-simulate_run.trace_samples = 10_001
+@dataclass(frozen=True)
+class BenchModel:
+    """The bench twin as the runner's run model (:class:`campaigns.runner.runs.RunModel`): one run, lock-step lane
+    groups, the compile warm-up, what a run costs, and the data sets' conditions and loop margins in ``results.nc``.
+    """
+
+    #: Runs a group takes at once: the twin's lane count (the results do not depend on it).
+    lanes: int = DEFAULT_LANES
+    #: Wall time of one 10 s data-set run at auto fidelity [s] (measured: docs/performance.md, "Campaign runs").
+    typical_run_seconds: float = 1.2
+    #: The step that time holds for: the twin's default.
+    typical_step: float = DEFAULT_DT
+    #: Samples of a trace before decimation: 10 s at the 1 ms output spacing, both ends included.
+    trace_samples: int = 10_001
+    #: numba compiles the twin's loop on first use (its on-disk cache then serves every worker).
+    compiles: bool = True
+
+    def __call__(self, request: RunRequest) -> dict:
+        return simulate_one(request)
+
+    def run_group(self, requests: list[RunRequest]) -> list[dict]:
+        return simulate_group(requests)
+
+    def warm_up(self, request: RunRequest) -> None:
+        _warm_up(request)
+
+    def signals(self) -> tuple[str, ...]:
+        """Every signal and feature the twin can return (what a replay keeps, :mod:`campaigns.bench.replay`)."""
+        return OUTPUT_NAMES
+
+    def results_attributes(self, spec) -> dict[str, str]:
+        """Every condition of each data set's effective scene and of the base scene (:func:`dataset_conditions`)."""
+        conditions, base = dataset_conditions(spec)
+        return {"dataset_conditions": json.dumps(conditions), "base_scene_conditions": json.dumps(base)}
+
+    def margin_variables(self, spec, request_of, map_chunks) -> dict:
+        return margin_variables(spec, request_of, map_chunks=map_chunks)
 
 
-def _signals() -> tuple[str, ...]:
-    """Every signal and feature the twin can return (what a replay keeps, :mod:`campaigns.bench.replay`)."""
-    return OUTPUT_NAMES
-
-
-simulate_run.signals = _signals
+#: The bench twin's run model, the campaigns' default (``results.nc`` records it as
+#: ``campaigns.bench.adapter:simulate_run``).
+simulate_run = BenchModel()

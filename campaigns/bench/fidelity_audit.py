@@ -33,6 +33,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from campaigns.runner.execution import run_campaign
+from campaigns.runner.runs import RunModel
 from campaigns.runner.spec import CampaignSpec, FidelityAudit, Observability, Traces
 from campaigns.runner.storage import write_netcdf
 from campaigns.statistics.accuracy_rule import MEAN_SHIFT_TOLERANCE, SD_RATIO_TOLERANCE, judge_accuracy
@@ -175,10 +177,14 @@ def summary_attrs(audit: xr.Dataset) -> dict[str, str]:
     return attrs
 
 
-def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function, **run_options) -> xr.Dataset | None:
-    """Run the full-fidelity twin of the campaign's first runs, compare, and record the audit in
+def audit_campaign(results_path: Path, spec: CampaignSpec, run_model: RunModel, **run_options) -> xr.Dataset | None:
+    """Run the full-fidelity twin of the campaign's first runs with ``run_model``, compare, and record the audit in
     ``results.nc``. Returns the audit (also written as ``fidelity_audit.nc``), or None when there is
-    nothing to audit (audit off, full fidelity already, or a model that reports no fidelity)."""
+    nothing to audit (audit off, full fidelity already, or a model that reports no fidelity).
+
+    ``run_options`` are those of :func:`campaigns.runner.execution.run_campaign` (workers, scheduler, resume,
+    progress, allow_version_mix, announce); the audit's runs are a campaign of their own in
+    ``results_path.parent / "fidelity_audit"``."""
     with xr.open_dataset(results_path) as handle:
         auto = handle.load()
     reported = any(k.startswith("fidelity_") and k != "fidelity_requested" for k in auto.attrs)
@@ -191,7 +197,10 @@ def audit_campaign(results_path: Path, spec: CampaignSpec, run_campaign_function
         _write_attrs(results_path, auto, {"fidelity_audit": f"not run ({why})"})
         return None
     out_dir = results_path.parent / "fidelity_audit"
-    full_path = run_campaign_function(full_fidelity_variant(spec, runs), out_dir, **run_options)
+    announce = run_options.get("announce") or (lambda stage, message: None)
+    announce("fidelity audit", f"{spec.name}: re-running {runs * len(spec.datasets)} runs at full fidelity to check "
+                               "the automatic choice")
+    full_path = run_campaign(full_fidelity_variant(spec, runs), out_dir, run_function=run_model, **run_options)
     with xr.open_dataset(full_path) as handle:
         full = handle.load()
     audit = compare_fidelity(auto, full, list(spec.features), numerical_floors(spec, list(spec.features)))

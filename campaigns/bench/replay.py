@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from campaigns.runner.execution import build_request
-from campaigns.runner.runs import RunFunction, execute
+from campaigns.runner.runs import RunModel, execute
 from campaigns.runner.sampling import sample_run
 from campaigns.runner.spec import Distribution, SpecError, validate_spec
 from campaigns.runner.storage import CampaignError, check_output, read_results, write_netcdf
@@ -33,7 +33,7 @@ MOVED_RUN_FUNCTION_MODULES = {
 }
 
 
-def resolve_run_function(name: str) -> RunFunction:
+def resolve_run_function(name: str) -> RunModel:
     """The run function recorded as ``module:name`` in ``results.nc`` (``run_function`` attribute)."""
     module, sep, attr = name.partition(":")
     module = MOVED_RUN_FUNCTION_MODULES.get(module, module)
@@ -46,7 +46,7 @@ def resolve_run_function(name: str) -> RunFunction:
 
 
 def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | Path | None = None,
-               run_function: RunFunction | None = None, force: bool = False) -> xr.Dataset:
+               run_function: RunModel | None = None, force: bool = False) -> xr.Dataset:
     """Re-run run ``run`` of data set ``dataset`` of a campaign and compare it with the stored record.
 
     Parameters
@@ -104,8 +104,8 @@ def replay_run(results_path: str | Path, dataset: str, run: int, *, out: str | P
         run_function = resolve_run_function(name)
     samples = np.broadcast_to(values, (len(names), spec.runs_per_dataset, len(values)))  # only [d, run] is read
     request = build_request(spec, samples, d, run, targets=targets)
-    signals = getattr(run_function, "signals", None)
-    variables = tuple(signals()) if signals is not None else tuple(spec.traces.variables)
+    signals = run_function.signals()
+    variables = tuple(signals) if signals is not None else tuple(spec.traces.variables)
     request = dataclasses.replace(request, trace_variables=variables, trace_decimation=1, wall_time_limit=math.inf)
     record = execute(run_function, request)
 

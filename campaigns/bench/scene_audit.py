@@ -1,6 +1,6 @@
 """``twin fidelity audit``: the fidelity audit of one scene, as a small campaign of its own.
 
-It runs a campaign (:func:`campaigns.runner.execution.run_campaign`), whose last stage is the audit
+It runs a campaign (:func:`campaigns.bench.campaign.run_campaign`), whose last stage is the audit
 (:func:`campaigns.bench.fidelity_audit.audit_campaign`), so it sits above both.
 """
 
@@ -10,8 +10,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from campaigns.runner.execution import run_campaign
-from campaigns.runner.spec import Dataset, FidelityAudit, Observability, Traces, load_spec
+from campaigns.bench.campaign import load_spec, run_campaign
+from campaigns.runner.spec import Dataset, FidelityAudit, Observability, Traces
 from twin.errors import InputError
 from twin.scenes import load_scene
 

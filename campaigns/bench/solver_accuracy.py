@@ -20,9 +20,9 @@ import numpy as np
 import xarray as xr
 
 from campaigns.analysis.campaign_analysis import analyze
-from campaigns.runner.execution import run_campaign
+from campaigns.bench.campaign import load_spec, run_campaign
 from campaigns.runner.files import write_netcdf
-from campaigns.runner.spec import CampaignSpec, FidelityAudit, Observability, Solver, Traces, load_spec
+from campaigns.runner.spec import CampaignSpec, FidelityAudit, Observability, Solver, Traces
 from campaigns.statistics.accuracy_rule import MIN_PAIRED_RUNS, REFERENCE_SOLVER, judge_accuracy
 
 #: The thesis study (Sec. 9.4, Table 9.5 uncertainties, data sets 1-7): the spec the rule is stated for.
@@ -93,7 +93,7 @@ def campaign_accuracy(out_dir: str | Path, spec: CampaignSpec | str | Path = THE
     min_pairs : int
         Fewest paired runs for a verdict (the rule's 200; fewer only to exercise the pipeline).
     resume : bool
-        Continue interrupted campaigns in ``out_dir`` (:func:`campaigns.runner.execution.run_campaign`).
+        Continue interrupted campaigns in ``out_dir`` (:func:`campaigns.bench.campaign.run_campaign`).
     run_function : callable, optional
         The campaigns' run function (default: the bench twin).
     progress : callable

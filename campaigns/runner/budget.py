@@ -4,11 +4,9 @@ The estimate is printed by ``twin campaign run`` before anything runs, and the d
 checked against the free space of the output directory's file system
 (:func:`shutil.disk_usage`): a campaign that cannot fit is refused before the cluster starts.
 
-A run function may declare what a run costs through optional attributes:
-``typical_run_seconds`` (wall time of one run on one core at the model's default step),
-``typical_step`` (that step [s]; default: the twin's ``DEFAULT_DT``, so a spec's ``solver.dt`` scales the
-run time in proportion) and ``trace_samples`` (samples of a kept time series before decimation). Without
-them the wall time is not estimated and traces are taken as :data:`DEFAULT_TRACE_SAMPLES` samples. A run
+The run model (:class:`campaigns.runner.runs.RunModel`) says what a run costs: ``typical_run_seconds`` (wall time
+of one run on one core at ``typical_step``, so a spec's ``solver.dt`` scales the run time in proportion; None: the
+wall time is not estimated) and ``trace_samples`` (samples of a kept time series before decimation). A run
 never costs more than its budget (``execution.timeout`` and the kill grace): the sandbox ends it there.
 
 The disk estimate covers what a campaign writes, at its peak: the chunk files, ``results.nc`` twice (a
@@ -25,24 +23,24 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from campaigns.runner.files import size_text
-from campaigns.runner.runs import kill_grace
+from campaigns.runner.runs import RunModel, kill_grace
 from campaigns.runner.spec import CampaignSpec
 from campaigns.runner.storage import CampaignError
 
 #: Bytes of one chunk file besides its runs: the zip and .npy headers of its ~15 arrays, the provenance (JSON as
-#: 4-byte unicode) and the checksum. Measured 6.1 kB (synthetic model) and 6.9 kB (bench); rounded up.
+#: 4-byte unicode) and the checksum. The measured sizes of this and the figures below: docs/performance.md, "The
+#: figures behind the campaign code's constants"; each rounded up.
 CHUNK_FILE_BYTES = 8_000
 #: Bytes per run in a chunk file besides its numbers: status, failure reason, fidelity and integrator as
-#: fixed-width 4-byte unicode (the bench's fidelity line is ~250 characters). Measured ~1.1 kB (bench).
+#: fixed-width 4-byte unicode (the bench's fidelity line is ~250 characters).
 RUN_CHUNK_BYTES = 1_500
 #: Bytes per run in results.nc besides its numbers: status, failure reason, integrator and loop-margin note as
-#: variable-length strings (HDF5 heap entries), the status flag. Measured ~200 B (bench).
+#: variable-length strings (HDF5 heap entries), the status flag.
 RUN_RESULTS_BYTES = 400
 #: Bytes of a netCDF file besides its variables: the global attributes (the spec JSON, provenance, the fidelity
 #: audit's statements) and the HDF5 superblock.
 FILE_BYTES = 100_000
-#: Bytes of HDF5 metadata per netCDF variable (headers, attributes, chunk index). Measured 5.7 kB in a bench
-#: results.nc (70 variables, 400 kB without traces).
+#: Bytes of HDF5 metadata per netCDF variable (headers, attributes, chunk index).
 VARIABLE_BYTES = 7_000
 #: Variables of results.nc besides the sampled values, features, margins, traces and conditions (status, its flag,
 #: failure reason, integrator, t_reached, wall_time, the margin note, the coordinates).
@@ -52,8 +50,6 @@ ANALYSIS_VARIABLES = 45
 #: Margin figures the bench stores per run (4 loops x 4 figures, ``campaigns.bench.adapter.margin_variables``): counted
 #: for every run function, a few hundred bytes of slack for the others.
 MARGIN_FIGURES = 16
-#: Samples of a kept time series when the run function does not say.
-DEFAULT_TRACE_SAMPLES = 10_001
 #: Free space the campaign must leave beyond its estimate (the estimate is an upper bound of the measured sizes,
 #: this covers what it cannot see: the file system's blocks, the report, other writers on the same disk).
 DISK_MARGIN = 1.5
@@ -91,16 +87,13 @@ class Estimate:
         return f"{self.runs} run(s), {wall}, about {_size(self.disk_bytes)} on disk"
 
 
-def run_seconds(spec: CampaignSpec, run_function=None) -> float | None:
-    """Wall time of one run of ``spec`` (see the module docstring), or None when the run function gives none."""
-    typical = getattr(run_function, "typical_run_seconds", None)
+def run_seconds(spec: CampaignSpec, run_function: RunModel) -> float | None:
+    """Wall time of one run of ``spec`` (see the module docstring), or None when the run model gives none."""
+    typical = run_function.typical_run_seconds
     if typical is None:
         return None
-    if spec.solver.dt is not None:
-        step = getattr(run_function, "typical_step", None)
-        if step is None:
-            from twin.simulation import DEFAULT_DT as step  # lazy: only a spec that sets its own step needs it
-        typical *= step / spec.solver.dt
+    if spec.solver.dt is not None and run_function.typical_step is not None:
+        typical *= run_function.typical_step / spec.solver.dt
     return min(typical, spec.execution.timeout + kill_grace(spec.execution.timeout))
 
 
@@ -121,11 +114,11 @@ def _campaign_bytes(spec: CampaignSpec, runs_per_dataset: int, trace_samples: in
     return chunk_files + 2 * len(spec.to_json()), results + trace_bytes  # spec.json (indented) beside the chunks
 
 
-def estimate(spec: CampaignSpec, run_function=None, *, workers: int = 2, runs: int | None = None) -> Estimate:
+def estimate(spec: CampaignSpec, run_function: RunModel, *, workers: int = 2, runs: int | None = None) -> Estimate:
     """Estimate the cost of ``runs`` runs of ``spec`` (default: all of them)."""
     total = len(spec.datasets) * spec.runs_per_dataset
     runs = total if runs is None else runs
-    samples = getattr(run_function, "trace_samples", DEFAULT_TRACE_SAMPLES)
+    samples = run_function.trace_samples
     chunks, results = _campaign_bytes(spec, spec.runs_per_dataset, samples)
     audit_runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset)
     audit = sum(_campaign_bytes(spec, audit_runs, samples, traces=False)) + FILE_BYTES if audit_runs >= 2 else 0

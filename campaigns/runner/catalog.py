@@ -75,6 +75,10 @@ class Catalog(Protocol):
     def nominal(self, target: str) -> tuple[float, str]:
         """Nominal value and SI unit of a parameter or ``scene.<condition>``; KeyError if unknown."""
 
+    def support_checks(self, spec) -> tuple[list[str], list[str]]:
+        """``(problems, warnings)`` of a validated ``CampaignSpec``'s sampled ranges and fixed parameters against
+        the model's own bounds, before anything runs (problems refuse the spec, warnings are printed)."""
+
 
 @dataclass(frozen=True)
 class StaticCatalog:
@@ -110,6 +114,11 @@ class StaticCatalog:
 
     def nominal(self, target: str) -> tuple[float, str]:
         return lookup_nominal(target, self.parameters, self.conditions)
+
+    def support_checks(self, spec) -> tuple[list[str], list[str]]:
+        """A catalog given as data states no bounds: nothing to check."""
+        return [], []
+
 
 
 def lookup_nominal(

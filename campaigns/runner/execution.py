@@ -32,7 +32,6 @@ after that is recorded with status ``"lost"``.
 from __future__ import annotations
 
 import contextlib
-import json
 import logging
 import math
 import os
@@ -50,22 +49,18 @@ from distributed.comm.core import CommClosedError
 from distributed.scheduler import KilledWorker
 from tqdm.auto import tqdm
 
-from campaigns.bench import adapter as bench_adapter
-from campaigns.bench.fidelity_audit import audit_campaign, has_automatic_choice
 from campaigns.runner.budget import check_disk, estimate
-from campaigns.runner.catalog import Catalog
 from campaigns.runner.files import CampaignError, CampaignInterrupted
 from campaigns.runner.provenance import provenance
-from campaigns.runner.runs import RunFunction, RunRequest, execute_group, record, run_function_name
+from campaigns.runner.runs import RunModel, RunRequest, execute_group, record, run_function_name
 from campaigns.runner.sampling import sample
 from campaigns.runner.sandbox import STOP_SIGNALS, Sandbox, children_ignore_stop_signals, run_group_isolated
-from campaigns.runner.spec import BOUNDS, CampaignSpec, load_spec
+from campaigns.runner.spec import BOUNDS, CampaignSpec
 from campaigns.runner.storage import ChunkStore, OutputLock
 from twin.scenes import split_targets
 
-#: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write. Measured
-#: 9 ms (1 worker) to 13 ms (2 workers sharing 2 cores with the driver) with one-run chunks of
-#: the synthetic model; rounded up.
+#: Per-task overhead [s]: dask round trip, sandbox pipes and the driver's chunk write; an upper value of the
+#: measured one (docs/performance.md, "The figures behind the campaign code's constants").
 TASK_OVERHEAD = 0.02
 #: Largest fraction of the compute time the per-task overhead may take.
 OVERHEAD_TARGET = 0.05
@@ -99,18 +94,13 @@ def chunk_size(run_time: float | None, remaining: int, slots: int) -> int:
     return max(1, min(overhead_bound, balance_bound, duration_bound))
 
 
-def run_chunk(run_function: RunFunction, requests: list[RunRequest], isolation: str) -> list[dict]:
+def run_chunk(run_function: RunModel, requests: list[RunRequest], isolation: str) -> list[dict]:
     """Dask task: execute the runs of one chunk, in lane groups of ``run_function.lanes`` where the run function
     takes groups (:func:`campaigns.runner.runs.execute_group`), and return their records in order."""
-    lanes = group_lanes(run_function)
+    lanes = run_function.lanes
     run = run_group_isolated if isolation == "process" else execute_group
     return [record for first in range(0, len(requests), lanes)
             for record in run(run_function, requests[first:first + lanes])]
-
-
-def group_lanes(run_function: RunFunction) -> int:
-    """How many runs the run function takes at once (1 without ``run_group``)."""
-    return int(getattr(run_function, "lanes", 1)) if getattr(run_function, "run_group", None) else 1
 
 
 def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: int, *,
@@ -205,24 +195,25 @@ class QuietWorkerClose(WorkerPlugin):
 
 
 def run_campaign(
-    spec: CampaignSpec | str | Path,
+    spec: CampaignSpec,
     out_dir: str | Path,
     *,
+    run_function: RunModel,
     workers: int = 2,
     scheduler: str | None = None,
     resume: bool = False,
     progress: bool = True,
-    run_function: RunFunction | None = None,
-    catalog: Catalog | None = None,
     allow_version_mix: bool = False,
     announce: Callable[[str, str], None] | None = None,
 ) -> Path:
-    """Run (or resume) a campaign and write ``results.nc``.
+    """Run (or resume) a campaign of ``run_function`` and write ``results.nc``; the bench twin's entry, with its
+    run model by default and the fidelity audit after the runs, is :func:`campaigns.bench.campaign.run_campaign`
+    (``campaigns.run_campaign``).
 
     Parameters
     ----------
-    spec : CampaignSpec or path
-        A validated spec, or a spec file (validated first; nothing runs if it is invalid).
+    spec : CampaignSpec
+        A validated spec.
     out_dir : str or Path
         Output directory (layout in :mod:`campaigns.runner.storage`).
     workers : int, default 2
@@ -234,40 +225,28 @@ def run_campaign(
         only missing runs execute. Refused if ``out_dir`` holds another spec's results.
     progress : bool, default True
         Show a progress bar.
-    run_function : callable, optional
-        ``run_function(RunRequest) -> dict`` (contract in :mod:`campaigns.runner.runs`);
-        default :func:`campaigns.bench.adapter.simulate_run`.
-    catalog : Catalog, optional
-        Used only when ``spec`` is a path (see :func:`campaigns.load_spec`).
+    run_function : RunModel
+        The model that runs (contract in :mod:`campaigns.runner.runs`).
     allow_version_mix : bool, default False
         On resume, accept finished chunks computed by other package versions or model code
         (:mod:`campaigns.runner.provenance`); ``results.nc`` then lists every provenance it mixes.
     announce : callable, optional
         ``announce(stage, message)`` is called as each stage starts (compile, cluster start, runs,
-        margins, assembly, fidelity audit, cluster stop), with its expected duration in the message;
-        default silent.
+        margins, assembly, cluster stop); default silent.
 
     Returns
     -------
     Path
-        The ``results.nc`` file, with the fidelity audit of :mod:`campaigns.bench.fidelity_audit`
-        in its ``fidelity_audit*`` attributes (its full-fidelity runs in ``out_dir/fidelity_audit``).
+        The ``results.nc`` file.
 
     Raises
     ------
-    SpecError
-        If ``spec`` is a path to an invalid spec.
     CampaignError
         If ``out_dir`` holds results that may not be mixed with this campaign's, is in use by
         another driver, cannot be written, or lacks the disk space the campaign needs.
         Everything is checked before the cluster starts.
     """
-    if not isinstance(spec, CampaignSpec):
-        spec = load_spec(spec, catalog=catalog)
     announce = announce or (lambda stage, message: None)
-    bench = run_function is None
-    if bench:
-        run_function = bench_adapter.simulate_run
     if not (isinstance(workers, int) and 1 <= workers <= BOUNDS["workers"][1]):
         raise CampaignError(f"workers: {workers!r} is not a whole number in [1, {BOUNDS['workers'][1]}]")
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
@@ -275,11 +254,11 @@ def run_campaign(
     with _stop_signals() as stopped:
         try:
             return _run(spec, out_dir, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
-                        run_function=run_function, bench=bench, allow_version_mix=allow_version_mix,
+                        run_function=run_function, allow_version_mix=allow_version_mix,
                         announce=announce, stores=stores)
-        except (KeyboardInterrupt, CampaignInterrupted) as exc:  # the second: the fidelity audit's own campaign
+        except KeyboardInterrupt:
             kept = len(stores[0].done) if stores else 0
-            name = exc.signal_name if isinstance(exc, CampaignInterrupted) else stopped.name or "Ctrl-C"
+            name = stopped.name or "Ctrl-C"
             raise CampaignInterrupted(out_dir, kept, len(spec.datasets) * spec.runs_per_dataset, name) from None
 
 
@@ -321,7 +300,7 @@ def _stop_signals():
             signal.signal(sig, handler)
 
 
-def _compile_and_time(run_function: RunFunction, request: RunRequest) -> float | None:
+def _compile_and_time(run_function: RunModel, request: RunRequest) -> float | None:
     """Compile the run function's model once before the workers start, then time one run, both in a sandbox.
 
     The sandbox's start-up (imports, the run function's warm-up: numba compiles and writes its on-disk cache,
@@ -339,11 +318,11 @@ def _compile_and_time(run_function: RunFunction, request: RunRequest) -> float |
     return record["wall_time"] if record["status"] == "ok" else None
 
 
-def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, bench, allow_version_mix, announce,
+def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, allow_version_mix, announce,
          stores: list) -> Path:
     """:func:`run_campaign` once its arguments are checked (``stores`` receives the chunk store, for the count of
     an interruption)."""
-    with OutputLock(out_dir):  # held until results.nc and the fidelity audit are written
+    with OutputLock(out_dir):  # held until results.nc is written
         store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
                            allow_version_mix=allow_version_mix)
         stores.append(store)
@@ -355,14 +334,14 @@ def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, b
         start = time.perf_counter()
         per_run = None
         # once here, before the workers start, so they load the compiled code instead of compiling it
-        if pending and bench:
+        if pending and run_function.compiles:
             announce("compile",
-                     f"{spec.name}: compiling the twin (about 1-2 min on a fresh install, seconds once cached), then "
-                     f"timing one run (within its {spec.execution.timeout:g} s budget)")
+                     f"{spec.name}: compiling the model (docs/performance.md: minutes on a fresh install, seconds "
+                     f"once cached), then timing one run (within its {spec.execution.timeout:g} s budget)")
             per_run = _compile_and_time(run_function, build_request(spec, samples, *pending[0]))
             if per_run is None:
                 announce("compile", f"{spec.name}: the timed run did not end ok within its budget; duration unknown")
-        # One cluster for the runs, the margins and the fidelity audit: started when first needed, closed at the end.
+        # One cluster for the runs and the margins: started when first needed, closed at the end.
         with contextlib.ExitStack() as cluster:
             client = None
             quiet = _QuietStop()
@@ -371,7 +350,7 @@ def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, b
                 slots = 1 if scheduler else workers
                 announce("cluster start",
                          f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
-                         "(about 10-20 s)")
+                         "(seconds: docs/performance.md)")
                 with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
                     client = cluster.enter_context(_client(workers, scheduler))
                 cluster.push(quiet.on_exit)  # first: a stop silences the close that follows
@@ -380,31 +359,16 @@ def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, b
                 announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
                 with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
                     _execute(client, spec, samples, pending, run_function, store, bar)
-            attrs = {"run_function": run_function_name(run_function)}
-            margins = {}
-            if bench:
-                conditions, base = bench_adapter.dataset_conditions(spec)
-                attrs.update(dataset_conditions=json.dumps(conditions), base_scene_conditions=json.dumps(base))
-                announce("margins", f"{spec.name}: loop margins of {len(spec.datasets) * spec.runs_per_dataset} runs"
-                         + (" on the cluster" if client else ""))
-                margins = bench_adapter.margin_variables(
-                    spec, lambda d, i: build_request(spec, samples, d, i),
-                    map_chunks=(lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
+            attrs = {"run_function": run_function_name(run_function), **run_function.results_attributes(spec)}
+            announce("margins", f"{spec.name}: the model's per-run variables (the bench: loop margins) of "
+                     f"{len(spec.datasets) * spec.runs_per_dataset} runs" + (" on the cluster" if client else ""))
+            margins = run_function.margin_variables(
+                spec, lambda d, i: build_request(spec, samples, d, i),
+                (lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
             announce("assembly", f"{spec.name}: writing results.nc")
             results = store.assemble(samples,
                                      {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
                                       "workers": scheduler or workers}, attrs, margins)
-            if spec.fidelity_audit.runs >= 2 and has_automatic_choice(spec):
-                runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset) * len(spec.datasets)
-                announce("fidelity audit",
-                         f"{spec.name}: re-running {runs} runs at full fidelity to check the automatic choice"
-                         + (f" (about {runs * per_run / (1 if scheduler else workers) / 60:.1f} min or more)"
-                            if per_run else ""))
-            # the audit's runs go to the cluster already started (its workers are warm), else it starts one
-            audit_campaign(results, spec, run_campaign, workers=workers,
-                           scheduler=client.scheduler.address if client else scheduler, resume=resume,
-                           progress=progress, run_function=None if bench else run_function,
-                           allow_version_mix=allow_version_mix, announce=announce)
             if client is not None and scheduler is None:
                 announce("cluster stop", f"{spec.name}: stopping the {workers} worker processes")
     return results
@@ -421,7 +385,7 @@ def _execute(client: Client, spec, samples, pending: deque, run_function, store:
         in_flight[future] = (chunk, attempt)
         completed.add(future)
 
-    lanes = group_lanes(run_function)
+    lanes = run_function.lanes
 
     def next_chunk() -> list[RunRequest]:
         size = spec.execution.chunk_size or chunk_size(

@@ -192,18 +192,18 @@ def atomic_write(path: Path, write) -> None:
 
 
 def cf_encoding(ds) -> dict:
-    """netCDF encoding that keeps a dataset CF-clean: label (string) coordinates as character arrays (CF 6.1
-    labels, which CF tools do not take for numeric coordinate variables), no ``_FillValue`` on coordinates,
-    64-bit integers stored as 32-bit where they fit (netCDF classic types)."""
+    """netCDF encoding that keeps a dataset CF-clean: text coordinates (``dataset``, ``feature``, a data set's
+    ``scene``, ...) as character arrays (CF 1.8, Sec. 6.1 labels: tools that check the monotonicity of numeric
+    coordinate variables skip them, and xarray reads them back as string coordinates), no ``_FillValue`` on any other
+    coordinate (CF 1.8, Sec. 2.5.1: coordinates have no missing values), 64-bit integers stored as 32-bit where they
+    fit (netCDF classic types)."""
     import numpy as np
 
     encoding = {}
     for name, variable in ds.variables.items():
         entry = {}
-        if variable.dtype.kind in "OUS" and name in ds.dims:
-            entry["dtype"] = "S1"
-        if name in ds.coords and variable.dtype.kind in "fc":
-            entry["_FillValue"] = None
+        if name in ds.coords:
+            entry.update({"dtype": "S1"} if variable.dtype.kind in "OUS" else {"_FillValue": None})
         if variable.dtype == np.int64 and (variable.size == 0 or (
                 np.iinfo(np.int32).min <= variable.values.min() and variable.values.max() <= np.iinfo(np.int32).max)):
             entry["dtype"] = "int32"

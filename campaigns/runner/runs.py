@@ -1,7 +1,6 @@
-"""One run: the request a run function receives and the outcome recorded for it.
+"""One run: the request a run model receives, the run model's contract and the outcome recorded for it.
 
-The run-function contract is ``run_function(request: RunRequest) -> dict`` with
-keys
+A run model (:class:`RunModel`) is called as ``run_model(request: RunRequest) -> dict`` with keys
 
 ``status``
     ``"ok"``, ``"diverged"``, ``"failed"`` or ``"timeout"``;
@@ -17,23 +16,12 @@ keys
 ``fidelity`` (optional)
     the model configuration the run used (``twin.simulate``'s ``attrs["fidelity"]``).
 
-The function must be picklable (a module-level function or an instance of a
-module-level class) so it can travel to dask workers. It should stop by itself
-once ``request.wall_time_limit`` seconds have passed (returning status
-``"timeout"``); :mod:`campaigns.runner.sandbox` kills it otherwise.
-
-Optional attributes of a run function:
-
-``run_group(requests)``
-    runs several requests of one data set together (the bench twin's lock-step lanes) and returns their results
-    in order, each what ``run_function(request)`` returns for it alone, bit for bit; ``lanes`` is how many it takes
-    at once. :func:`execute_group` calls it and falls back to one run after the other if the group call raises;
-``warm_up(request)``
-    loads or compiles what the run needs (imports, numba's compiled loop); called
-    once per process and model configuration *before* the run's clock starts, so
-    start-up is never charged to a run's budget;
-``typical_run_seconds``, ``trace_samples``
-    used by :mod:`campaigns.runner.budget` to estimate a campaign's cost.
+The model must be picklable (an instance of a module-level class) so it can travel to dask workers. It should
+stop by itself once ``request.wall_time_limit`` seconds have passed (returning status ``"timeout"``);
+:mod:`campaigns.runner.sandbox` kills it otherwise. The rest of the contract (groups of runs, warm-up, what a run
+costs, what the model adds to ``results.nc``) is the rest of :class:`RunModel`; the bench twin
+(:data:`campaigns.bench.adapter.simulate_run`) and the synthetic model (:mod:`campaigns.runner.synthetic`)
+implement it.
 
 :func:`execute` wraps a call to the run function and turns *every* outcome,
 including exceptions and invalid results, into a record; failures are data. A
@@ -52,7 +40,7 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -69,7 +57,48 @@ STATUS_MEANINGS = {
     "lost": "infrastructure failure (lost worker) persisted after the retries",
 }
 
-RunFunction = Callable[["RunRequest"], dict]
+
+
+class RunModel(Protocol):
+    """What the runner needs of a model: one run, a group of runs, a warm-up, what a run costs, and what the model
+    adds to ``results.nc`` besides its runs' records."""
+
+    #: Runs :meth:`run_group` takes at once (1: one run at a time).
+    lanes: int
+    #: Wall time of one run [s] at :attr:`typical_step` (the budget's estimate, :mod:`campaigns.runner.budget`);
+    #: None: not known, the wall time is not estimated.
+    typical_run_seconds: float | None
+    #: The step [s] :attr:`typical_run_seconds` holds for (a spec's ``solver.dt`` scales it); None: no step.
+    typical_step: float | None
+    #: Samples of a kept time series before decimation.
+    trace_samples: int
+    #: Whether the model compiles on first use: the runner then compiles and times one run in a sandbox before the
+    #: workers start, so they load the compiled code instead of compiling it each.
+    compiles: bool
+
+    def __call__(self, request: RunRequest) -> dict:
+        """One run (the result keys in the module docstring)."""
+
+    def run_group(self, requests: list[RunRequest]) -> list[dict]:
+        """Several requests of one data set together (the bench twin's lock-step lanes), their results in order,
+        each what ``self(request)`` returns for it alone, bit for bit. :func:`execute_group` calls it for groups of
+        up to :attr:`lanes` and falls back to one run after the other if it raises."""
+
+    def warm_up(self, request: RunRequest) -> None:
+        """Load or compile what the run needs (imports, numba's compiled loop); called once per process and model
+        configuration *before* the run's clock starts, so start-up is never charged to a run's budget."""
+
+    def signals(self) -> tuple[str, ...] | None:
+        """Every signal and feature a run can return (what a replay keeps), or None when the model cannot say."""
+
+    def results_attributes(self, spec) -> dict[str, str]:
+        """Global attributes the model adds to ``results.nc`` for the ``CampaignSpec`` ``spec``."""
+
+    def margin_variables(self, spec, request_of: Callable[[int, int], RunRequest], map_chunks) -> dict:
+        """Per-run variables the model adds to ``results.nc`` (``{name: (values, attrs)}``, the bench's loop
+        margins), from ``request_of(dataset_index, run_index)``; ``map_chunks(function, chunks)`` maps on the
+        campaign's cluster (None: in this process). Empty when the model adds none."""
+
 
 #: Smallest time [s] a run may overrun its wall-clock budget before it counts as a timeout (and, in a
 #: sandbox, is killed).
@@ -163,25 +192,24 @@ def record(request: RunRequest, status: str, reason: str, t_reached: float, wall
 _warmed: set[tuple] = set()
 
 
-def warm_up(run_function: RunFunction, request: RunRequest) -> None:
+def warm_up(run_function: RunModel, request: RunRequest) -> None:
     """Call ``run_function.warm_up(request)`` once per process and model configuration.
 
     A failing warm-up is ignored here: the run itself then fails and is recorded with its reason.
     """
-    hook = getattr(run_function, "warm_up", None)
     key = (run_function_name(run_function), request.scene, json.dumps(request.procedure, sort_keys=True),
            request.parameters,
            json.dumps(request.solver, sort_keys=True, default=str), request.outputs)
-    if hook is None or key in _warmed:
+    if key in _warmed:
         return
     _warmed.add(key)
     try:
-        hook(request)
+        run_function.warm_up(request)
     except Exception:  # noqa: BLE001 - reported by the run that follows
         pass
 
 
-def execute(run_function: RunFunction, request: RunRequest) -> dict:
+def execute(run_function: RunModel, request: RunRequest) -> dict:
     """Call ``run_function`` on ``request`` and return its record; never raises.
 
     The run's warm-up (:func:`warm_up`) happens before its clock starts.
@@ -198,7 +226,7 @@ def execute(run_function: RunFunction, request: RunRequest) -> dict:
         return record(request, "error", reason, math.nan, time.perf_counter() - start)
 
 
-def execute_group(run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+def execute_group(run_function: RunModel, requests: list[RunRequest]) -> list[dict]:
     """Call ``run_function.run_group`` on ``requests`` and return one record per request, in order; never raises.
 
     A group's budget is the sum of its runs' budgets (it may not take longer than running them one after the
@@ -206,7 +234,7 @@ def execute_group(run_function: RunFunction, requests: list[RunRequest]) -> list
     group cannot take, e.g. a broken parameter set), every request is executed alone (:func:`execute`) so that
     each failure is recorded with its own reason.
     """
-    if len(requests) == 1 or getattr(run_function, "run_group", None) is None:
+    if len(requests) == 1 or run_function.lanes == 1:
         return [execute(run_function, request) for request in requests]
     warm_up(run_function, requests[0])
     start = time.perf_counter()

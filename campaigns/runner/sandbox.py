@@ -37,7 +37,7 @@ import threading
 import time
 from multiprocessing.connection import Connection
 
-from campaigns.runner.runs import RunFunction, RunRequest, execute_group, kill_grace, record, warm_up
+from campaigns.runner.runs import RunModel, RunRequest, execute_group, kill_grace, record, warm_up
 
 #: Seconds a fresh child may take to import and warm up what a request needs (not counted in the
 #: run's budget): a cold numba compilation of the bench loop on a loaded machine fits well within it.
@@ -112,11 +112,11 @@ class Sandbox:
         self._proc.kill()
         self.close()
 
-    def run(self, run_function: RunFunction, request: RunRequest) -> dict:
+    def run(self, run_function: RunModel, request: RunRequest) -> dict:
         """Execute one request in the child; return its record (never raises for run failures)."""
         return self.run_group(run_function, [request])[0]
 
-    def run_group(self, run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+    def run_group(self, run_function: RunModel, requests: list[RunRequest]) -> list[dict]:
         """Execute requests together in the child (:func:`campaigns.runner.runs.execute_group`); return their records in
         order (never raises for run failures). The group's budget is the sum of its runs' budgets; a group killed
         for overrunning it records every run as a timeout."""
@@ -157,7 +157,7 @@ class Sandbox:
         return [record(r, "error", f"run process died (exit code {code})", float("nan"), elapsed) for r in requests]
 
 
-def run_group_isolated(run_function: RunFunction, requests: list[RunRequest]) -> list[dict]:
+def run_group_isolated(run_function: RunModel, requests: list[RunRequest]) -> list[dict]:
     """Execute ``requests`` together in this thread's :class:`Sandbox` (created on first use)."""
     sandbox = getattr(_local, "sandbox", None)
     if sandbox is None:

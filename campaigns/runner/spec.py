@@ -35,12 +35,11 @@ from pydantic import (
     model_validator,
 )
 
-from campaigns.analysis.within_unit import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
-from campaigns.bench.adapter import BenchCatalog
 from campaigns.runner.catalog import CONDITION_CHOICES, CONDITION_UNITS, Catalog, spelling_hint
 from campaigns.runner.control_limits import ControlLimits
 from campaigns.runner.distributions import Distribution, DistributionKind
 from campaigns.runner.ranges import resolve, shape_problems
+from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
 from twin.errors import InputError
 from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
@@ -51,10 +50,9 @@ from twin.tomlfiles import read_inheriting
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
 #: detection probability is at most 0.35 percentage points and that of a mean 0.7 % of the spread, far
 #: below the model's other uncertainties (the thesis study uses 1000). Beyond it the cost is out of
-#: proportion: the driver samples every run before anything is submitted (~0.3 ms per run with the
-#: 38-row Table 9.5, so 7 data sets x 20 000 runs take ~40 s) and keeps the samples in memory, and the
-#: bench's ~1 s per run makes 140 000 runs about 20 h on two workers. A larger study is several
-#: campaigns with different ``root_seed`` values.
+#: proportion: the driver samples every run before anything is submitted and keeps the samples in memory,
+#: and the wall time of the runs grows with them (docs/performance.md, "The figures behind the campaign code's
+#: constants"). A larger study is several campaigns with different ``root_seed`` values.
 MAX_RUNS_PER_DATASET = 20_000
 
 #: Physical bounds of the solver and execution fields, ``field: (low, high, unit, what it is and why the range)``,
@@ -68,8 +66,8 @@ BOUNDS = {
     "output_dt": (1.0e-4, 1.0, "s", "output spacing"),
     # the longest built-in test procedure is 10 s; a procedure 60 times longer is a mistake, not a test
     "duration": (1.0e-3, 600.0, "s", "simulated duration"),
-    # a bench run takes about 1.2 s, a full-fidelity one a few s; one hour of wall clock per run is far beyond
-    # any procedure, and the budget bounds what a hung run (and the compile warm-up's timed run) holds the queue
+    # one hour of wall clock per run is far beyond any procedure's run time (docs/performance.md), and the budget
+    # bounds what a hung run (and the compile warm-up's timed run) holds the queue
     "timeout": (1.0e-3, 3600.0, "s", "wall-clock budget of one run"),
     "runs_per_dataset": (1, MAX_RUNS_PER_DATASET, "", "runs per data set"),
     "fidelity_audit_runs": (0, MAX_RUNS_PER_DATASET, "", "runs per data set re-run at full fidelity"),
@@ -166,7 +164,7 @@ class Solver(_Strict):
     ``{subsystem = level}`` (see ``twin fidelity levels``).
     """
 
-    integrator: str = "rk4"  # or "auto" (opt-in: twin.engine.solver_choice), or any twin.simulate integrator
+    integrator: str = "rk4"  # or any other twin.simulate integrator
     dt: _bounded(float | None, "dt") = None
     output_dt: _bounded(float | None, "output_dt") = None
     fidelity: str | dict[str, str] = "auto"
@@ -377,7 +375,7 @@ def _unit_floor(count: int) -> int:
     if count < MIN_UNITS:
         raise ValueError(f"{count} units is below the floor of {MIN_UNITS}: with fewer, not even the largest unit "
                          f"bounds the {DESIGN_REVIEW_QUANTILE * 100:g}th-percentile unit the within-unit verdict is "
-                         "about with 95 % confidence (campaigns.analysis.within_unit.MIN_UNITS)")
+                         "about with 95 % confidence (campaigns.statistics.within_unit_floors.MIN_UNITS)")
     return count
 
 
@@ -385,7 +383,7 @@ def _repeat_floor(repeats: int) -> int:
     if repeats < MIN_REPEATS:
         raise ValueError(f"{repeats} repeats is below the floor of {MIN_REPEATS}: the check that the units share one "
                          "test-to-test scatter (Brown-Forsythe) needs 3 tests per unit and fault level "
-                         "(campaigns.analysis.within_unit.MIN_REPEATS)")
+                         "(campaigns.statistics.within_unit_floors.MIN_REPEATS)")
     return repeats
 
 
@@ -818,73 +816,10 @@ def validate_spec(data: dict, catalog: Catalog | None) -> CampaignSpec:
     problems += [p for p in _row_problems(data, failed_rows, catalog) + cross_field_problems(data) if p not in problems]
     if problems:
         raise SpecError(problems)
-    found, spec._warnings = support_checks(spec, catalog)
+    found, spec._warnings = catalog.support_checks(spec) if catalog is not None else ([], [])
     if found:
         raise SpecError(found)
     return spec
-
-
-#: Relative round-off a sampled range may have beyond a bound it was written at (unit conversion of the bound).
-ROUND_OFF = 1e-9
-
-
-def support_checks(spec: CampaignSpec, catalog: Catalog | None) -> tuple[list[str], list[str]]:
-    """Every sampled range, and every data set's fixed parameter, against what its target allows, before anything
-    runs: ``(problems, warnings)``.
-
-    A problem: a range (uniform, truncated Gaussian: its bounds; a constant: its value; a Gaussian or lognormal:
-    its centre) outside the bounds of the parameter file or of the scene condition, which every run would fail on.
-    A warning: a Gaussian whose tail crosses a bound (the share of runs that would fail is given) or a centre more
-    than ``twin.parameters.PLAUSIBLE_FACTOR`` times away from the nominal (a unit or exponent slip, usually).
-    The bounds are the bench's (its parameter set and ``twin.scenes.CONDITIONS``); other models' catalogs are not
-    checked here.
-    """
-    if not isinstance(catalog, BenchCatalog):
-        return [], []
-    from twin import load_parameters  # lazy: only bench specs are checked against a parameter set
-
-    parameters = load_parameters(spec.base.parameters)
-    problems, warnings = [], []
-    for k, row in enumerate(spec.uncertainties):
-        d = row.distribution_resolved
-        conditions, _ = split_targets({d.target: None})
-        name = next(iter(conditions), None)
-        exact = ((lambda v, c=SCENE_CONDITIONS[name]: c.check(v)) if name in SCENE_CONDITIONS
-                 else (lambda v, p=parameters[d.target]: p.check(v) is None) if name is None else None)
-        # a range given as the bound itself (a sensor's Table 9.5 range) may land a last bit beyond it in SI units
-        check = exact and (lambda v, exact=exact: any(exact(v * (1.0 + e)) for e in (0.0, -ROUND_OFF, ROUND_OFF)))
-        if check is None or not SCENE_CONDITIONS.get(name, SCENE_CONDITIONS["backlash"]).numeric:
-            continue
-        allowed = (f"{SCENE_CONDITIONS[name].allowed}" if name is not None
-                   else f"{parameters[d.target].allowed()} {d.unit}")
-        if d.kind in ("uniform", "truncated_gaussian"):
-            edges = [("low", d.low), ("high", d.high)]
-        elif d.kind == "constant":
-            edges = [("value", d.value)]
-        else:
-            edges = [("centre", d.mean)]
-        for what, value in edges:
-            if not check(value):
-                problems.append(f"uncertainties[{k}]: {d.target}: the range's {what} {value:g} {d.unit} is outside "
-                                f"the allowed range {allowed}; every run drawing it would fail")
-        if d.kind == "gaussian" and check(d.mean) and d.sigma > 0:
-            for side in (-1.0, 1.0):
-                edge = d.mean + side * 3.0 * d.sigma
-                if not check(edge):
-                    warnings.append(f"uncertainties[{k}]: {d.target}: the Gaussian (mean {d.mean:g}, sigma {d.sigma:g} "
-                                    f"{d.unit}) reaches beyond the allowed range {allowed} within 3 sigma: its draws "
-                                    "beyond it fail (use truncated_gaussian to keep them inside)")
-                    break
-        centre = d.value if d.kind == "constant" else d.mean if math.isfinite(d.mean) else 0.5 * (d.low + d.high)
-        if name is None and (warning := parameters[d.target].implausible(centre)) is not None:
-            warnings.append(f"uncertainties[{k}]: {warning}")
-    for k, dataset in enumerate(spec.datasets):
-        for name, value in dataset.parameters.items():
-            if (problem := parameters[name].check(value)) is not None:
-                problems.append(f"datasets[{k}].parameters: {problem}; every run of the data set would fail")
-            elif (warning := parameters[name].implausible(value)) is not None:
-                warnings.append(f"datasets[{k}].parameters: {warning}")
-    return problems, warnings
 
 
 def _read_spec_file(path: Path) -> dict:
@@ -915,9 +850,8 @@ def read_spec(path: Path) -> dict:
     return read_inheriting(Path(path), "extends", _read_spec_file, _locate_parent)
 
 
-def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | None = None,
-              catalog: Catalog | None = None) -> CampaignSpec:
-    """Read and validate a campaign spec (TOML).
+def read_spec_data(path: str | Path, runs: int | None = None, *, timeout: float | None = None) -> dict:
+    """Read a campaign spec (TOML) with its overrides, not yet validated (:func:`validate_spec`).
 
     Parameters
     ----------
@@ -929,9 +863,25 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
         Override ``runs_per_dataset`` (the CLI's ``--runs``).
     timeout : float, optional
         Override ``execution.timeout`` [s] (the CLI's ``--timeout``).
-    catalog : Catalog, optional
-        The model's catalog. Default: :class:`campaigns.bench.adapter.BenchCatalog` for
-        the spec's ``base.parameters`` and ``base.scene``.
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed.
+    """
+    data = read_spec(Path(path))
+    if runs is not None:
+        data["runs_per_dataset"] = runs
+    if timeout is not None:
+        execution = data.get("execution")
+        data["execution"] = {**(execution if isinstance(execution, dict) else {}), "timeout": timeout}
+    return data
+
+
+def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | None = None,
+              catalog: Catalog) -> CampaignSpec:
+    """Read (:func:`read_spec_data`) and validate a campaign spec against a model's ``catalog``; the bench twin's
+    entry, which defaults to its catalog, is :func:`campaigns.bench.campaign.load_spec` (``campaigns.load_spec``).
 
     Returns
     -------
@@ -943,21 +893,4 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
     SpecError
         If the file cannot be read or parsed, or listing every validation problem.
     """
-    data = read_spec(Path(path))
-    if runs is not None:
-        data["runs_per_dataset"] = runs
-    if timeout is not None:
-        execution = data.get("execution")
-        data["execution"] = {**(execution if isinstance(execution, dict) else {}), "timeout": timeout}
-    if catalog is None:
-        base = data.get("base", {}) if isinstance(data.get("base"), dict) else {}
-        try:
-            catalog = BenchCatalog(base.get("parameters", "bench"), base.get("scene", "nominal"))
-        except InputError as exc:
-            structural = []
-            try:
-                validate_spec(data, None)
-            except SpecError as inner:
-                structural = inner.problems
-            raise SpecError([f"base: {p}" for p in exc.problems] + structural) from None
-    return validate_spec(data, catalog)
+    return validate_spec(read_spec_data(path, runs, timeout=timeout), catalog)

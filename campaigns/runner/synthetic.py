@@ -20,6 +20,7 @@ import math
 import os
 import time
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 import xarray as xr
@@ -52,7 +53,7 @@ SYNTHETIC_CATALOG = StaticCatalog(
 
 @dataclass(frozen=True)
 class SyntheticModel:
-    """Picklable run function of the synthetic model.
+    """The synthetic model as a run model (:class:`campaigns.runner.runs.RunModel`), picklable.
 
     Parameters
     ----------
@@ -71,6 +72,27 @@ class SyntheticModel:
     faults: dict = field(default_factory=dict)
     delay: float = 0.0
     log_dir: str | None = None
+    #: One run at a time; its cost is not known (the wall time is not estimated); no compilation.
+    lanes: ClassVar[int] = 1
+    typical_run_seconds: ClassVar[float | None] = None
+    typical_step: ClassVar[float | None] = None
+    #: Samples of a kept time series (:func:`_trace`).
+    trace_samples: ClassVar[int] = 11
+    compiles: ClassVar[bool] = False
+
+    def run_group(self, requests: list[RunRequest]) -> list[dict]:
+        """One run after the other (``lanes`` is 1: never called with more than one)."""
+        return [self(request) for request in requests]
+
+    def signals(self) -> None:
+        """The synthetic model does not list its signals: a replay keeps the spec's trace variables."""
+        return None
+
+    def results_attributes(self, spec) -> dict[str, str]:
+        return {}
+
+    def margin_variables(self, spec, request_of, map_chunks) -> dict:
+        return {}
 
     def warm_up(self, request: RunRequest) -> None:
         """One fault-free, unlogged run: the first xarray objects of a fresh process are slow to build

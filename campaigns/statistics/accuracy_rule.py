@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm, t
 
+from campaigns.statistics.defaults import CONFIDENCE
 from campaigns.statistics.paired_comparison import VERDICTS, Verdict, worst_verdict
 
 #: m: half a tenth of the 1 um backlash the bench must detect (Table 9.3): a shift of the mean at most this large
@@ -44,7 +45,6 @@ SD_RATIO_TOLERANCE = 0.10
 #: holds its nominal 95 % with skewed, heteroscedastic and two-outcome differences (docs/accuracy.md, "Why these
 #: numbers"; tests/campaigns/test_accuracy_rule.py).
 MIN_PAIRED_RUNS = 200
-CONFIDENCE = 0.95
 #: The sensitivity ranking compared: the tolerances with the largest lower bound of the first-order index's interval
 #: (the report's sensitivity table, reports/sections/correlations.py), resolved ones only (lower bound > 0).
 TOP_RANKED = 3

@@ -47,18 +47,18 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis.campaign_analysis import mean_shift
+from campaigns.statistics.defaults import CONFIDENCE
+from campaigns.statistics.intervals import mean_shift
 from campaigns.units import estimate_with_interval
 
-#: Confidence of every interval of the comparison.
-CONFIDENCE = 0.95
 #: Bootstrap resamples of the standard-deviation shift, and their seed.
 N_BOOT = 2000
 SEED = 20261126
 #: Fewest runs (pairs) per data set for an interval.
 MIN_RUNS = 3
-#: Shifts smaller than this (in the feature's SI unit) are round-off, shown as 0 (describe_shift).
-ROUND_OFF = 1e-15
+#: Shifts smaller than this (in the feature's SI unit) are the round-off of runs identical in both designs, shown as
+#: 0 (describe_shift).
+IDENTICAL_RUNS_ROUND_OFF = 1e-15
 
 
 @dataclass(frozen=True)
@@ -284,8 +284,9 @@ def describe_shift(shift: Shift, unit: str) -> str:
     (:func:`campaigns.units.estimate_with_interval`), or ``–`` without an interval."""
     if not math.isfinite(shift.lower):
         return "–"
-    # below ROUND_OFF: the round-off of runs identical in both designs (attometres of a position), not a difference
-    estimate, lower, upper = (0.0 if abs(v) < ROUND_OFF else v for v in (shift.estimate, shift.lower, shift.upper))
+    # attometres of a position: the round-off of runs identical in both designs, not a difference
+    estimate, lower, upper = (0.0 if abs(v) < IDENTICAL_RUNS_ROUND_OFF else v
+                              for v in (shift.estimate, shift.lower, shift.upper))
     return estimate_with_interval(estimate, lower, upper, unit, CONFIDENCE)
 
 

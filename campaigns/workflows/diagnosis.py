@@ -43,12 +43,12 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import SWEEP_QUANTITIES, printed_estimate
+from campaigns.analysis.vocabulary import SWEEP_QUANTITIES
+from campaigns.statistics.defaults import CONFIDENCE  # of the prediction intervals: a level's exclusion is 1 - it
+from campaigns.statistics.detection import printed_estimate
 from campaigns.units import quantity as shown_value  # fault_size's `quantity` is the fault's name
 from campaigns.units import quantity_range
 
-#: Confidence of the prediction intervals (the significance of a level's exclusion is 1 minus it).
-CONFIDENCE = 0.95
 #: Fewest ok runs a data set needs before a test is judged against it (a standard deviation with 2 degrees of
 #: freedom; the interval's t factor is then 4.3, so the judgement is conservative, not wrong).
 MIN_RUNS = 3

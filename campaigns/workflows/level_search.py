@@ -44,25 +44,20 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from scipy import optimize, stats
 
-from campaigns.analysis.campaign_analysis import (
-    BACKLASH_REQUIREMENT,
-    FALSE_ALARM_RATE,
-    POWER,
-    SWEEP_QUANTITIES,
-    analyze,
-    bootstrap_minimum_detectable,
-    detection_run_floor,
-    requirement_verdict,
-    runs_to_decide,
-)
+from campaigns.analysis.campaign_analysis import analyze
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
 from campaigns.bench.adapter import BenchCatalog, simulate_run
-from campaigns.runner.execution import build_request, group_lanes, run_campaign
+from campaigns.bench.campaign import run_campaign
+from campaigns.runner.execution import build_request, group_lanes
 from campaigns.runner.files import atomic_write
 from campaigns.runner.provenance import provenance
-from campaigns.runner.runs import RunFunction, execute_group
+from campaigns.runner.runs import RunModel, execute_group
 from campaigns.runner.sampling import sample_run
 from campaigns.runner.spec import MAX_RUNS_PER_DATASET, CampaignSpec, read_spec, validate_spec
 from campaigns.runner.storage import ChunkStore
+from campaigns.statistics.defaults import FALSE_ALARM_RATE, POWER
+from campaigns.statistics.detection import bootstrap_minimum_detectable, requirement_verdict, runs_to_decide
+from campaigns.statistics.order_statistics import detection_run_floor
 from twin.errors import InputError
 
 #: Spawn-key tag of the search's bootstrap streams (one per look and step), far from the data-set indices and from
@@ -368,7 +363,7 @@ class _Runs:
     """The search's runs, executed in this process in the run function's lane groups and kept by (data set name,
     run index): a level's runs never change once run (their seeds do not depend on the spec's other levels)."""
 
-    def __init__(self, run_function: RunFunction):
+    def __init__(self, run_function: RunModel):
         self.run_function, self.records = run_function, {}
 
     def values(self, spec: CampaignSpec, name: str, runs: int, feature: str) -> np.ndarray:
@@ -406,7 +401,7 @@ def _with_levels(data: dict, sweep: Sweep, added: dict[str, float], runs: int) -
             "observability": {**data["observability"], "sweep": sorted(levels, key=lambda n: levels[n])}}
 
 
-def search(spec_path: str | Path, settings: Settings, *, run_function: RunFunction | None = None, catalog=None,
+def search(spec_path: str | Path, settings: Settings, *, run_function: RunModel | None = None, catalog=None,
            runs: int | None = None, progress: Callable[[str], None] | None = None) -> Result:
     """Run the level search on the sweep of the spec at ``spec_path`` (module docstring).
 
@@ -550,7 +545,7 @@ def statement(result: Result) -> str:
     return text
 
 
-def store(result: Result, out_dir: str | Path, *, run_function: RunFunction | None = None, workers: int = 1,
+def store(result: Result, out_dir: str | Path, *, run_function: RunModel | None = None, workers: int = 1,
           analyse: bool = True, progress: bool = False) -> Path:
     """Store the final campaign as any campaign: the search's runs written as chunk files of the final spec, then
     :func:`campaigns.runner.execution.run_campaign` resumes it (only the runs the search did not need execute: the

@@ -45,18 +45,14 @@ import xarray as xr
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from scipy.stats import qmc
 
-from campaigns.analysis.campaign_analysis import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES, analyze
-from campaigns.analysis.within_unit import (
-    DESIGN_REVIEW_QUANTILE,
-    MIN_REPEATS,
-    MIN_UNITS,
-    extrapolated_detectable,
-    unit_values,
-)
+from campaigns.analysis.campaign_analysis import analyze
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, REQUIREMENT_SOURCE, SWEEP_QUANTITIES
+from campaigns.analysis.within_unit import extrapolated_detectable, unit_values
 from campaigns.bench.adapter import force_demand_peak
-from campaigns.runner.execution import run_campaign
+from campaigns.bench.campaign import load_spec, run_campaign
 from campaigns.runner.files import CONVENTIONS
-from campaigns.runner.spec import SearchName, SpecError, load_spec, read_spec
+from campaigns.runner.spec import SearchName, SpecError, read_spec
+from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS
 from campaigns.units import display_scale, quantity, quantity_range
 from twin.scenes import load_scene
 from twin.scenes.procedure import (

@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from campaigns.workflows.design_comparison import CONFIDENCE, MIN_RUNS, describe_shift, failure_text
+from campaigns.statistics.defaults import CONFIDENCE
+from campaigns.workflows.design_comparison import MIN_RUNS, describe_shift, failure_text
 from reports.builder import Builder
 from reports.model import Callout, Paragraph
 from reports.phrases import feature_words, plain_name, tone

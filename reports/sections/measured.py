@@ -3,7 +3,8 @@ campaign's sweep gives it (:mod:`campaigns.workflows.diagnosis`; nothing is comp
 
 from __future__ import annotations
 
-from campaigns.workflows.diagnosis import CONFIDENCE, describe
+from campaigns.statistics.defaults import CONFIDENCE
+from campaigns.workflows.diagnosis import describe
 from reports.builder import Builder
 from reports.model import Callout, Paragraph
 from reports.units import quantity

@@ -12,7 +12,7 @@ import json
 from weakref import WeakKeyDictionary
 
 from campaigns.analysis import model_form
-from campaigns.analysis.campaign_analysis import printed_estimate
+from campaigns.statistics.detection import printed_estimate
 from reports.builder import Builder
 from reports.model import Callout, Paragraph, Table
 from reports.phrases import INSUFFICIENT, VERDICT_TONES

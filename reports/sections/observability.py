@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from campaigns.analysis.campaign_analysis import RESOLUTIONS
+from campaigns.statistics.detection import RESOLUTIONS
 from reports import figures
 from reports.builder import Builder
 from reports.detection import minimum_detectable, sweep_quantity

@@ -16,22 +16,19 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis import campaign_analysis as analysis
-from campaigns.analysis.campaign_analysis import (
-    BACKLASH_REQUIREMENT,
-    MIN_DETECTION_RUNS,
-    analysis_dataset,
-    analyze,
-    bootstrap_correlation,
+from campaigns.analysis import settings as analysis_settings
+from campaigns.analysis.campaign_analysis import analysis_dataset, analyze, summary
+from campaigns.analysis.observability import observability_sweep, requirement_statement
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT
+from campaigns.statistics import detection, sensitivity
+from campaigns.statistics.correlation import bootstrap_correlation, prcc
+from campaigns.statistics.detection import (
     bootstrap_minimum_detectable,
     detection_probability,
     minimum_detectable,
     overlap_coefficient,
-    prcc,
-    requirement_statement,
-    summary,
 )
-from campaigns.statistics import sensitivity
+from campaigns.statistics.order_statistics import MIN_DETECTION_RUNS
 from campaigns.statistics.sensitivity import HARMONICS, _easi_order, _first_order_of_signals, first_order
 
 AGAINST = "against the 1 µm requirement of Table 9.3"
@@ -131,7 +128,7 @@ def test_the_analysis_intervals_are_the_bootstrap_of_each_data_set_and_feature_s
                 y,
                 n_boot=20,
                 confidence=0.9,
-                seed=np.random.SeedSequence(8, spawn_key=(analysis._SENSITIVITY_STREAM, d, k)),
+                seed=np.random.SeedSequence(8, spawn_key=(analysis_settings.SENSITIVITY_STREAM, d, k)),
             )
             # 30 runs, below sensitivity.MIN_RUNS: every index flagged (outputs print the intervals only)
             cell = a.sel(dataset=f"d{d}", feature=("f", "g")[k])
@@ -360,7 +357,7 @@ def test_sweep_statistics_are_those_of_the_sweep_functions_against_the_zero_back
             list(values),
             1,
             n_boot=200,
-            seed=np.random.SeedSequence(6, spawn_key=(analysis._OBSERVABILITY_STREAM, k)),
+            seed=np.random.SeedSequence(6, spawn_key=(analysis_settings.OBSERVABILITY_STREAM, k)),
         )
         cell = a.isel(feature=k)
         np.testing.assert_array_equal(cell["sweep_detection_probability"], found["probability"])
@@ -368,8 +365,8 @@ def test_sweep_statistics_are_those_of_the_sweep_functions_against_the_zero_back
         np.testing.assert_array_equal(cell["minimum_detectable_backlash_ci"], found["bounds"])
         resolved = found["resolution"] == "resolved"
         np.testing.assert_equal(float(cell["minimum_detectable_backlash"]), found["estimate"] if resolved else math.nan)
-        assert analysis.RESOLUTIONS[int(cell["minimum_detectable_status"])] == found["resolution"]
-        verdict = analysis.requirement_verdict(*found["bounds"])
+        assert detection.RESOLUTIONS[int(cell["minimum_detectable_status"])] == found["resolution"]
+        verdict = detection.requirement_verdict(*found["bounds"], BACKLASH_REQUIREMENT)
         assert str(cell["requirement_verdict"].item()) == verdict
         assert str(cell["requirement_statement"].item()).startswith(f"{verdict}: ")
     np.testing.assert_array_equal(a["sweep_backlash"], levels * 1e-6)
@@ -384,7 +381,7 @@ def test_observability_sweep_defaults_are_the_documented_ones():
     defaults."""
     levels, samples = _sweep_samples()
     results = results_dataset({"f": np.array(samples)}, {}, levels=levels)
-    found = analysis.observability_sweep(results, "f", ["d0", "d1", "d2", "d3", "d4"], n_boot=100, seed=3)
+    found = observability_sweep(results, "f", ["d0", "d1", "d2", "d3", "d4"], n_boot=100, seed=3)
     expected = bootstrap_minimum_detectable(levels, samples, 1, n_boot=100, seed=3)
     np.testing.assert_equal(float(found["minimum_detectable_backlash"]),
                             expected["estimate"] if expected["resolution"] == "resolved" else math.nan)
@@ -408,7 +405,7 @@ def test_a_short_sweep_data_set_withholds_the_verdict_but_not_the_others_detecti
     )
     assert np.isnan(a["minimum_detectable_backlash_ci"]).all() and np.isnan(a["minimum_detectable_bracket"]).all()
     assert "d3 has 58 ok runs; at least 59 per sweep data set are needed" in str(a["requirement_statement"].item())
-    assert int(a["minimum_detectable_status"]) == analysis.RESOLUTIONS.index("insufficient_data")
+    assert int(a["minimum_detectable_status"]) == detection.RESOLUTIONS.index("insufficient_data")
     status[1, 58:] = "error"  # the reference short too: no data set has a detection probability
     a = analysis_dataset(results.assign(status=(("dataset", "run"), status)), n_boot=50).sel(feature="f")
     assert np.isnan(a["sweep_detection_probability"]).all()

@@ -11,20 +11,20 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from scipy import stats
 
 import campaigns
-from campaigns.analysis.campaign_analysis import (
-    analysis_dataset,
-    bootstrap_correlation,
-    detection_probability,
-    minimum_detectable,
-    overlap_coefficient,
-    prcc,
-    requirement_verdict,
-)
+from campaigns.analysis.campaign_analysis import analysis_dataset
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT
 from campaigns.runner.execution import build_request
 from campaigns.runner.files import CONVENTIONS
 from campaigns.runner.runs import execute
 from campaigns.runner.sampling import sample
 from campaigns.runner.synthetic import synthetic_run
+from campaigns.statistics.correlation import bootstrap_correlation, prcc
+from campaigns.statistics.detection import (
+    detection_probability,
+    minimum_detectable,
+    overlap_coefficient,
+    requirement_verdict,
+)
 
 
 def _prcc_by_precision_matrix(X, y):
@@ -133,13 +133,15 @@ def test_minimum_detectable_interpolates_the_sweep():
     assert minimum_detectable([40e-6, 0.0, 5e-6], [1.0, 0.05, 0.95], 0.95) == (pytest.approx(5e-6), 0.0, 5e-6)
     estimate, lower, upper = minimum_detectable([0.0, 5e-6], [0.05, 0.5], 0.95)
     assert math.isnan(estimate) and (lower, upper) == (5e-6, math.inf)
-    assert requirement_verdict(0.5e-6, 0.8e-6) == "met"
-    assert requirement_verdict(0.5e-6, 1e-6) == "met"  # 1 um itself detected
-    assert requirement_verdict(5e-6, 40e-6) == "not met"
-    assert requirement_verdict(1e-6, 1.5e-6) == "not met"  # 1 um not detected: the minimum lies above it
-    assert requirement_verdict(0.0, 5e-6) == "undetermined"
-    assert requirement_verdict(5e-6, math.inf) == "not met"
-    assert requirement_verdict(*minimum_detectable([0.0, 5e-6], [0.05, math.nan])[1:]) == "undetermined"
+    assert requirement_verdict(0.5e-6, 0.8e-6, BACKLASH_REQUIREMENT) == "met"
+    assert requirement_verdict(0.5e-6, 1e-6, BACKLASH_REQUIREMENT) == "met"  # 1 um itself detected
+    assert requirement_verdict(5e-6, 40e-6, BACKLASH_REQUIREMENT) == "not met"
+    # 1 um not detected: the minimum lies above it
+    assert requirement_verdict(1e-6, 1.5e-6, BACKLASH_REQUIREMENT) == "not met"
+    assert requirement_verdict(0.0, 5e-6, BACKLASH_REQUIREMENT) == "undetermined"
+    assert requirement_verdict(5e-6, math.inf, BACKLASH_REQUIREMENT) == "not met"
+    unknown = minimum_detectable([0.0, 5e-6], [0.05, math.nan])[1:]
+    assert requirement_verdict(*unknown, BACKLASH_REQUIREMENT) == "undetermined"
 
 
 def test_analysis_of_the_synthetic_campaign(reference_results, tmp_path):
@@ -226,9 +228,9 @@ def test_analysis_reports_exclusions_by_status():
 
 def test_resampled_ranks_are_scipys_average_ranks():
     """The bootstrap ranks each resample from cumulative counts; ties (repeated runs, discrete values) included."""
-    from campaigns.analysis.campaign_analysis import _resampled_ranks
+    from campaigns.statistics.correlation import resampled_ranks
 
     rng = np.random.default_rng(5)
     for v in (rng.normal(size=200), rng.integers(0, 4, 200).astype(float), np.full(200, 2.0)):
         idx = rng.integers(0, 200, (30, 200))
-        np.testing.assert_array_equal(_resampled_ranks(v, idx), stats.rankdata(v[idx], axis=-1))
+        np.testing.assert_array_equal(resampled_ranks(v, idx), stats.rankdata(v[idx], axis=-1))

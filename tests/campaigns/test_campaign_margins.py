@@ -11,8 +11,8 @@ import pytest
 import xarray as xr
 
 import campaigns
-from campaigns.analysis.campaign_analysis import bootstrap_correlation, requirement_verdict
 from campaigns.analysis.margins import control_robustness
+from campaigns.analysis.settings import AnalysisSettings
 from campaigns.bench.adapter import MARGIN_NOTE, MARGIN_VARIABLES, margin_variables, run_margins
 from campaigns.runner.execution import build_request
 from campaigns.runner.sampling import sample
@@ -91,8 +91,7 @@ def _synthetic_results(n: int, below: int, limits: dict | None = None, seed: int
 
 
 def _robustness(results, **options):
-    return control_robustness(results, correlate=bootstrap_correlation, verdict_rule=requirement_verdict,
-                              features=["backlash_feature"], n_boot=200, **options)
+    return control_robustness(results, AnalysisSettings(n_boot=200, **options))
 
 
 @pytest.mark.parametrize(("n", "below", "verdict"), [

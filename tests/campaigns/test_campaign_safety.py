@@ -231,8 +231,8 @@ def test_the_free_space_estimate_covers_what_a_campaign_writes(tmp_path):
     campaigns.analyze(results)
     written = _disk_usage(out) + results.stat().st_size  # results.nc is rewritten once: two copies at the peak
     estimated = budget.estimate(spec, synthetic_run).disk_bytes
-    # an upper bound (the synthetic model's traces are shorter than the 10 001 samples assumed for a model that
-    # does not say; the bench test below checks the estimate is also close)
+    # an upper bound (the synthetic model states its 11-sample traces, RunModel.trace_samples; the bench test below
+    # checks the estimate is also close)
     assert written <= estimated, (written, estimated)
 
 

@@ -15,11 +15,11 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from SALib.analyze import rbd_fast
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import prcc
 from campaigns.runner.execution import build_request
 from campaigns.runner.runs import execute
 from campaigns.runner.sampling import sample
 from campaigns.runner.synthetic import NOISE_SIGMA, TEMPERATURE_SLOPE, synthetic_run
+from campaigns.statistics.correlation import prcc
 from campaigns.statistics.sensitivity import _easi_order, _first_order_of_signals, first_order
 
 

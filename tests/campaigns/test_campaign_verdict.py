@@ -19,15 +19,10 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import (
-    MIN_DETECTION_RUNS,
-    MIN_OK_RUNS,
-    RESOLUTIONS,
-    analysis_dataset,
-    bootstrap_minimum_detectable,
-    printed_estimate,
-    sweep_resolution,
-)
+from campaigns.analysis.campaign_analysis import analysis_dataset
+from campaigns.analysis.settings import MIN_OK_RUNS
+from campaigns.statistics.detection import RESOLUTIONS, bootstrap_minimum_detectable, printed_estimate, sweep_resolution
+from campaigns.statistics.order_statistics import MIN_DETECTION_RUNS
 
 #: The observability spec's sweep levels [m].
 LEVELS = (0.0, 0.5e-6, 1e-6, 1.5e-6, 2e-6, 3e-6, 5e-6)

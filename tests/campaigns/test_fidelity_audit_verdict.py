@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from campaigns.bench.campaign import load_spec
 from campaigns.bench.fidelity_audit import (
     AUDIT_MIN_PAIRS,
     MEAN_SHIFT_TOLERANCE,
@@ -16,7 +17,6 @@ from campaigns.bench.fidelity_audit import (
     summary_attrs,
 )
 from campaigns.bench.scene_audit import THESIS_SPEC
-from campaigns.runner.spec import load_spec
 from campaigns.statistics.accuracy_rule import paired_verdict
 
 UM = 1e-6

@@ -23,12 +23,12 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import FALSE_ALARM_RATE, POWER
 from campaigns.runner.execution import build_request
 from campaigns.runner.runs import execute
 from campaigns.runner.sampling import sample
 from campaigns.runner.spec import load_spec
 from campaigns.runner.synthetic import NOISE_SIGMA, SYNTHETIC_CATALOG, synthetic_run
+from campaigns.statistics.defaults import FALSE_ALARM_RATE, POWER
 from campaigns.workflows.level_search import (
     LOG_NAME,
     LevelSearchError,

@@ -14,9 +14,11 @@ import xarray as xr
 import campaigns
 import twin
 from campaigns.analysis import model_form
-from campaigns.analysis.campaign_analysis import mean_shift, observability_sweep
+from campaigns.analysis.observability import observability_sweep
+from campaigns.analysis.settings import OBSERVABILITY_STREAM
 from campaigns.bench.adapter import BenchCatalog
 from campaigns.runner.spec import read_spec, validate_spec
+from campaigns.statistics.intervals import mean_shift
 from campaigns.statistics.paired_comparison import VERDICTS
 
 SPEC = Path(__file__).parents[2] / "campaigns" / "specs" / "model_form.toml"
@@ -86,7 +88,7 @@ def _analysis(results: xr.Dataset) -> xr.Dataset:
     settings = model_form._settings(xr.Dataset(attrs=attrs))
     found = observability_sweep(
         results, "f", list(LEVELS), false_alarm_rate=0.05, power=0.95, n_boot=200, confidence=0.95, min_runs=59,
-        seed=np.random.SeedSequence(0, spawn_key=(model_form._OBSERVABILITY_STREAM, 0)),
+        seed=np.random.SeedSequence(0, spawn_key=(OBSERVABILITY_STREAM, 0)),
         requirement=settings["requirement"], requirement_source=settings["requirement_source"])
     return xr.Dataset({"requirement_verdict": ("feature", [str(found["requirement_verdict"].item())])},
                       coords={"feature": ["f"]}, attrs=attrs)

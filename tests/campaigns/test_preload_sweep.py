@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from campaigns.analysis.campaign_analysis import observability_sweep
-from campaigns.runner.spec import SpecError, load_spec
+from campaigns.analysis.observability import observability_sweep
+from campaigns.bench.campaign import load_spec
+from campaigns.runner.spec import SpecError
 
 SPEC = Path(__file__).parents[2] / "campaigns" / "specs" / "preload_loss.toml"
 

@@ -22,11 +22,11 @@ from campaign_helpers import SYNTHETIC_SPEC
 from scipy import stats
 
 import campaigns
-from campaigns.analysis.campaign_analysis import FALSE_ALARM_RATE, POWER
 from campaigns.analysis.within_unit import extrapolated_detectable
 from campaigns.runner.files import CONVENTIONS
 from campaigns.runner.spec import SpecError
 from campaigns.runner.synthetic import SYNTHETIC_CATALOG, procedure_effect, synthetic_run
+from campaigns.statistics.defaults import FALSE_ALARM_RATE, POWER
 from campaigns.workflows.procedure_search import (
     describe_plan,
     design,

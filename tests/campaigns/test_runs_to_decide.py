@@ -8,8 +8,9 @@ import math
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis.campaign_analysis import analysis_dataset, runs_to_decide
+from campaigns.analysis.campaign_analysis import analysis_dataset
 from campaigns.analysis.margins import _fraction_bounds, _fraction_interval, fraction_runs_to_decide
+from campaigns.statistics.detection import runs_to_decide
 
 LEVELS = [0.0, 1e-6, 2e-6]
 

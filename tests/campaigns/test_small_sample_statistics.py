@@ -17,23 +17,19 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import (
-    MIN_DETECTION_RUNS,
-    MIN_OK_RUNS,
-    analysis_dataset,
-    analyze,
-    detection_run_floor,
-    mean_interval,
-    min_runs_for_quantile_bound,
-    quantile_bound_rank,
-    quantile_interval,
-    quantile_interval_min_runs,
-    quantile_interval_ranks,
-    std_interval,
-    summary,
-)
+from campaigns.analysis.campaign_analysis import analysis_dataset, analyze, summary
+from campaigns.analysis.settings import MIN_OK_RUNS
 from campaigns.runner.files import CONVENTIONS
 from campaigns.statistics import sensitivity
+from campaigns.statistics.intervals import mean_interval, quantile_interval, std_interval
+from campaigns.statistics.order_statistics import (
+    MIN_DETECTION_RUNS,
+    detection_run_floor,
+    min_runs_for_quantile_bound,
+    quantile_bound_rank,
+    quantile_interval_min_runs,
+    quantile_interval_ranks,
+)
 
 # --- the detection threshold's floor ------------------------------------------------------------------------------
 

@@ -9,6 +9,7 @@ from campaign_helpers import SYNTHETIC_SPEC, load
 from test_campaign_cf import high_priority_findings
 
 from app.studies.charts import campaign_accuracy_chart
+from campaigns.bench.campaign import load_spec
 from campaigns.bench.solver_accuracy import (
     CANDIDATES,
     REFERENCE,
@@ -17,7 +18,6 @@ from campaigns.bench.solver_accuracy import (
     markdown_table,
     variant,
 )
-from campaigns.runner.spec import load_spec
 from campaigns.runner.synthetic import synthetic_run
 from campaigns.statistics.paired_comparison import compare_features
 

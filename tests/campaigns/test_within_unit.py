@@ -22,23 +22,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from campaigns.analysis.campaign_analysis import (
-    BACKLASH_REQUIREMENT,
-    RESOLUTIONS,
-    bootstrap_minimum_detectable,
-    min_runs_for_quantile_bound,
-    minimum_detectable,
-)
-from campaigns.analysis.within_unit import (
-    DESIGN_REVIEW_QUANTILE,
-    MIN_REPEATS,
-    MIN_UNITS,
-    _first_detected,
-    population_detectable,
-    unit_detection,
-    unit_floor,
-    within_unit_dataset,
-)
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT
+from campaigns.analysis.within_unit import _first_detected, population_detectable, unit_detection, within_unit_dataset
+from campaigns.statistics.detection import RESOLUTIONS, bootstrap_minimum_detectable, minimum_detectable
+from campaigns.statistics.order_statistics import min_runs_for_quantile_bound
+from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, MIN_UNITS, unit_floor
 
 #: Test-to-test noise of the feature [V] and its sensitivity to the fault [V/m]: sigma / k = 1 µm of backlash.
 SIGMA, K = 0.01, 1e4

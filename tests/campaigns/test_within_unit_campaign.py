@@ -22,13 +22,14 @@ from scipy import stats
 
 import campaigns
 from campaigns.analysis.campaign_analysis import analysis_dataset, summary
-from campaigns.analysis.within_unit import MIN_REPEATS, MIN_UNITS, unit_values, within_unit_dataset
+from campaigns.analysis.within_unit import unit_values, within_unit_dataset
 from campaigns.bench.fidelity_audit import full_fidelity_variant
 from campaigns.bench.replay import replay_run
 from campaigns.runner.execution import build_request
 from campaigns.runner.sampling import UNIT_STREAM, draw, sample
 from campaigns.runner.spec import SpecError
 from campaigns.runner.synthetic import NOISE_SIGMA, TEMPERATURE_SLOPE, SyntheticModel, synthetic_run
+from campaigns.statistics.within_unit_floors import MIN_REPEATS, MIN_UNITS
 from campaigns.workflows.export import runs_table
 
 UNITS, REPEATS = MIN_UNITS, MIN_REPEATS

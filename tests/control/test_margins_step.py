@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import twin
+from campaigns.bench.campaign import load_spec
 from campaigns.runner.execution import build_request
 from campaigns.runner.sampling import sample
-from campaigns.runner.spec import load_spec
 from twin.control.margins import loop_systems
 from twin.scenes import scene_from_dict
 

@@ -1,0 +1,87 @@
+"""What the analyses say alike: the Table 9.3 requirement and its wording, the fault quantity of each sweep
+condition, the attributes of the verdict variables, and which runs a statistic uses."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import xarray as xr
+
+from campaigns.statistics.detection import RESOLUTIONS
+
+#: Table 9.3: minimum detectable linear backlash [m].
+BACKLASH_REQUIREMENT = 1e-6
+REQUIREMENT_SOURCE = "Bertolino (2020) Table 9.3: minimum detectable linear backlash 1 µm"
+#: What a sweep's condition measures: condition -> (fault quantity, unit, display scale, display unit). The
+#: fault size of a data set is ``|condition - condition of the reference|`` (the backlash itself; the loss of
+#: preload from the healthy reference).
+SWEEP_QUANTITIES = {"backlash": ("backlash", "m", 1e6, "µm"), "preload": ("preload loss", "N", 1.0, "N")}
+VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not met / undetermined / insufficient data"}
+STATEMENT_ATTRS = {
+    "long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, "
+                 "in one sentence"}
+RESOLUTION_ATTRS = {
+    "long_name": "how far the sweep resolves the minimum detectable level: resolved (a sweep level lies strictly "
+                 "inside the bootstrap bounds: the value is printed), between_adjacent_levels (the bracket of two "
+                 "adjacent sweep levels is the finding), beyond_sweep (no level detected with the power), "
+                 "insufficient_data",
+    "flag_values": np.arange(len(RESOLUTIONS), dtype=np.int8),
+    "flag_meanings": " ".join(RESOLUTIONS),
+}
+
+
+def requirement_of(observability: dict) -> tuple[float, str]:
+    """The requirement [SI] on the swept fault size and its source: the spec's ``observability`` table's, else
+    Table 9.3's."""
+    return (observability.get("requirement") or BACKLASH_REQUIREMENT,
+            observability.get("requirement_source") or REQUIREMENT_SOURCE)
+
+
+def used(results: xr.Dataset, feature: str) -> xr.DataArray:
+    """The runs a statistic of ``feature`` uses: status ok and a finite feature."""
+    return (results["status"] == "ok") & np.isfinite(results[feature])
+
+
+def runs_text(n: int) -> str:
+    """``"1 ok run"``, ``"3 ok runs"``."""
+    return f"{n} ok run{'s' if n != 1 else ''}"
+
+
+def feature_units(units: list[str]) -> dict[str, str]:
+    """The ``units`` attribute of a variable along the feature axis: the features' common unit, or (features in
+    several units; CF gives one unit per variable) a comment that points at the ``feature_units`` coordinate."""
+    if len(set(units)) == 1:
+        return {"units": units[0]}
+    return {"comment": "in the units of each feature, given by the feature_units coordinate (" + ", ".join(
+        sorted(set(units))) + ")"}
+
+
+def features_of(results: xr.Dataset) -> list[str]:
+    """The feature variables of ``results.nc``, in their stored order."""
+    return [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]
+
+
+def parameters_of(results: xr.Dataset) -> list[str]:
+    """The sampled-value variables of ``results.nc``, in their stored order."""
+    return [v for v in results.data_vars if results[v].attrs.get("role") == "sampled"]
+
+
+def stored_spec(results: xr.Dataset) -> dict:
+    """The spec the results were computed from, as ``results.nc`` stores it."""
+    return json.loads(results.attrs["spec_json"])["spec"]
+
+
+def is_within_unit(spec: dict) -> bool:
+    """Whether a stored spec is a within-unit campaign: units and a sweep (a fidelity audit's runs keep the units but
+    no sweep)."""
+    return spec.get("units") is not None and bool(spec["observability"]["sweep"])
+
+
+def sweep_levels(results: xr.Dataset, datasets: list[str], condition: str = "backlash",
+                 reference: str | None = None) -> tuple[np.ndarray, int]:
+    """The fault size [SI] of each sweep data set, ``|condition - condition of the reference|``, and the index of the
+    reference (``reference`` named, else the data set where the condition is zero)."""
+    values = np.array([float(results[f"condition_{condition}"].sel(dataset=n)) for n in datasets])
+    index = datasets.index(reference) if reference is not None else int(np.flatnonzero(values == 0.0)[0])
+    return np.abs(values - values[index]), index
