@@ -48,7 +48,7 @@ from campaigns.analysis.campaign_analysis import analyze
 from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
 from campaigns.bench.adapter import BenchCatalog, simulate_run
 from campaigns.bench.campaign import run_campaign
-from campaigns.runner.execution import build_request, group_lanes
+from campaigns.runner.execution import build_request
 from campaigns.runner.files import atomic_write
 from campaigns.runner.provenance import provenance
 from campaigns.runner.runs import RunModel, execute_group
@@ -370,7 +370,7 @@ class _Runs:
         """The used values of ``feature`` (status ok, finite) of the first ``runs`` runs of data set ``name``."""
         d = [x.name for x in spec.datasets].index(name)
         missing = [i for i in range(runs) if (name, i) not in self.records]
-        draws, lanes = _Draws(spec), group_lanes(self.run_function)
+        draws, lanes = _Draws(spec), self.run_function.lanes
         requests = [build_request(spec, draws, d, i) for i in missing]
         for first in range(0, len(requests), lanes):
             group = requests[first:first + lanes]
