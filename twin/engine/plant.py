@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
+from twin.components import reducer
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -44,7 +45,6 @@ from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
 from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
-from twin.physics.coupling import elasto_backlash
 from twin.physics.friction import stribeck_friction, stribeck_level
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.physics.preload import preload_force
@@ -299,9 +299,7 @@ def _contact_at(c, w, lane, nut, contact_model):
 @numba.njit(**SCALAR)
 def _couplings_at(x, c, w, lane):
     """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
-    w[W.TORQUE, lane] = elasto_backlash(
-        x[S.REDUCER_ANGLE, lane] - x[S.SCREW_ANGLE, lane], x[S.REDUCER_SPEED, lane] - x[S.SCREW_SPEED, lane],
-        c[K.TORSION_STIFFNESS, lane], c[K.TORSION_DAMPING, lane], c[K.REDUCER_BACKLASH, lane])
+    w[W.TORQUE, lane] = reducer.transmitted_torque_at(x, c, lane)
     w[W.PRELOAD, lane] = preload_force(
         x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane], x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane],
         c[K.PRELOAD_COMPRESSION, lane], c[K.PRELOAD_STIFFNESS, lane], c[K.PRELOAD_DAMPING, lane],
@@ -482,16 +480,9 @@ def _lead_error_torque(w, lane):
 
 @numba.njit(**SCALAR)
 def _rotation_at(x, c, w, dxdt, lane):
-    """Motor-reducer (Eq. 9.3, written for the reducer output angle) and screw rotation (Eq. 9.7)."""
-    ratio = c[K.RATIO, lane]
-    w_r = x[S.REDUCER_SPEED, lane]
+    """Motor-reducer (Eq. 9.3, :func:`twin.components.reducer.reducer_rhs_at`) and screw rotation (Eq. 9.7)."""
     torque = w[W.TORQUE, lane]
-    friction_mr = stribeck_friction(w_r, c[K.MR_FRICTION_STATIC, lane], c[K.MR_FRICTION_DYNAMIC, lane],
-                                    c[K.MR_FRICTION_RATE, lane], 0.0, c[K.ANGULAR_V_THRESHOLD, lane])
-    drive = (c[K.TORQUE_CONSTANT, lane] * x[S.CURRENT, lane] * c[K.EFFICIENCY, lane]
-             - c[K.MOTOR_VISCOUS, lane] * ratio * w_r) * ratio
-    dxdt[S.REDUCER_ANGLE, lane] = w_r
-    dxdt[S.REDUCER_SPEED, lane] = (drive - friction_mr - torque) / c[K.J_MOTOR_SIDE, lane]
+    reducer.reducer_rhs_at(x, c, torque, dxdt, lane)
     # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
     w_s = x[S.SCREW_SPEED, lane]
     friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
