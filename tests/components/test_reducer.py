@@ -90,3 +90,10 @@ def test_the_derived_constants_are_the_only_ones_the_reducer_writes():
     c = np.full(N_CONSTANTS, np.nan)
     reducer.derive_constants(c, twin.load_parameters("bench").values())
     assert sorted(np.flatnonzero(np.isfinite(c))) == sorted([K.J_MOTOR_SIDE, K.TORSION_STIFFNESS])
+
+
+def test_the_motor_turns_ratio_times_faster_than_the_reducer_output():
+    p = twin.load_parameters("bench").values()
+    x = _state(0.0, 3.0)
+    c = _reducer_constants()
+    assert reducer.motor_speed(3.0, p) == reducer.motor_speed_at(x, c, 0) == 3.0 * p["reducer.ratio"]

@@ -5,7 +5,7 @@ What it holds, and who reads it:
 
 * the derivation of its constants from its parameters (:func:`reflected_inertia`, :func:`derive_constants`):
   the engine's model (:func:`twin.engine.model.build_model`) and the loop design (:mod:`twin.control.design`) take
-  the same motor-side inertia from here;
+  the same motor-side inertia from here; the fidelity rules the motor speed of a demand (:func:`motor_speed`);
 * its laws: Eq. 9.3 for the reducer output (:func:`reducer_rhs_at`) and the torsional elasto-backlash of reducer,
   couplings and torque meter (:func:`transmitted_torque_at`, the law of :mod:`twin.physics.coupling`);
 * its lane stage, one lane at a time (``*_at``, :data:`numerics.jit.SCALAR`): the engine composes it split over
@@ -44,6 +44,11 @@ def reflected_inertia(p: Mapping[str, float]) -> float:
     """Motor and reducer inertia about the reducer output, ``(J_m + J_r) tau_mr^2`` [kg m^2] (Eq. 9.3 written for the
     reducer output angle)."""
     return (p["motor.inertia"] + p["reducer.inertia"]) * p["reducer.ratio"] ** 2
+
+
+def motor_speed(output_speed: float, p: Mapping[str, float]) -> float:
+    """Motor shaft speed [rad/s] at the reducer output speed ``output_speed`` [rad/s] (the ratio ``tau_mr``)."""
+    return output_speed * p["reducer.ratio"]
 
 
 def derive_constants(c: np.ndarray, p: Mapping[str, float]) -> None:
