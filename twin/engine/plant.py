@@ -343,10 +343,11 @@ def _groove_friction_at(x, c, w, lane, nut, chapter5):
         c[K.ROLLING_F_V1, lane], c[K.ROLLING_THRESHOLD, lane])
 
 
-@numba.njit(**SCALAR)
+@numba.njit(**KERNEL)
 def _internal_forces_at(x, c, w, lane, levels, demand, errors):
     """:func:`internal_forces` of one lane, fused (``demand``: :func:`_force_demand`; ``errors``:
-    :func:`has_lead_error` of its group)."""
+    :func:`has_lead_error` of its group). Not inlined: :func:`internal_forces` and :func:`rhs_at` call the one
+    compiled copy (inlining it twice costs compile time and gains nothing measurable)."""
     contact_model = levels[CONTACT]
     _axial_stiffness_at(x, c, w, lane)
     if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
