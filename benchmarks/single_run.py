@@ -7,7 +7,7 @@ instruments and noise, features); the scene and the parameter files are read onc
 and compilation is done before the clock starts.
 
 * the default: RK4 at the 125 us drive period with the quasi-static screw axial (the automatic fidelity of the
-  thesis campaign), as one lane (a replay, ``twin.simulate_features``) and in groups of 8 and 16 lanes
+  thesis campaign), as one lane (a replay, ``twin.simulate(save="features")``) and in groups of 8 and 16 lanes
   (``twin.simulate_batch``: a campaign's runs); the target is at most 40 ms of CPU per sample in a group
   (issue 32);
 * the previous default: RK4 at 62.5 us with the screw's axial mass (``screw_axial = "dynamic"``), one lane;
