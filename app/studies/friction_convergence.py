@@ -279,7 +279,7 @@ def paired_study(arms: Iterable[Arm], datasets: Iterable[str] = ACCEPTANCE_DATAS
                 data[f][i, j] = result["features"][f]
             status[i, j], dt[i, j], cpu[i, j] = result["status"], result["dt"], result["cpu_per_run"]
             progress(f"{name} {arm.name}: {len(runs)} runs at dt {dt[i, j, 0] * 1e6:g} us, "
-                     f"{sum(s == 'ok' for s in status[i, j])} ok, {cpu[i, j]:.2f} s CPU per run")
+                     f"{sum(s == 'ok' for s in status[i, j])} ok, {result['cpu_per_run']:.2f} s CPU per run")
     coords = {"arm": [a.name for a in arms], "dataset": datasets, "run": runs}
     out = xr.Dataset({f: (("arm", "dataset", "run"), data[f], {"units": "m"}) for f in ACCEPTANCE_FEATURES},
                      coords=coords)
