@@ -14,10 +14,12 @@ the seeds and the paired shift from the default, and writes the chart OUT/fricti
 The acceptance study (issue 41, "done when"): paired runs of the thesis campaign's own sampled runs under the arms of
 app.studies.friction_convergence.acceptance_arms, at the campaign's step (RK4, 62.5 us on these data sets) and half
 of it, in the twin's lanes; a table of paired shifts with 95 % intervals and verdicts on +-0.05 um, and the chart
-OUT/friction_acceptance.png (f_b against the seal's v_th beside the elasto-plastic level, with the CPU per run):
+OUT/friction_acceptance.png (f_b against the seal's law, the halvings against the tolerance, the CPU per run);
+--save-combined writes the folder's study as one file (docs/figures keeps it for --replot):
 
     python benchmarks/friction_convergence.py --acceptance 0:100 --out DIR     # ~7 min of CPU; 100:200 adds to it
-    python benchmarks/friction_convergence.py --replot --out DIR               # the table and chart from DIR
+    python benchmarks/friction_convergence.py --acceptance --replot --out DIR  # the table and chart from DIR
+    python benchmarks/friction_convergence.py --acceptance --replot --out DIR --save-combined FILE
 
 The free nut (item 4): 14 traced runs (FREE_NUT_CASES, ~25 s of CPU), their table and OUT/free_nut.png:
 
@@ -44,7 +46,7 @@ from machine import header  # noqa: E402
 
 import twin  # noqa: E402
 from app.studies import friction_convergence as fc  # noqa: E402
-from campaigns.statistics.accuracy_rule import pairs_for_tolerance  # noqa: E402
+from campaigns.statistics.accuracy_rule import MEAN_SHIFT_TOLERANCE, pairs_for_tolerance  # noqa: E402
 
 CSV_NAME = "friction_convergence.csv"
 ACCEPTANCE_PREFIX = "friction_acceptance_"
@@ -158,11 +160,24 @@ def read_acceptance(out: Path):
         return None
     by_dataset: dict[str, list] = {}
     for path in paths:
-        part = xr.load_dataset(path)
-        part["cpu_per_run"] = part.cpu_per_run.broadcast_like(part.dt)   # files of one CPU figure per data set
-        by_dataset.setdefault(str(part.dataset.values[0]), []).append(part)
-    parts = [xr.concat(sorted(p, key=lambda x: int(x.run[0])), dim="run") for p in by_dataset.values()]
-    return xr.concat(parts, dim="dataset", join="outer")   # a data set with fewer runs: NaN, not "ok", beyond them
+        whole = xr.load_dataset(path)
+        whole["cpu_per_run"] = whole.cpu_per_run.broadcast_like(whole.dt)   # files of one CPU figure per data set
+        for name in whole.dataset.values:
+            part = whole.sel(dataset=[name])
+            part = part.isel(run=np.flatnonzero((part.status == "ok").any(("arm", "dataset")).values))
+            by_dataset.setdefault(str(name), []).append(part)
+    # runs and arms a file lacks are NaN, not "ok": left out of every pairing that needs them
+    parts = [xr.concat(sorted(p, key=lambda x: int(x.run[0])), dim="run", join="outer") for p in by_dataset.values()]
+    study = xr.concat(parts, dim="dataset", join="outer")
+    study["status"] = study.status.where(study.status.notnull(), "absent").astype(str)
+    return study
+
+
+def write_acceptance(study, path: Path) -> None:
+    """The combined study as one compressed file (what docs/figures keeps for --replot)."""
+    encoding = {name: {"zlib": True, "complevel": 6} for name in study.data_vars}
+    encoding["status"]["dtype"] = "S1"   # fixed-width characters, compressed (variable-length strings are not)
+    study.to_netcdf(path, encoding=encoding)
 
 
 def acceptance_table(study) -> None:
@@ -199,41 +214,55 @@ def acceptance_table(study) -> None:
 
 
 def acceptance_chart(study, path: Path) -> None:
-    """f_b against the seal's v_th (the regularised law at 5 and 2.5 mm/s, the campaign's runs) beside the
-    elasto-plastic level (dashed, no v_th), and each arm's CPU per run."""
-    fig, (ax, cost) = plt.subplots(2, 1, figsize=(7, 7), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    """Three panels: f_b against the seal's law (the regularised seal at v_th and v_th / 2, the elasto-plastic seal,
+    each as the paired shift from the regularised default with its 95 % interval); the numerical halvings' paired
+    shifts against the +-0.05 um tolerance; the CPU per run of every arm."""
+    shifts = fc.paired_shifts(study)
+    fig, (law, halving, cost) = plt.subplots(3, 1, figsize=(7.5, 10), gridspec_kw={"height_ratios": [3, 3, 2]})
+    names = list(study.dataset.values)
     v_th = twin.load_parameters().value("pneumatics.friction_velocity_threshold") * 1e3
-    speeds = np.array([v_th, v_th / 2.0])
-    for k, name in enumerate(study.dataset.values):
-        color = f"C{k}"
-        means, halves = [], []
-        for arm in ("regularised", "regularised_half_v_th"):
-            x = study.backlash_feature.sel(arm=arm, dataset=name).where(
-                study.status.sel(arm=arm, dataset=name) == "ok").dropna("run").values * 1e6
-            means.append(x.mean())
-            halves.append(1.96 * x.std(ddof=1) / np.sqrt(x.size))
-        ax.errorbar(speeds, means, yerr=halves, fmt="o-", color=color, capsize=3, label=f"{name} regularised")
-        ep = study.backlash_feature.sel(arm="elasto_plastic", dataset=name).values * 1e6
-        ax.axhline(np.nanmean(ep), color=color, ls="--", lw=1.2, label=f"{name} elasto-plastic")
-        cost.plot(speeds, [float(study.cpu_per_run.sel(arm=a, dataset=name).mean())
-                           for a in ("regularised", "regularised_half_v_th")], "o-", color=color)
-        cost.axhline(float(study.cpu_per_run.sel(arm="elasto_plastic", dataset=name).mean()), color=color, ls="--",
-                     lw=1)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_ylabel("f_b, measured [um]: mean of the campaign's runs (95 % of the mean)")
-    ax.legend(fontsize=7, ncol=2, loc="upper left", bbox_to_anchor=(0.0, 0.93))
-    ax.grid(True, which="both", alpha=0.3)
-    ax.set_title(f"thesis campaign's runs 0-{study.sizes['run'] - 1}, RK4 at the campaign step: the regularised "
-                 "seal against its v_th,\nthe elasto-plastic seal (dashed, no v_th)", fontsize=9)
-    cost.set_xlabel("seal v_th [mm/s] (regularised law)")
-    cost.set_ylabel("CPU per run [s]\n(8 lanes)")
-    cost.set_xticks(speeds, [f"{t:g}" for t in speeds])
-    cost.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    cost.grid(True, which="both", alpha=0.3)
+    for k, name in enumerate(names):
+        cells = [shifts.sel(pairing=arm, dataset=name, feature="backlash_feature")
+                 for arm in ("regularised_half_v_th", "elasto_plastic")]
+        y = [0.0] + [float(c["mean"]) * 1e6 for c in cells]
+        low = [0.0] + [(float(c["mean"]) - float(c.lower)) * 1e6 for c in cells]
+        high = [0.0] + [(float(c.upper) - float(c["mean"])) * 1e6 for c in cells]
+        x = np.arange(3) + 0.06 * (k - 1.5)
+        law.errorbar(x, y, yerr=[low, high], fmt="o", capsize=3, color=f"C{k}", label=name)
+        law.plot(x[:2], y[:2], "-", color=f"C{k}")   # a line along v_th only: the bristle law has none
+    law.set_xticks(range(3), [f"regularised, v_th = {v_th:g} mm/s\n(the default)", f"regularised, {v_th / 2:g} mm/s",
+                              "elasto-plastic\n(no v_th)"])
+    law.axhline(0.0, color="0.5", lw=0.8)
+    law.set_ylabel("f_b: paired shift from the default [um]\n(mean, 95 % interval)")
+    law.legend(fontsize=8, ncol=4)
+    law.grid(True, alpha=0.3)
+    law.set_title(f"free-nut data sets, the thesis campaign's runs 0-{study.sizes['run'] - 1} (fewer where a pairing "
+                  "has fewer),\nRK4 at the campaign step (62.5 us); the halvings at the same step or half of it",
+                  fontsize=9)
+    halvings = (("elasto_plastic_half_step", "elasto-plastic:\nstep halved"),
+                ("elasto_plastic_half_step_half_guide_v_th", "guides:\nv_th halved"),
+                ("regularised_half_v_th", "regularised:\nv_th halved"))
+    for k, name in enumerate(names):
+        for j, (pairing, _) in enumerate(halvings):
+            c = shifts.sel(pairing=pairing, dataset=name, feature="backlash_feature")
+            m = float(c["mean"]) * 1e6
+            halving.errorbar(j + 0.1 * (k - 1.5), m, yerr=[[m - float(c.lower) * 1e6], [float(c.upper) * 1e6 - m]],
+                             fmt="o", capsize=3, color=f"C{k}", label=name if j == 0 else None)
+    tolerance = MEAN_SHIFT_TOLERANCE * 1e6
+    halving.axhspan(-tolerance, tolerance, color="0.85", label="+-0.05 um")
+    halving.set_xticks(range(len(halvings)), [label for _, label in halvings])
+    halving.set_ylabel("f_b: paired shift when halved [um]")
+    halving.legend(fontsize=8, ncol=5)
+    halving.grid(True, alpha=0.3)
+    arms = list(study.arm.values)
+    cpu = [float(study.cpu_per_run.sel(arm=a).mean()) for a in arms]
+    cost.barh(range(len(arms)), cpu, color="0.5")
+    cost.set_yticks(range(len(arms)), [a.replace("_", " ") for a in arms], fontsize=7)
+    cost.set_xlabel("CPU per 10 s run [s] (8 lanes, mean over the data sets)")
+    cost.grid(True, axis="x", alpha=0.3)
     fig.tight_layout()
     for suffix in (".png", ".svg"):
-        fig.savefig(path.with_suffix(suffix), dpi=120, metadata={"Date": None} if suffix == ".svg" else None)
+        fig.savefig(path.with_suffix(suffix), dpi=100, metadata={"Date": None} if suffix == ".svg" else None)
     plt.close(fig)
 
 
@@ -321,15 +350,19 @@ def main() -> None:
                                       "unless given)")
     parser.add_argument("--replot", action="store_true", help="table and chart from the csv only")
     parser.add_argument("--quick", action="store_true", help="ds4, seed 0, 5 and 1 mm/s, 1 s")
+    parser.add_argument("--save-combined", metavar="FILE",
+                        help="with --acceptance: write the folder's combined study to FILE (name it "
+                             f"{ACCEPTANCE_PREFIX}*.nc to --replot it from its own folder)")
     parser.add_argument("--arms", help="with --acceptance: only these arms (comma-separated names)")
     parser.add_argument("--datasets", help="with --acceptance: only these data sets (comma-separated)")
     parser.add_argument("--free-nut", action="store_true",
                         help="the free-nut traces of issue 41 item 4 (app.studies.friction_convergence."
                              "FREE_NUT_CASES): their table and OUT/free_nut.png")
-    parser.add_argument("--acceptance", metavar="START:STOP",
+    parser.add_argument("--acceptance", metavar="START:STOP", nargs="?", const="",
                         help="the paired acceptance study instead of the sweep: the thesis campaign's runs START to "
                              "STOP-1 of ds2, ds4, ds6, ds7 under every arm (app.studies.friction_convergence."
-                             "acceptance_arms); a later range adds to the same --out")
+                             "acceptance_arms); a later range adds to the same --out; with --replot and no range, "
+                             "the table and chart of the folder's study")
     args = parser.parse_args()
     if args.out is None and not args.quick:
         parser.error("--out is required (the folder of the csv and the chart), except with --quick")
@@ -339,17 +372,23 @@ def main() -> None:
         header("the free nut under the elasto-plastic seal: hold, creep or hunt (traces)", False)
         free_nut(out)
         return
-    if args.acceptance is not None or (args.replot and read_acceptance(out) is not None
-                                       and not (out / CSV_NAME).exists()):
+    if args.acceptance is not None:
+        if not args.replot and not args.acceptance:
+            parser.error("--acceptance needs START:STOP (or --replot to redraw a folder's study)")
         out.mkdir(parents=True, exist_ok=True)
         header("friction law acceptance: paired halvings on the free-nut data sets", False)
-        if args.acceptance is not None and not args.replot:
+        if not args.replot:
             start, stop = (int(x) for x in args.acceptance.split(":"))
             run_acceptance(out, range(start, stop), args.arms.split(",") if args.arms else None,
                            args.datasets.split(",") if args.datasets else None)
         study = read_acceptance(out)
+        if args.save_combined:
+            write_acceptance(study, Path(args.save_combined))
         acceptance_table(study)
-        acceptance_chart(study, out / "friction_acceptance.png")
+        if {a.name for a in fc.acceptance_arms(twin.load_parameters())} <= set(study.arm.values):
+            acceptance_chart(study, out / "friction_acceptance.png")
+        else:
+            print("\n(no chart: the folder does not hold every arm; --replot a folder that does)")
         return
     if not args.replot and (out / CSV_NAME).exists():
         parser.error(f"{out / CSV_NAME} exists: --replot reads it, or give another --out (runs are appended as "
