@@ -236,8 +236,8 @@ def acceptance_chart(study, path: Path) -> None:
     law.set_ylabel("f_b: paired shift from the default [um]\n(mean, 95 % interval)")
     law.legend(fontsize=8, ncol=4)
     law.grid(True, alpha=0.3)
-    law.set_title(f"free-nut data sets, the thesis campaign's runs 0-{study.sizes['run'] - 1} (fewer where a pairing "
-                  "has fewer),\nRK4 at the campaign step (62.5 us); the halvings at the same step or half of it",
+    law.set_title(f"free-nut data sets, the thesis campaign's runs 0-{study.sizes['run'] - 1} (n per pairing: the "
+                  "table),\nRK4 at the campaign step (62.5 us); the halvings at the same step or half of it",
                   fontsize=9)
     halvings = (("elasto_plastic_half_step", "elasto-plastic:\nstep halved"),
                 ("elasto_plastic_half_step_half_guide_v_th", "guides:\nv_th halved"),
