@@ -38,11 +38,22 @@ every state and speed (:func:`dissipation_bound_holds`). With a constant ``sigma
 not dissipative at high speed (Barabanov & Ortega, "Necessary and sufficient conditions for passivity of the
 LuGre friction model", IEEE TAC 45(4), 2000).
 
-All functions are ``numba.njit`` scalar functions (float arguments, SI units, selects instead of branches),
-meant for the lanes of the compiled loop.
+**The step these laws allow** (explicit RK4, :func:`rk4_step_problems`). On a body of mass ``m`` the laws add two
+eigenvalues that a fixed explicit step must resolve: sticking (``alpha = 0``, ``dz/dt = v``) the presliding mode
+``m s^2 + sigma_1 s + sigma_0 = 0``; sliding, the bristles' relaxation to ``z_ss``, ``d(dz/dt)/dz = -sigma_0 |v| /
+g(v)`` at ``|z| = |z_ss|`` (``alpha = 1`` with zero slope there), largest at the largest sliding speed and ``g =
+F_d``. The regularised law's slope ``F_s / v_th`` on the same mass adds ``-F_s / (m v_th)``. A step is stable where
+RK4's stability polynomial ``|1 + h + h^2/2 + h^3/6 + h^4/24| <= 1`` for every ``h = lambda dt``. The coupling to
+the load cell and the contacts is not in these figures: they bound from below what a step needs, and a run that
+passes them can still fail on the coupled modes (docs/accuracy.md).
+
+All functions but the parameter checks are ``numba.njit`` scalar functions (float arguments, SI units, selects
+instead of branches), meant for the lanes of the compiled loop.
 """
 
+import cmath
 import math
+from collections.abc import Mapping
 
 import numba
 
@@ -119,3 +130,60 @@ def dissipation_bound_holds(damping, damping_speed, dynamic):
     """``sigma_1 v_d / sqrt(2 e) <= 4 F_d``: the bristle law dissipates at every state and speed (module
     docstring). A parameter check, not for the compiled loop."""
     return damping * damping_speed / math.sqrt(2.0 * math.e) <= 4.0 * dynamic
+
+
+def rk4_stable(h: complex) -> bool:
+    """Is ``h = lambda dt`` inside RK4's region of absolute stability (its stability polynomial at most 1)?"""
+    return abs(1.0 + h * (1.0 + h / 2.0 * (1.0 + h / 3.0 * (1.0 + h / 4.0)))) <= 1.0
+
+
+def seal_eigenvalues(level: str, values: Mapping[str, float], speed: float) -> dict[str, complex]:
+    """The eigenvalues [1/s] the seal-friction ``level`` (``"regularised"`` or ``"elasto_plastic"``) adds on the
+    piston (module docstring, "The step"), from ``values`` (``{"pneumatics.<key>": value}``, SI) and the largest
+    sliding ``speed`` [m/s]."""
+    v = {key.removeprefix("pneumatics."): value for key, value in values.items()}
+    mass = v["piston_mass"]
+    if level == "regularised":
+        return {"regularised Coulomb slope": -max(v["friction_static"], v["friction_dynamic"]) / (
+            mass * v["friction_velocity_threshold"])}
+    stiffness, damping = v["friction_presliding_stiffness"], v["friction_bristle_damping"]
+    # the stiffer root (an underdamped pair's conjugate has the same stability: RK4's region is symmetric)
+    presliding = (-damping - cmath.sqrt(damping * damping - 4.0 * mass * stiffness)) / (2.0 * mass)
+    return {"presliding mode": presliding,
+            "sliding relaxation": complex(-stiffness * abs(speed) / max(v["friction_dynamic"], 1e-300))}
+
+
+def rk4_step_limit(eigenvalues, dt: float) -> float:
+    """The largest step up to ``dt`` at which RK4 is stable on every one of ``eigenvalues`` (bisection along each
+    ray: the region is star-shaped about the origin along the rays of damped modes)."""
+    limit = dt
+    for lam in eigenvalues:
+        if rk4_stable(lam * limit):
+            continue
+        low, high = 0.0, limit
+        for _ in range(60):
+            mid = 0.5 * (low + high)
+            low, high = (mid, high) if rk4_stable(lam * mid) else (low, mid)
+        limit = low
+    return limit
+
+
+def rk4_step_problems(level: str, values: Mapping[str, float], dt: float, speed: float) -> list[str]:
+    """One line per seal-friction eigenvalue that RK4 at ``dt`` cannot integrate (empty when it can), naming the
+    parameter that sets it, its value, the seals' moving mass, and the largest stable step. ``values`` as in
+    :func:`seal_eigenvalues`. A parameter check for the caller that knows the run's step and speed, not for the
+    compiled loop."""
+    field, remedy = (("pneumatics.friction_velocity_threshold", "a larger threshold") if level == "regularised"
+                     else ("pneumatics.friction_presliding_stiffness", "a smaller stiffness"))
+    shown = values[field]
+    mass = values["pneumatics.piston_mass"]
+    problems = []
+    for what, lam in seal_eigenvalues(level, values, speed).items():
+        if rk4_stable(lam * dt):
+            continue
+        problems.append(
+            f"{field}: {shown:g} with the seals' moving mass pneumatics.piston_mass = {mass:g} kg puts the "
+            f"{what} of the {level} seal friction at {abs(lam):.3g} 1/s, beyond RK4's stability at dt = {dt:g} s "
+            f"(|lambda dt| = {abs(lam) * dt:.3g}); allowed: {remedy}, or dt <= "
+            f"{rk4_step_limit([lam], dt):.3g} s")
+    return problems

@@ -63,3 +63,17 @@ def sech_squared(z):
     ``tanh`` rounds to 1 (the sliding speeds of most steps)."""
     t = elementary.tanh(z)
     return 1.0 - t * t
+
+
+def level_problems(static_name: str, static: float, dynamic_name: str, dynamic: float) -> list[str]:
+    """The problems of an Eq. 7.63 pair of levels, one line each naming the field: both finite and >= 0, and the
+    breakaway ``F_s`` at least the Coulomb level ``F_d`` (the Stribeck curve falls from breakaway to sliding; a
+    rising one is not the law Eq. 7.63 states, and the bristle laws' purely elastic range ``z_ba < F_d / sigma_0``
+    is set below breakaway by it). A parameter check, not for the compiled loop."""
+    problems = [f"{name}: must be a finite number >= 0, got {value!r}"
+                for name, value in ((static_name, static), (dynamic_name, dynamic))
+                if not (value == value and 0.0 <= value < float("inf"))]
+    if not problems and static < dynamic:
+        problems.append(f"{static_name}: the breakaway (static) friction must not be below the dynamic one "
+                        f"({static_name} = {static!r}, {dynamic_name} = {dynamic!r})")
+    return problems
