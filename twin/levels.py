@@ -63,8 +63,9 @@ SUBSYSTEMS: dict[str, Subsystem] = {s.name: s for s in (
               PNEUMATIC_STATES, PNEUMATIC_SIGNALS),
         Level("absent", "no external force", PNEUMATIC_STATES, PNEUMATIC_SIGNALS),
     )),
-    # Listed with the regularised law first (the "full" level of a "full" request) until the free-nut audit of
-    # issue 41 decides where it is accurate enough; the bristle law is the opt-in level.
+    # Listed with the regularised law first (the "full" level of a "full" request); the bristle law is the opt-in
+    # level. Its acceptance (docs/accuracy.md, "Acceptance of the elasto-plastic seal") qualifies it as the default;
+    # the flip is a deliberate change of every free-nut result, not made yet (issue 41).
     Subsystem("seal_friction", "friction of the cylinder's piston and rod seals (Eq. 9.11 with Eq. 7.63)", (
         Level("regularised", "Eq. 7.63 with sign(v) regularised as tanh(v / v_th): below v_th a viscous damper, "
                              "a force below breakaway makes the piston creep",

@@ -25,12 +25,16 @@ from twin.engine.reference import local_error_tolerance, run_reference
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
+from twin.fidelity.rules import PROFILE_GRID
 from twin.layout import BOUND_REASONS, N_MEMORY, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, M, S, Signal
 from twin.parameters import ParameterSet, load_parameters
+from twin.physics.bristle_friction import rk4_step_problems
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
+from twin.scenes.profiles import profile_values
 from twin.solver import DEFAULT_SOLVER, Solver
 
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
+NOMINAL_SLED_SPEED = 0.07  # m/s: Table 9.3's nominal bench speed, the least sliding speed the seal check assumes
 DEFAULT_NOISE_SEED = 0      # rng=None: a fixed seed, so a bare call is reproducible
 #: What :func:`simulate` returns: the recorded signals with the features (an xarray Dataset), or the status and
 #: scalar features alone (a :class:`RunSummary`, no signals recorded: a Monte Carlo campaign's runs).
@@ -297,6 +301,8 @@ def _validated(scene, params, solver, output_dt, duration, fidelity, outputs, rn
     if resolved is not None:
         problems += solver.conflicts(resolved)
     dt = solver.step(resolved, speed_ts)
+    if resolved is not None and solver.integrator == "rk4" and resolved.level("pneumatics") == "full":
+        problems += _seal_step_problems(scene, params, resolved.level("seal_friction"), dt)
     speed_every = _steps_per(speed_ts, dt, "speed-loop period", problems)
     position_every = _steps_per(params.value("controller.position_loop_sample_time"), dt, "position-loop period",
                                 problems)
@@ -304,6 +310,19 @@ def _validated(scene, params, solver, output_dt, duration, fidelity, outputs, rn
     if problems:
         raise OptionError(list(dict.fromkeys(problems)))
     return _Run(scene, params, resolved, solver, dt, curvature, speed_ts, speed_every, position_every, output_every)
+
+
+def _seal_step_problems(scene: Scene, params: ParameterSet, level: str, dt: float) -> list[str]:
+    """The seal friction's eigenvalues against RK4's reach at ``dt`` (:func:`twin.physics.bristle_friction.
+    rk4_step_problems`): a presliding stiffness, a regularisation speed or a piston mass that would make the run
+    diverge is refused before it starts, naming the field. The sliding relaxation grows with the speed: the largest
+    the position demand asks for, at least Table 9.3's nominal 0.07 m/s (a scene that holds the sled still can still
+    be pushed by its force loop)."""
+    times = np.arange(0.0, scene.duration + PROFILE_GRID, PROFILE_GRID)
+    position = profile_values(scene.position_table(), times)
+    demand = float(np.max(np.abs(np.diff(position)))) / PROFILE_GRID if position.size > 1 else 0.0
+    seal = {key: value for key, value in params.values().items() if key.startswith("pneumatics.")}
+    return rk4_step_problems(level, seal, dt, max(demand, NOMINAL_SLED_SPEED))
 
 
 def _features(done: _Simulated) -> dict[str, float]:

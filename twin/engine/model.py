@@ -15,7 +15,7 @@ from numerics.linalg import lstsq
 from twin.components import COMPONENTS
 from twin.components.preload import assembled_compression
 from twin.control.force_loop_design import operating_point
-from twin.errors import SceneError
+from twin.errors import ParameterError, SceneError
 from twin.layout import N_CONSTANTS, N_STATES, PARAMETER_CONSTANTS, POSITION_VELOCITY_PAIRS, K, S
 from twin.levels import level_code, level_codes
 from twin.parameters import ParameterSet
@@ -32,6 +32,7 @@ from twin.physics.ball_screw import (
     travel_deviation,
 )
 from twin.physics.drivetrain import screw_inertia, screw_mass
+from twin.physics.friction import level_problems
 from twin.physics.guides import abbe_reading_gain
 from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
 from twin.scenes import Scene
@@ -135,6 +136,10 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.BACKLASH] = scene.condition("backlash")
     ball_groove_friction_constants(c, p, fidelity)
     # nuts, guides (Eq. 9.8, Eq. 7.63): the slave nut carries a share of the guide friction law
+    guide_problems = level_problems("sled.guide_friction_static", p["sled.guide_friction_static"],
+                                    "sled.guide_friction_dynamic", p["sled.guide_friction_dynamic"])
+    if guide_problems:
+        raise ParameterError(guide_problems)
     c[K.NUT1_GUIDE_FRICTION_SHARE] = 1.0
     c[K.NUT2_GUIDE_FRICTION_SHARE] = p["sled.slave_friction_fraction"]
     preload = scene.condition("preload")  # the preload set's constants: twin.components.preload
