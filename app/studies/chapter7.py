@@ -9,7 +9,7 @@ loops, two nuts on the sled, a pneumatic cylinder). The study runs the thesis's 
 long both contact forces vanish, how far the screw turns meanwhile, the support-friction peak, and the width of
 the nut-screw loop against the backlash. Fig. 7.19 (preload against nut displacement, screw fixed) is the static
 contact law of Eq. 9.4 with Hertz (:func:`preload_curve`) beside its closed form at the design angle.
-docs/validation_chapter7.md reads the numbers.
+docs/validation.md, "Validation of the free nut against the thesis's Chapter 7" reads the numbers.
 """
 
 from __future__ import annotations

@@ -22,8 +22,8 @@ def test_nut_stops_at_every_reversal_until_the_screw_has_crossed_the_gap(run):
     # 5 Hz for 0.5 s: four reversals of the screw inside the sinusoid
     assert found.sizes["reversal"] == 4
     # Fig. 7.16b: the nut stands while the screw turns round. The screw travels the gap plus the release and
-    # retake of the drive chain's deflection under the ~47 N of sliding support friction (about 1.7 um each way,
-    # docs/validation_chapter7.md): between b and b + 10 um.
+    # retake of the drive chain's deflection under the ~47 N of sliding support friction (about 1.7 um each way;
+    # docs/validation.md, "Validation of the free nut against the thesis's Chapter 7"): between b and b + 10 um.
     assert np.all(found.stop_duration > 5e-3)
     assert np.all((found.screw_travel_while_stopped > BACKLASH)
                   & (found.screw_travel_while_stopped < BACKLASH + 10e-6))
