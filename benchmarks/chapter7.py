@@ -1,5 +1,6 @@
 """The chapter 7 validation (docs/validation.md, "Validation of the free nut against the thesis's Chapter 7"):
-the Sec. 7.9.3 scenes run, their figures and ``chapter7.nc`` written into --out, and the numbers the page quotes printed, with the wall time.
+the Sec. 7.9.3 scenes run, their figures and ``chapter7.nc`` written into --out, and the numbers the page quotes
+printed, with the wall time.
 
     python benchmarks/chapter7.py --out out/chapter7          # the three scenes and Fig. 7.19 (about 10 s compiled)
     python benchmarks/chapter7.py --out out/chapter7 --quick  # chapter7_backlash and Fig. 7.19 only
