@@ -309,18 +309,17 @@ def build(b: Builder):
     yield Paragraph(_question(b))
     yield Paragraph("Decisions, one line per requirement (GO: met, NO-GO: not met, UNDETERMINED: the runs cannot tell "
                     "yet, with the runs that would decide it; each links to its section):")
-    if "requirement_statement" not in a or "requirement_verdict" not in a:
+    verdicts = "requirement_statement" in a and "requirement_verdict" in a
+    if not verdicts:
         yield Callout(NO_VERDICT, "info", "observability")
-    else:
-        for key, view in sweep_views(a):
-            for feature in b.measured:
-                yield observability_decision(b, feature, view)
-                if not key and (within := within_unit_decision(b, feature)) is not None:
-                    yield within
-    yield from limit_decisions(a)
-    for key, view in sweep_views(a):  # the answer in a picture, one per sweep, right below the decisions
-        if (answer := detection_answer(view)) is not None:
+    for key, view in sweep_views(a) if verdicts else ():
+        for feature in b.measured:
+            yield observability_decision(b, feature, view)
+            if not key and (within := within_unit_decision(b, feature)) is not None:
+                yield within
+        if (answer := detection_answer(view)) is not None:  # the answer in a picture, right below its decisions
             yield b.figure("detection-sweep" + key.replace("_", "-"), *reversed(answer))
+    yield from limit_decisions(a)
     if b.inputs.comparison is not None:
         c = b.inputs.comparison
         sentence = c.sentence
