@@ -1,5 +1,5 @@
 """The detection requirement along an observability sweep, as the analysis states it: the requirement, the swept
-fault quantity and its levels, and the answer in a picture.
+fault quantity and its levels, and the answer in a picture; one view of the analysis per sweep (:func:`sweep_views`).
 
 :func:`detection_answer` needs ``analysis.nc`` alone, so page 1 of the report (:mod:`reports.sections.executive`) and
 the service's campaign page (:mod:`app.service.web`) draw the same figure; the Observability section reads the sweep
@@ -18,6 +18,29 @@ from reports.phrases import decision
 from reports.units import axis_label, display_scale, number
 
 
+def sweep_views(analysis) -> list[tuple[str, object]]:
+    """Each fault sweep of the analysis as ``(key, view)``: the view reads as the analysis of a spec with that sweep
+    alone, so every function here (and page 1, the Observability section, the service) reads any sweep the same
+    way. The first sweep's view is the analysis itself (key ``""``); a further sweep's (key ``"_preload"``,
+    :func:`campaigns.analysis.vocabulary.sweep_key`) has its variables and sweep dimension under the plain names and
+    its condition and requirement in the global attributes, where the first sweep's stand."""
+    views = [("", analysis)]
+    for name in analysis.data_vars:
+        if not (name.startswith("requirement_verdict_") and "sweep" in analysis[name].attrs):
+            continue
+        key = name.removeprefix("requirement_verdict")
+        own = [v for v in analysis.data_vars if v.endswith(key) and analysis[v].attrs.get("sweep") is not None]
+        first = [v for v in analysis.data_vars if "sweep_point" in analysis[v].dims or v in
+                 {o.removesuffix(key) for o in own}]
+        view = analysis.drop_vars([*first, *(["sweep_point"] if "sweep_point" in analysis.coords else [])])
+        view = view.rename({**{v: v.removesuffix(key) for v in own}, f"sweep_point{key}": "sweep_point"})
+        attrs = analysis[name].attrs
+        view.attrs = {**analysis.attrs, **{k: attrs[k] for k in ("observability_condition", "requirement",
+                                                                  "requirement_units", "requirement_source")}}
+        views.append((key, view))
+    return views
+
+
 def backlash_requirement(analysis) -> tuple[float, str]:
     """The requirement the observability verdict is about, as the analysis states it."""
     if "requirement" in analysis.attrs:
@@ -26,8 +49,6 @@ def backlash_requirement(analysis) -> tuple[float, str]:
         attrs = analysis["minimum_detectable_backlash"].attrs
         return float(attrs.get("requirement", BACKLASH_REQUIREMENT)), str(attrs.get("requirement_source", "Table 9.3"))
     return BACKLASH_REQUIREMENT, "Table 9.3"
-
-
 
 
 def swept(analysis) -> tuple[str, str, float, str]:

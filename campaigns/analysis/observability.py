@@ -28,6 +28,7 @@ from campaigns.analysis.vocabulary import (
     runs_text,
     stored_spec,
     sweep_levels,
+    sweeps_of,
     used,
 )
 from campaigns.statistics.defaults import CONFIDENCE, FALSE_ALARM_RATE, POWER
@@ -174,52 +175,67 @@ def observability_sweep(
         ``minimum_detectable_<q>_ci(bound)``, ``requirement_verdict`` and ``requirement_statement``,
         where ``<q>`` is the fault quantity (``backlash``, ``preload_loss``).
     """
-    quantity, unit, _, _ = SWEEP_QUANTITIES[condition]
-    stem = quantity.replace(" ", "_")
     backlash, reference = sweep_levels(results, datasets, condition, reference)
     mask = used(results, feature)
     samples = [results[feature].sel(dataset=n).values[mask.sel(dataset=n).values] for n in datasets]
     n_used = {n: len(s) for n, s in zip(datasets, samples, strict=False)}
     if min_runs is None:
         min_runs = detection_run_floor(false_alarm_rate, power, confidence)
-    nan2 = (math.nan, math.nan)
-    needed, needed_reason = math.nan, "the verdict is decided"
+    settings = {"false_alarm_rate": false_alarm_rate, "power": power, "confidence": confidence}
+    found, verdict, needed, needed_reason = _detection(backlash, samples, reference, datasets, n_used, min_runs,
+                                                       settings, n_boot, seed, condition, requirement)
+    statement = requirement_statement(
+        verdict, found["printed"], found["bounds"], n_used, resolution=found["resolution"], bracket=found["bracket"],
+        levels=dict(zip(datasets, backlash, strict=True)), min_runs=min_runs, condition=condition,
+        requirement=requirement, requirement_source=requirement_source.removeprefix("Bertolino (2020) ").split(":")[0],
+        **settings,
+    )
+    return _sweep_dataset(datasets, reference, backlash, found, verdict, statement, needed, needed_reason, n_boot,
+                          settings, condition, requirement, requirement_source)
+
+
+def _detection(levels: np.ndarray, samples: list[np.ndarray], reference: int, datasets: list[str],
+               n_used: dict[str, int], min_runs: int, settings: dict, n_boot: int, seed, condition: str,
+               requirement: float) -> tuple[dict, str, float, str]:
+    """The numbers of :func:`observability_sweep`: ``(found, verdict, runs_to_decide, its reason)``, ``found`` as
+    :func:`bootstrap_minimum_detectable` returns it (its fields NaN and the resolution ``insufficient_data`` below
+    the run floor, where only the data sets with enough runs, and a reference with enough, get a probability)."""
+    false_alarm_rate, power, confidence = settings["false_alarm_rate"], settings["power"], settings["confidence"]
     if min(n_used.values()) < min_runs:
-        needed = float(min_runs)
-        needed_reason = (f"{min_runs} ok runs per sweep data set are needed before any verdict "
-                         f"({floor_reason(false_alarm_rate, power, confidence)})")
+        nan2 = (math.nan, math.nan)
+        reason = (f"{min_runs} ok runs per sweep data set are needed before any verdict "
+                  f"({floor_reason(false_alarm_rate, power, confidence)})")
         enough = [len(s) >= min_runs and n_used[datasets[reference]] >= min_runs for s in samples]
         probability = np.array([detection_probability(samples[reference], s, false_alarm_rate) if ok else math.nan
                                 for s, ok in zip(samples, enough, strict=False)])
-        found = {"estimate": math.nan, "printed": math.nan, "bracket": nan2, "bounds": nan2,
+        found = {"estimate": math.nan, "printed": math.nan, "bracket": nan2, "bounds": nan2, "probability": probability,
                  "resolution": "insufficient_data", "probability_ci": np.full((len(datasets), 2), math.nan)}
-        verdict = "insufficient data"
-    else:
-        found = bootstrap_minimum_detectable(
-            backlash, samples, reference, false_alarm_rate=false_alarm_rate, power=power, n_boot=n_boot,
-            confidence=confidence, seed=seed,
-        )
-        probability = found["probability"]
-        verdict = requirement_verdict(*found["bounds"], requirement)
-        if verdict == "undetermined":
-            _, _, scale, shown = SWEEP_QUANTITIES[condition]
-            needed, needed_reason = runs_to_decide(
-                backlash, probability, found["probability_se"], min(n_used.values()), requirement, power=power,
-                confidence=confidence, labels=[f"{b * scale:.3g} {shown} ({n})" for b, n in zip(backlash, datasets,
-                                                                                                  strict=True)])
-    statement = requirement_statement(
-        verdict, found["printed"], found["bounds"], n_used, resolution=found["resolution"], bracket=found["bracket"],
-        levels=dict(zip(datasets, backlash, strict=True)), confidence=confidence, power=power,
-        false_alarm_rate=false_alarm_rate, min_runs=min_runs, condition=condition, requirement=requirement,
-        requirement_source=requirement_source.removeprefix("Bertolino (2020) ").split(":")[0],
-    )
+        return found, "insufficient data", float(min_runs), reason
+    found = bootstrap_minimum_detectable(levels, samples, reference, n_boot=n_boot, seed=seed, **settings)
+    verdict = requirement_verdict(*found["bounds"], requirement)
+    if verdict != "undetermined":
+        return found, verdict, math.nan, "the verdict is decided"
+    _, _, scale, shown = SWEEP_QUANTITIES[condition]
+    needed, reason = runs_to_decide(
+        levels, found["probability"], found["probability_se"], min(n_used.values()), requirement, power=power,
+        confidence=confidence, labels=[f"{b * scale:.3g} {shown} ({n})" for b, n in zip(levels, datasets, strict=True)])
+    return found, verdict, needed, reason
+
+
+def _sweep_dataset(datasets: list[str], reference: int, levels: np.ndarray, found: dict, verdict: str,
+                   statement: str, needed: float, needed_reason: str, n_boot: int, settings: dict, condition: str,
+                   requirement: float, requirement_source: str) -> xr.Dataset:
+    """The variables of :func:`observability_sweep` from its numbers, with their attributes."""
+    false_alarm_rate, power, confidence = settings["false_alarm_rate"], settings["power"], settings["confidence"]
+    quantity, unit, _, _ = SWEEP_QUANTITIES[condition]
+    stem = quantity.replace(" ", "_")
     return xr.Dataset(
         {
-            f"sweep_{stem}": ("sweep_point", backlash,
+            f"sweep_{stem}": ("sweep_point", levels,
                               {"units": unit, "long_name": f"{quantity} of the sweep data set"}),
             "sweep_detection_probability": (
                 "sweep_point",
-                probability,
+                found["probability"],
                 {"units": "1",
                  "long_name": f"detection probability at false-alarm rate {false_alarm_rate:g} against "
                               f"{datasets[reference]} (NaN: insufficient data)"},
@@ -281,15 +297,20 @@ def observability_sweep(
 
 
 def observability_analysis(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
-    """:func:`observability_sweep` of every feature along the stored spec's sweep, along a ``feature`` dimension
-    (feature ``f`` bootstraps from ``SeedSequence(seed, spawn_key=(OBSERVABILITY_STREAM, f))``); without a sweep,
-    the verdict ``insufficient data`` with the statement that says why. A within-unit campaign's sweep takes one
-    test per unit, and its statement says so."""
+    """:func:`observability_sweep` of every feature along each of the stored spec's sweeps, along a ``feature``
+    dimension; without a sweep, the verdict ``insufficient data`` with the statement that says why.
+
+    The first sweep's variables keep the names of a spec with one sweep (feature ``f`` bootstraps from
+    ``SeedSequence(seed, spawn_key=(OBSERVABILITY_STREAM, f))``); each further sweep's carry its
+    :func:`campaigns.analysis.vocabulary.sweep_key` (``requirement_verdict_preload`` along ``sweep_point_preload``,
+    the ``sweep`` attribute naming the condition, its verdict's attributes the requirement), with their own streams
+    ``(OBSERVABILITY_STREAM, f, k)`` for the k-th sweep. A within-unit campaign's sweep takes one test per unit, and
+    its statement says so."""
     spec = stored_spec(results)
-    table = spec["observability"]
     features = features_of(results)
     feature = ("feature", np.array(features, dtype=object))
-    if not table["sweep"]:
+    sweeps = sweeps_of(spec)
+    if not sweeps:
         statement = requirement_statement("insufficient data", math.nan, (math.nan, math.nan), {})
         n = len(features)
         return xr.Dataset({
@@ -301,24 +322,52 @@ def observability_analysis(results: xr.Dataset, settings: AnalysisSettings) -> x
     within_unit = is_within_unit(spec)
     # A unit's tests share its fixed errors: between units, one test per unit keeps the sweep's runs independent.
     between_units = results.isel(run=results["repeat"].values == 0) if within_unit else results
-    condition = table.get("condition", "backlash")
-    requirement, source = requirement_of(table)
-    per_feature = [
-        observability_sweep(
-            between_units, name, table["sweep"], false_alarm_rate=settings.false_alarm_rate, power=settings.power,
-            n_boot=settings.n_boot, confidence=settings.confidence, min_runs=settings.detection_runs,
-            seed=np.random.SeedSequence(settings.seed, spawn_key=(OBSERVABILITY_STREAM, f)), condition=condition,
-            reference=table.get("reference"), requirement=requirement, requirement_source=source,
-        )
-        for f, name in enumerate(features)
-    ]
-    levels = f"sweep_{SWEEP_QUANTITIES[condition][0].replace(' ', '_')}"
-    combined = xr.concat([s.drop_vars(levels) for s in per_feature], dim="feature").assign_coords(feature=feature)
-    combined[levels] = per_feature[0][levels]
+    parts = [_sweep_analysis(between_units, features, table, settings, k) for k, (_, table) in enumerate(sweeps)]
+    combined = parts[0].assign_coords(feature=feature)
     if within_unit:
         combined["requirement_statement"] = ("feature", np.array(
             [f"{statement}; between units: one test per unit (repeat 0 of each of the "
              f"{between_units.sizes['run']} units), since a unit's tests share its fixed errors and are not "
              "independent draws" for statement in combined["requirement_statement"].values], dtype=object),
             STATEMENT_ATTRS)
+    further = [_keyed(part.assign_coords(feature=feature), key, table)
+               for part, (key, table) in zip(parts[1:], sweeps[1:], strict=True)]
+    return xr.merge([combined, *further], combine_attrs="override") if further else combined
+
+
+def _sweep_analysis(results: xr.Dataset, features: list[str], table: dict, settings: AnalysisSettings,
+                    index: int) -> xr.Dataset:
+    """:func:`observability_sweep` of every feature along one sweep table, concatenated along ``feature``."""
+    condition = table.get("condition", "backlash")
+    requirement, source = requirement_of(table)
+    per_feature = [
+        observability_sweep(
+            results, name, table["sweep"], false_alarm_rate=settings.false_alarm_rate, power=settings.power,
+            n_boot=settings.n_boot, confidence=settings.confidence, min_runs=settings.detection_runs,
+            seed=np.random.SeedSequence(settings.seed, spawn_key=(OBSERVABILITY_STREAM, f) + ((index,) if index
+                                                                                                else ())),
+            condition=condition, reference=table.get("reference"), requirement=requirement,
+            requirement_source=source,
+        )
+        for f, name in enumerate(features)
+    ]
+    levels = f"sweep_{SWEEP_QUANTITIES[condition][0].replace(' ', '_')}"
+    combined = xr.concat([s.drop_vars(levels) for s in per_feature], dim="feature")
+    combined[levels] = per_feature[0][levels]
     return combined
+
+
+def _keyed(part: xr.Dataset, key: str, table: dict) -> xr.Dataset:
+    """A further sweep's variables and sweep dimension named with its ``key``, each marked with the ``sweep`` it
+    belongs to, and what the analysis's global attributes say of the first sweep on its verdict."""
+    condition = table.get("condition", "backlash")
+    requirement, source = requirement_of(table)
+    keyed = part.rename({name: f"{name}{key}" for name in [*part.data_vars, "sweep_point"]})
+    for name in keyed.data_vars:
+        if name != "feature":
+            keyed[name].attrs["sweep"] = condition
+    keyed[f"requirement_verdict{key}"].attrs.update({
+        "observability_condition": condition, "requirement": requirement,
+        "requirement_units": SWEEP_QUANTITIES[condition][1], "requirement_source": source,
+        "sweep_reference": str(table.get("reference") or ""), "sweep_data_sets": " ".join(table["sweep"])})
+    return keyed

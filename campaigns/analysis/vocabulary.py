@@ -72,6 +72,21 @@ def stored_spec(results: xr.Dataset) -> dict:
     return json.loads(results.attrs["spec_json"])["spec"]
 
 
+def sweep_key(index: int, condition: str) -> str:
+    """What tells a spec's fault sweeps apart in the analysis's variable names: ``""`` for the first (its variables
+    keep the names of a spec with one sweep, so older analysis files read the same), ``"_<condition>"`` for each
+    further one (``requirement_verdict_preload``, along ``sweep_point_preload``); a spec sweeps each condition at most
+    once (:func:`campaigns.runner.spec.cross_field_problems`)."""
+    return "" if index == 0 else f"_{condition}"
+
+
+def sweeps_of(spec: dict) -> list[tuple[str, dict]]:
+    """Each fault sweep of a stored spec, the first first, with its :func:`sweep_key`: the ``observability`` table
+    and the ``further_sweeps`` of a spec written with ``[[observability]]`` tables; empty without a sweep."""
+    tables = [spec["observability"], *spec.get("further_sweeps", [])]
+    return [(sweep_key(k, t.get("condition", "backlash")), t) for k, t in enumerate(tables) if t["sweep"]]
+
+
 def is_within_unit(spec: dict) -> bool:
     """Whether a stored spec is a within-unit campaign: units and a sweep (a fidelity audit's runs keep the units but
     no sweep)."""

@@ -279,6 +279,9 @@ class Dataset(_Strict):
     ``procedure`` replaces the scene's demand profiles by a test procedure's knobs (:data:`twin.scenes.procedure.KNOBS`:
     preload setting, external force, motion amplitude and frequency, cycles, dwell, zero procedure); the data set's
     ``conditions`` apply after it (a preload loss is the condition ``preload`` below the procedure's setting).
+    ``fidelity`` replaces ``solver.fidelity`` for this data set's runs (``{subsystem: level}``): the campaign sets it
+    on the members of a fault sweep whose automatic levels differ from the sweep's
+    (:func:`campaigns.bench.campaign.sweep_fidelity`), so that every level of a sweep runs one model.
     """
 
     name: Name
@@ -288,6 +291,15 @@ class Dataset(_Strict):
     parameters: dict[ParameterName, FiniteValue] = {}
     seeds_from: str | None = None
     procedure: dict[str, int | float | str] = {}
+    fidelity: dict[str, str] | None = None
+
+    @field_validator("fidelity")
+    @classmethod
+    def _known_levels(cls, fidelity: dict[str, str] | None) -> dict[str, str] | None:
+        problems = requested_levels(fidelity)[1] if fidelity is not None else []
+        if problems:
+            raise ValueError("\n".join(problems))  # one problem per line, split in validate_spec
+        return fidelity
 
     @field_validator("scene")
     @classmethod
@@ -489,12 +501,34 @@ class CampaignSpec(_Strict):
     datasets: list[Dataset] = Field(min_length=1)
     uncertainties: list[Uncertainty] = []
     observability: Observability = Observability()
+    #: The sweeps after the first when the spec gives ``[[observability]]`` tables (:meth:`_sweep_tables`).
+    further_sweeps: list[Observability] = []
     control_limits: ControlLimits = ControlLimits()
     units: Units | None = None
 
     _feature_units: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
     _warnings: list[str] = PrivateAttr(default_factory=list)
     _condition_units: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _sweep_tables(cls, data):
+        """``[[observability]]`` (an array of sweep tables) is the first sweep in ``observability`` and the others in
+        ``further_sweeps``, so that a spec with one sweep, and everything that reads ``observability``, stays as it
+        was; the single table ``[observability]`` passes unchanged."""
+        if not isinstance(data, dict) or not isinstance(data.get("observability"), list):
+            return data
+        tables = data["observability"]
+        if not tables or "further_sweeps" in data:
+            raise ValueError("observability: give one [observability] table, or one [[observability]] table per "
+                             "fault sweep" + ("" if tables else " (the array is empty)")
+                             + (", not further_sweeps beside it" if "further_sweeps" in data else ""))
+        return {**data, "observability": tables[0], "further_sweeps": tables[1:]}
+
+    @property
+    def sweeps(self) -> list[Observability]:
+        """Every fault sweep of the spec, the first first (empty without a sweep)."""
+        return ([self.observability] if self.observability.sweep else []) + list(self.further_sweeps)
 
     @field_validator("features")
     @classmethod
@@ -574,9 +608,9 @@ class CampaignSpec(_Strict):
     def canonical(self) -> dict:
         """The spec with its resolved distributions, as plain JSON-ready data.
 
-        ``control_limits`` is left out when it holds the defaults, and ``units`` and a data set's ``parameters``,
-        ``seeds_from`` and ``procedure`` when not used, so specs written before they existed keep their hash (and
-        their results directories).
+        ``control_limits`` is left out when it holds the defaults, and ``units``, ``further_sweeps`` and a data
+        set's ``parameters``, ``seeds_from``, ``procedure`` and ``fidelity`` when not used, so specs written before
+        they existed keep their hash (and their results directories).
         """
         spec = self.model_dump(mode="json")
         if self.control_limits == ControlLimits():
@@ -585,6 +619,8 @@ class CampaignSpec(_Strict):
             del spec["units"]
         else:  # the rows as sampled, so that a change of the default is a change of the hash
             spec["units"]["per_test"] = self.per_test_targets()
+        if not self.further_sweeps:
+            del spec["further_sweeps"]
         for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
             if not dataset["parameters"]:
                 del dataset["parameters"]
@@ -592,6 +628,8 @@ class CampaignSpec(_Strict):
                 del dataset["seeds_from"]
             if not dataset["procedure"]:
                 del dataset["procedure"]
+            if dataset["fidelity"] is None:
+                del dataset["fidelity"]
         return {"spec": spec, "resolved": [d.as_dict() for d in self.distributions()]}
 
     def to_json(self) -> str:
@@ -608,6 +646,8 @@ def _catalog(info: ValidationInfo) -> Catalog | None:
 
 
 def _path(loc: tuple) -> str:
+    if len(loc) > 1 and loc[0] == "further_sweeps" and isinstance(loc[1], int):  # as written: [[observability]]
+        loc = (f"observability[{loc[1] + 1}]", *loc[2:])
     out = ""
     for part in loc:
         if part == "[key]":
@@ -650,13 +690,42 @@ def cross_field_problems(data: dict) -> list[str]:
             if isinstance(value, (int, float)) and (problem := condition_range_problem(name, value)) is not None:
                 problems.append(f"datasets[{k}].conditions: {problem}")
     problems += _seeds_from_problems(datasets)
-    observability = data.get("observability")
-    sweep = observability.get("sweep") if isinstance(observability, dict) else None
-    if isinstance(sweep, list):
-        problems += _sweep_problems([n for n in sweep if isinstance(n, str)], datasets, observability)
+    tables = sweep_tables(data)
+    for path, observability in tables:
+        sweep = observability.get("sweep")
+        if len(tables) > 1 and not sweep:
+            problems.append(f"{path}.sweep: empty; each [[observability]] table names the data sets of its sweep")
+        if isinstance(sweep, list):
+            problems += [f"{path}{p}" for p in _sweep_problems([n for n in sweep if isinstance(n, str)], datasets,
+                                                                  observability)]
+    conditions = [t.get("condition", "backlash") for _, t in tables]
+    twice = sorted({c for c in conditions if isinstance(c, str) and conditions.count(c) > 1})
+    if twice:
+        problems.append(f"observability: {', '.join(twice)} swept by more than one table; a spec sweeps each "
+                        "condition once (the analysis names a sweep's variables after its condition: "
+                        "campaigns.analysis.vocabulary.sweep_key)")
     if isinstance(data.get("units"), dict):
-        problems += _units_problems(data["units"], data, targets, sweep if isinstance(sweep, list) else [])
+        first = tables[0][1].get("sweep") if tables else None
+        problems += _units_problems(data["units"], data, targets, first if isinstance(first, list) else [])
+        if len(tables) > 1:
+            problems.append("units: a within-unit campaign takes one observability sweep (its fault levels are the "
+                            "levels each unit is tested at)")
     return problems
+
+
+def sweep_tables(data: dict) -> list[tuple[str, dict]]:
+    """The sweep tables of raw spec data or of a validated spec's ``model_dump()``, each with the field path its
+    problems are reported under: ``[("observability", table)]`` for the single table, ``observability[k]`` for the
+    k-th of ``[[observability]]`` (``further_sweeps`` being the tables after the first). Entries of the wrong type are
+    skipped (they are field errors)."""
+    observability = data.get("observability")
+    if isinstance(observability, list):
+        return [(f"observability[{k}]", t) for k, t in enumerate(observability) if isinstance(t, dict)]
+    further = data.get("further_sweeps") if isinstance(data.get("further_sweeps"), list) else []
+    if not further:
+        return [("observability", observability)] if isinstance(observability, dict) else []
+    first = [("observability[0]", observability)] if isinstance(observability, dict) else []
+    return first + [(f"observability[{k + 1}]", t) for k, t in enumerate(further) if isinstance(t, dict)]
 
 
 def _units_problems(units: dict, data: dict, targets: list[str], sweep: list) -> list[str]:
@@ -708,6 +777,7 @@ def _seeds_from_problems(datasets: list[dict]) -> list[str]:
 
 
 def _sweep_problems(sweep: list[str], datasets: list[dict], observability: dict) -> list[str]:
+    """The problems of one sweep table, each starting with the field below the table (``.sweep: ...``)."""
     if not sweep:
         return []
     condition = observability.get("condition", "backlash")
@@ -715,24 +785,24 @@ def _sweep_problems(sweep: list[str], datasets: list[dict], observability: dict)
     by_name = {d["name"]: d for d in datasets if isinstance(d.get("name"), str)}
     unknown = [n for n in sweep if n not in by_name]
     if unknown:
-        return [f"observability.sweep: unknown data set(s) {', '.join(unknown)}"]
+        return [f".sweep: unknown data set(s) {', '.join(unknown)}"]
     conditions = {n: by_name[n].get("conditions") if isinstance(by_name[n].get("conditions"), dict) else {}
                   for n in sweep}
-    problems = [f"observability.sweep: data set {n} does not set conditions.{condition}" for n in sweep
+    problems = [f".sweep: data set {n} does not set conditions.{condition}" for n in sweep
                 if condition not in conditions[n]]
     if reference is not None:
         if reference not in sweep:
-            problems.append(f"observability.reference: {reference!r} is not in observability.sweep")
+            problems.append(f".reference: {reference!r} is not in the table's sweep")
     elif condition != "backlash":
-        problems.append(f"observability.reference: required for a {condition} sweep (the healthy data set)")
+        problems.append(f".reference: required for a {condition} sweep (the healthy data set)")
     else:
         zeros = [n for n in sweep if conditions[n].get("backlash") == 0.0]
         if not problems and len(zeros) != 1:
-            problems.append(f"observability.sweep: needs exactly one zero-backlash reference, found {len(zeros)}")
+            problems.append(f".sweep: needs exactly one zero-backlash reference, found {len(zeros)}")
     if condition != "backlash" and observability.get("requirement") is None:
-        problems.append(f"observability.requirement: required for a {condition} sweep (the fault size to detect)")
+        problems.append(f".requirement: required for a {condition} sweep (the fault size to detect)")
     if len(sweep) < 2:
-        problems.append(f"observability.sweep: needs the reference and at least one {condition} level")
+        problems.append(f".sweep: needs the reference and at least one {condition} level")
     return problems
 
 

@@ -8,7 +8,8 @@ Every decision is read from ``analysis.nc`` (the verdicts are computed once, in
   UNDETERMINED: the bounds straddle the requirement, the runs cannot tell yet, with the runs that would decide it
   (``runs_to_decide``, ``margin_limit_runs_to_decide``) or why no number of runs would; NO DATA: too few runs.
 * One line per requirement: the minimum detectable fault size per measured feature (the ideal-sensor reading beside
-  it), and each design limit of the loop margins over every loop.
+  it) for each fault sweep of the spec (backlash, preload loss), and each design limit of the loop margins over
+  every loop; then each sweep's detection figure.
 
 Then the comparison with another design and the measured tests (when given), the data sets, the strongest influences,
 the failures, the model check, and a glossary of the terms used.
@@ -25,7 +26,7 @@ from campaigns.analysis.campaign_analysis import mean_text
 from campaigns.statistics.paired_comparison import worst_verdict
 from campaigns.workflows.diagnosis import p_text
 from reports.builder import SUMMARY_INFLUENCES, Builder
-from reports.detection import backlash_requirement, detection_answer, minimum_detectable, swept
+from reports.detection import backlash_requirement, detection_answer, minimum_detectable, sweep_views, swept
 from reports.model import Callout, Paragraph
 from reports.outline import title
 from reports.phrases import NO_VERDICT, REANALYZE, decision, feature_words, plain_name, statement_tone, tone
@@ -88,9 +89,10 @@ def _runs_text(runs: float, reason: str, n: int) -> str:
     return reason[:1].upper() + reason[1:] + "." if reason else ""
 
 
-def observability_decision(b: Builder, feature: str) -> Callout:
-    """The decision on the detection requirement with one measured feature (the ideal-sensor reading beside it)."""
-    a = b.analysis
+def observability_decision(b: Builder, feature: str, analysis=None) -> Callout:
+    """The decision on the detection requirement with one measured feature (the ideal-sensor reading beside it), along
+    the sweep ``analysis`` is the view of (:func:`reports.detection.sweep_views`; the first sweep by default)."""
+    a = b.analysis if analysis is None else analysis
     requirement, source = backlash_requirement(a)
     quantity_name, unit, scale, shown = swept(a)
 
@@ -256,15 +258,20 @@ def _influences(b: Builder, feature: str) -> str:
             else f"What moves {words}: no parameter with a finite correlation.")
 
 
+def _asks(view) -> str:
+    """``a backlash of 1 µm (Table 9.3)``: what one sweep asks the bench to detect."""
+    requirement, source = backlash_requirement(view)
+    quantity_name, unit, _, _ = swept(view)
+    source = source.removeprefix("Bertolino (2020) ").split(":")[0]
+    return f"a {quantity_name} of {quantity(requirement, unit)} ({source})"
+
+
 def _question(b: Builder) -> str:
     spec = b.spec
-    requirement, source = backlash_requirement(b.analysis)
-    sweep = "sweep_point" in b.analysis.dims and b.analysis.sizes["sweep_point"] > 0
-    quantity_name, unit, _, _ = swept(b.analysis)
+    views = [view for _, view in sweep_views(b.analysis) if "sweep_point" in view.dims and view.sizes["sweep_point"]]
     n_sampled, n_varying = len(b.parameters), len(b.varying)
-    source = source.removeprefix("Bertolino (2020) ").split(":")[0]
-    asks = (f"can the bench detect a {quantity_name} of {quantity(requirement, unit)} ({source}) with its sensors"
-            if sweep else "how do the data sets differ (the spec has no observability sweep, so no detection "
+    asks = (f"can the bench detect {' and '.join(_asks(view) for view in views)} with its sensors"
+            if views else "how do the data sets differ (the spec has no observability sweep, so no detection "
                           "requirement is judged)")
     return (f"What this campaign answers ({spec.get('description') or spec['name']}): {asks}, when "
             f"{n_varying} of {n_sampled} sampled tolerances and conditions vary from run to run as in the spec; "
@@ -302,15 +309,16 @@ def build(b: Builder):
     yield Paragraph(_question(b))
     yield Paragraph("Decisions, one line per requirement (GO: met, NO-GO: not met, UNDETERMINED: the runs cannot tell "
                     "yet, with the runs that would decide it; each links to its section):")
-    if "requirement_statement" not in a or "requirement_verdict" not in a:
+    verdicts = "requirement_statement" in a and "requirement_verdict" in a
+    if not verdicts:
         yield Callout(NO_VERDICT, "info", "observability")
-    else:
+    for key, view in sweep_views(a) if verdicts else ():
         for feature in b.measured:
-            yield observability_decision(b, feature)
-            if (within := within_unit_decision(b, feature)) is not None:
+            yield observability_decision(b, feature, view)
+            if not key and (within := within_unit_decision(b, feature)) is not None:
                 yield within
-    if (answer := detection_answer(a)) is not None:  # the answer in a picture, right below its decisions
-        yield b.figure("detection-sweep", *reversed(answer))
+        if (answer := detection_answer(view)) is not None:  # the answer in a picture, right below its decisions
+            yield b.figure("detection-sweep" + key.replace("_", "-"), *reversed(answer))
     yield from limit_decisions(a)
     if b.inputs.comparison is not None:
         c = b.inputs.comparison

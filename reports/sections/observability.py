@@ -1,4 +1,5 @@
-"""Section "Observability": the backlash sweep and the minimum detectable backlash (Table 9.3)."""
+"""Section "Observability": the separation of the data sets, then each fault sweep (backlash, preload loss) and its
+minimum detectable fault size against its requirement (Table 9.3's 1 µm backlash by default)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 from campaigns.statistics.detection import RESOLUTIONS
 from reports import figures
 from reports.builder import Builder
-from reports.detection import minimum_detectable, sweep_quantity
+from reports.detection import minimum_detectable, sweep_quantity, sweep_views, swept
 from reports.model import Callout, Heading, Paragraph
 from reports.phrases import NO_VERDICT, tone
 from reports.units import number
@@ -65,9 +66,16 @@ def build(b: Builder):
                 figures.heatmap(overlap, b.datasets, b.datasets, colorbar_label="overlap coefficient [–]",
                                 xlabel="data set", ylabel="data set", vmin=0.0, vmax=1.0, cmap="magma"),
             )
-    yield Heading("Minimum detectable backlash")
+    for key, view in sweep_views(a):
+        yield from _sweep(b, view, key, power)
+
+
+def _sweep(b: Builder, a, key: str, power: float):
+    """One fault sweep (``a``: its view of the analysis, :func:`reports.detection.sweep_views`): the analysis's
+    verdicts, the curve's facts and the feature distributions along it."""
+    yield Heading(f"Minimum detectable {swept(a)[0]}")
     # the verdict is the analysis's sentence, verbatim (with its bounds and n); the report adds only facts of the curve
-    yield from _verdicts(b)
+    yield from _verdicts(b, a)
     if "sweep_point" not in a.dims or "requirement_verdict" not in a:
         yield Callout("Not available: the campaign spec has no observability sweep ([observability] sweep), so the "
                       "minimum detectable fault size cannot be compared with a requirement.")
@@ -101,16 +109,16 @@ def build(b: Builder):
             )
     for feature in b.measured:
         yield b.figure(
-            f"sweep-distribution-{feature}",
+            f"sweep-distribution-{feature}{key.replace('_', '-')}",
             f"{feature} for the sweep data sets (Fig. 9.10 style). The smallest {quantity_name} whose distribution "
             "clears the reference's is what the bench can observe.",
             figures.distributions(b.distribution_panels(feature, sweep)),
         )
 
 
-def _verdicts(b: Builder):
-    """One callout per feature with the analysis's requirement statement, verbatim."""
-    a = b.analysis
+def _verdicts(b: Builder, a):
+    """One callout per feature with the analysis's requirement statement along the sweep ``a`` is the view of,
+    verbatim."""
     if "requirement_statement" not in a or "requirement_verdict" not in a:
         yield Callout(NO_VERDICT, "info")
         return

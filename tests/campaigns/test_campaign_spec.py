@@ -146,13 +146,15 @@ def test_runs_override_and_extends(tmp_path):
 
 def test_shipped_specs_validate_structurally():
     """Structure only, without the catalog (the rows against the bench: test_table_9_5_extension_specs.py)."""
-    # the demo: the thesis's 7 data sets, then 0.5, 1 and 2 um levels at and around the requirement (issue 42)
-    for name, datasets, sweep in (("thesis_backlash.toml", 7, ["ds4", "ds6", "ds7", "ds2"]),
-                                  ("demo.toml", 10, ["ds4", "b0_5", "b1", "b2", "ds6", "ds7", "ds2"])):
+    # the demo: the thesis's 7 data sets, then 0.5, 1 and 2 um levels at and around the backlash requirement and
+    # 900, 800 and 600 N preloads at and around the preload-loss one, each a sweep of its own (issue 42)
+    for name, datasets, sweeps in (("thesis_backlash.toml", 7, [["ds4", "ds6", "ds7", "ds2"]]),
+                                   ("demo.toml", 13, [["ds4", "b0_5", "b1", "b2", "ds6", "ds7", "ds2"],
+                                                      ["ds5", "p900", "p800", "p600"]])):
         data = campaigns.runner.spec.read_spec(SPECS / name)
         spec = campaigns.runner.spec.validate_spec(data, None)
         assert len(spec.datasets) == datasets
         assert len(spec.uncertainties) == 38 + 10  # every row of Table 9.5, then the 10 rows of its extension
-        assert spec.observability.sweep == sweep
+        assert [s.sweep for s in spec.sweeps] == sweeps
     assert campaigns.runner.spec.validate_spec(
         campaigns.runner.spec.read_spec(SPECS / "thesis_backlash.toml"), None).runs_per_dataset == 1000

@@ -1,0 +1,140 @@
+"""Several fault sweeps in one spec (issue 42, item 1) and one fidelity along each sweep (item 3).
+
+A spec's ``[[observability]]`` tables each get their own verdict variables; the first keeps the names of a spec with
+one sweep, so a single ``[observability]`` table is the same spec (same hash) and the same analysis as before. The
+bench campaign runs every member of a sweep at one set of fidelity levels (:func:`sweep_fidelity`), and leaves a
+spec whose sweeps already agree unchanged.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from campaign_helpers import SYNTHETIC_SPEC, load, write_spec
+
+from campaigns.analysis.observability import observability_analysis
+from campaigns.analysis.settings import AnalysisSettings
+from campaigns.bench.campaign import load_spec as load_bench_spec
+from campaigns.bench.campaign import sweep_fidelity
+from campaigns.runner.spec import SpecError
+from reports.detection import sweep_views
+
+SPECS = Path(__file__).parents[2] / "campaigns" / "specs"
+GOLDEN = Path(__file__).parent / "data" / "golden_thesis_small.toml"
+PRELOAD_SWEEP = """
+[[observability]]
+sweep = ["ds4", "ds6", "ds2"]
+
+[[observability]]
+condition = "preload"
+reference = "ds4"
+sweep = ["ds4", "p800"]
+requirement = 200.0
+requirement_source = "test"
+
+[[datasets]]
+name = "p800"
+scene = "ds4"
+conditions = { backlash = 0.0, preload = 800.0, external_force = 0.0 }
+"""
+
+
+def test_one_table_in_an_array_is_the_single_table_spec(tmp_path):
+    single = load(write_spec(tmp_path, ""))
+    array = load(write_spec(tmp_path, '[[observability]]\nsweep = ["ds4", "ds6", "ds2"]\n'))
+    assert array.spec_hash() == single.spec_hash()
+    assert [s.sweep for s in array.sweeps] == [["ds4", "ds6", "ds2"]] and array.further_sweeps == []
+
+
+def test_two_sweeps_validate_and_keep_their_order(tmp_path):
+    path = tmp_path / "two.toml"  # the data sets added to the synthetic spec's (a list in an override replaces them)
+    path.write_text(SYNTHETIC_SPEC.read_text().replace('[observability]\nsweep = ["ds4", "ds6", "ds2"]\n', "")
+                    + PRELOAD_SWEEP)
+    spec = load(path)
+    assert [(s.condition, s.sweep) for s in spec.sweeps] == [("backlash", ["ds4", "ds6", "ds2"]),
+                                                              ("preload", ["ds4", "p800"])]
+    assert json.loads(spec.to_json())["spec"]["further_sweeps"][0]["requirement"] == 200.0
+
+
+@pytest.mark.parametrize(("table", "problem"), [
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\nsweep = ["ds4", "ds2"]\n',
+     "observability: backlash swept by more than one table"),
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\ncondition = "preload"\nreference = "ds4"\n'
+     'requirement = 200.0\nsweep = ["ds4", "nope"]\n', "observability[1].sweep: unknown data set(s) nope"),
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\ncondition = "preload"\nsweep = ["ds4", "ds5"]\n',
+     "observability[1].reference: required for a preload sweep"),
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\ncondition = "preload"\nreference = "ds4"\n'
+     'requirement = -1.0\nsweep = ["ds4", "ds5"]\n', "observability[1].requirement"),
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\n', "observability[1].sweep: empty"),
+    ("observability = []\n", "observability: give one [observability] table"),
+])
+def test_bad_sweep_tables_are_named_by_their_place(tmp_path, table, problem):
+    with pytest.raises(SpecError) as error:
+        load(write_spec(tmp_path, table))
+    assert any(p.startswith(problem) for p in error.value.problems), error.value.problems
+
+
+def test_a_preload_sweep_runs_at_one_fidelity():
+    """The automatic choice takes the quasi-static screw axial at 1000 N only (``min_preload``): the sweep's levels
+    are the most detailed any member takes, so the 1000 N reference runs the dynamic shaft like the lower preloads,
+    and the members that already chose them are left to the automatic choice."""
+    spec = load_bench_spec(SPECS / "preload_loss.toml")
+    swept = sweep_fidelity(spec)
+    changed = {d.name: d.fidelity for d in swept.datasets if d.fidelity is not None}
+    assert list(changed) == ["p1000"] and changed["p1000"]["screw_axial"] == "dynamic"
+    assert swept.spec_hash() != spec.spec_hash()  # the levels are part of the spec, recorded in results.nc
+
+
+@pytest.mark.parametrize("path", [GOLDEN, SPECS / "thesis_backlash.toml", SPECS / "observability.toml"])
+def test_a_spec_whose_sweep_agrees_is_unchanged(path):
+    """The golden campaign's sweep (ds4, ds2) and the thesis's already share their levels: the same spec, the same
+    hash, so the golden results stand."""
+    spec = load_bench_spec(path)
+    assert sweep_fidelity(spec) is spec
+
+
+def _results(spec_data: dict, runs: int = 80, seed: int = 3) -> xr.Dataset:
+    """Synthetic results: feature = backlash + preload loss x 1e-9 m/N + noise (0.1 um), every run ok."""
+    names = ["b0", "b1", "b5", "p800", "p600"]
+    backlash = np.array([0.0, 1e-6, 5e-6, 0.0, 0.0])
+    preload = np.array([1000.0, 1000.0, 1000.0, 800.0, 600.0])
+    rng = np.random.default_rng(seed)
+    values = (backlash + (1000.0 - preload) * 1e-9)[:, None] + 0.1e-6 * rng.standard_normal((len(names), runs))
+    return xr.Dataset(
+        {"f": (("dataset", "run"), values, {"role": "feature", "units": "m"}),
+         "status": (("dataset", "run"), np.full(values.shape, "ok", dtype=object)),
+         "condition_backlash": ("dataset", backlash), "condition_preload": ("dataset", preload)},
+        coords={"dataset": names}, attrs={"spec_json": json.dumps({"spec": spec_data})})
+
+
+BACKLASH = {"sweep": ["b0", "b1", "b5"], "condition": "backlash", "reference": None, "requirement": None,
+            "requirement_source": ""}
+PRELOAD = {"sweep": ["b0", "p800", "p600"], "condition": "preload", "reference": "b0", "requirement": 200.0,
+           "requirement_source": "test"}
+
+
+def test_each_sweep_has_its_own_verdict_and_the_first_keeps_its_names():
+    settings = AnalysisSettings(n_boot=200)
+    one = observability_analysis(_results({"observability": BACKLASH}), settings)
+    two = observability_analysis(_results({"observability": BACKLASH, "further_sweeps": [PRELOAD]}), settings)
+    alone = observability_analysis(_results({"observability": PRELOAD}), settings)
+    xr.testing.assert_identical(two[list(one.data_vars)], one)  # the first sweep: bit for bit as alone
+    assert list(two["sweep_point_preload"].values) == ["b0", "p800", "p600"]
+    # 200 N moves the feature 2 sigma: the verdict and the detection probabilities are those of the sweep alone
+    # (the bootstrap streams differ, the point estimates do not)
+    assert two["requirement_verdict_preload"].values.tolist() == alone["requirement_verdict"].values.tolist()
+    np.testing.assert_array_equal(two["sweep_detection_probability_preload"].values,
+                                  alone["sweep_detection_probability"].values)
+    assert two["requirement_verdict_preload"].attrs["requirement"] == 200.0
+    (_, first), (key, view) = sweep_views(two)
+    assert first is two and key == "_preload"
+    assert view.attrs["observability_condition"] == "preload" and view.attrs["requirement"] == 200.0
+    assert list(view["sweep_point"].values) == ["b0", "p800", "p600"]
+    xr.testing.assert_equal(view["sweep_preload_loss"], two["sweep_preload_loss_preload"].rename(
+        sweep_point_preload="sweep_point"))
+    assert "sweep_backlash" not in view and view["requirement_verdict"].values.tolist() == \
+        two["requirement_verdict_preload"].values.tolist()
