@@ -129,7 +129,11 @@ def build_request(spec: CampaignSpec, samples, dataset_index: int, run_index: in
         conditions=conditions,
         parameter_values=parameter_values,
         root_seed=spec.root_seed,
-        solver=spec.solver.model_dump(),
+        # a data set's own levels (one fidelity across a fault sweep: campaigns.bench.campaign.sweep_fidelity); a
+        # "full" campaign (the fidelity audit's) keeps its full levels
+        solver={**spec.solver.model_dump(),
+                **({"fidelity": dataset.fidelity} if dataset.fidelity is not None and spec.solver.fidelity != "full"
+                   else {})},
         features=tuple(spec.features),
         trace_variables=tuple(spec.traces.variables) if traced else (),
         outputs=tuple(spec.features) + (tuple(spec.traces.variables) if spec.traces.runs_per_dataset else ()),

@@ -20,6 +20,8 @@ from campaigns.analysis.observability import observability_analysis
 from campaigns.analysis.settings import AnalysisSettings
 from campaigns.bench.campaign import load_spec as load_bench_spec
 from campaigns.bench.campaign import sweep_fidelity
+from campaigns.runner.execution import build_request
+from campaigns.runner.sampling import sample
 from campaigns.runner.spec import SpecError
 from reports.detection import sweep_views
 
@@ -87,6 +89,11 @@ def test_a_preload_sweep_runs_at_one_fidelity():
     changed = {d.name: d.fidelity for d in swept.datasets if d.fidelity is not None}
     assert list(changed) == ["p1000"] and changed["p1000"]["screw_axial"] == "dynamic"
     assert swept.spec_hash() != spec.spec_hash()  # the levels are part of the spec, recorded in results.nc
+    # and the runs take them: the reference's request carries its sweep's levels, a member at its own choice none
+    samples = sample(swept)
+    names = [d.name for d in swept.datasets]
+    assert build_request(swept, samples, names.index("p1000"), 0).solver["fidelity"] == changed["p1000"]
+    assert build_request(swept, samples, names.index("p800"), 0).solver["fidelity"] == swept.solver.fidelity
 
 
 @pytest.mark.parametrize("path", [GOLDEN, SPECS / "thesis_backlash.toml", SPECS / "observability.toml"])
