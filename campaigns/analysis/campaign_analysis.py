@@ -102,14 +102,19 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     Returns
     -------
     tuple of list of str
-        ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature (a within-unit campaign's
+        ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature, then
+        ``"<feature> (<condition> sweep): ..."`` for each further fault sweep (a within-unit campaign's
         ``"<feature> within unit: <within_unit_requirement_statement>"`` after it), and one warning per feature
         with data sets below ``min_ok_runs`` ok runs.
     """
     statements, warnings = [], []
     min_ok_runs = int(analysis.attrs["min_ok_runs"])
+    further = sorted(str(v) for v in analysis.data_vars if str(v).startswith("requirement_statement_"))
     for feature in (str(f) for f in analysis["feature"].values):
         statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
+        for name in further:  # each further fault sweep's verdict (campaigns.analysis.vocabulary.sweep_key)
+            statements.append(f"{feature} ({name.removeprefix('requirement_statement_')} sweep): "
+                              f"{analysis[name].sel(feature=feature).item()}")
         if "within_unit_requirement_statement" in analysis:
             statements.append(f"{feature} within unit: "
                               f"{analysis['within_unit_requirement_statement'].sel(feature=feature).item()}")

@@ -145,3 +145,21 @@ def test_each_sweep_has_its_own_verdict_and_the_first_keeps_its_names():
         sweep_point_preload="sweep_point"))
     assert "sweep_backlash" not in view and view["requirement_verdict"].values.tolist() == \
         two["requirement_verdict_preload"].values.tolist()
+
+
+def test_the_printed_summary_gives_each_sweeps_verdict():
+    """What `twin campaign run --analyze` prints: the first sweep's statement per feature, then each further sweep's,
+    labelled by its condition."""
+    from campaigns.analysis.campaign_analysis import summary
+
+    two = observability_analysis(_results({"observability": BACKLASH, "further_sweeps": [PRELOAD]}),
+                                 AnalysisSettings(n_boot=200))
+    features = [str(f) for f in two["feature"].values]
+    shown = two.assign(n_used=xr.DataArray(np.full((len(features), 1), 100), dims=("feature", "dataset"),
+                                           coords={"feature": features, "dataset": ["b0"]}))
+    shown.attrs["min_ok_runs"] = 20
+    statements, _ = summary(shown)
+    for feature in features:
+        assert f"{feature}: {two['requirement_statement'].sel(feature=feature).item()}" in statements
+        assert (f"{feature} (preload sweep): {two['requirement_statement_preload'].sel(feature=feature).item()}"
+                in statements)
