@@ -147,10 +147,11 @@ def _ranks_of_resample(group, resample, counts, rank):
 
 
 @numba.njit(**KERNEL)
-def _standardized_resample(values, group, resample, spearman, counts, rank, row, work, plan, partial):
+def _standardized_resample(values, group, resample, spearman, weights, weighted, counts, rank, row, work, plan,
+                           partial):
     """One resample of ``values`` (or, ``spearman``, of their ranks) into ``row``, centred and scaled to unit norm
     (NaN without variance) as numpy computes ``c = v - mean(v); c / sqrt(sum(c * c))`` (:func:`_pairwise_sum`;
-    ``work``: one row of scratch).
+    ``work``: one row of scratch), times ``weights`` where ``weighted`` (the other resample of a correlation).
 
     Ranks take a shorter way to the same bits: a resample's ranks are whole or half numbers summing to
     ``n (n + 1) / 2``, so its mean, centred ranks and sum of squares are exact in any order of summation and come
@@ -171,7 +172,7 @@ def _standardized_resample(values, group, resample, spearman, counts, rank, row,
         for k in range(len(counts)):
             rank[k] = rank[k] / norm
         for i in range(n):
-            row[i] = rank[group[resample[i]]]
+            row[i] = rank[group[resample[i]]] * weights[i] if weighted else rank[group[resample[i]]]
         return
     for i in range(n):
         row[i] = values[resample[i]]
@@ -181,16 +182,17 @@ def _standardized_resample(values, group, resample, spearman, counts, rank, row,
         work[i] = row[i] * row[i]
     norm = np.sqrt(_pairwise_sum(work, plan, partial))
     for i in range(n):
-        row[i] = row[i] / norm
+        row[i] = (row[i] / norm) * weights[i] if weighted else row[i] / norm
 
 
 @numba.njit(**KERNEL)
 def _bootstrap_rows(values, group, n_values, idx, spearman, plan, standardized):
     """Every resample (row of ``idx``) standardized (:func:`_standardized_resample`) into ``standardized``."""
-    counts, rank, work = np.empty(n_values), np.empty(n_values), np.empty(idx.shape[1])
+    counts, rank, work, unweighted = np.empty(n_values), np.empty(n_values), np.empty(idx.shape[1]), np.empty(0)
     partial = np.empty(plan.shape[0])
     for b in range(idx.shape[0]):
-        _standardized_resample(values, group, idx[b], spearman, counts, rank, standardized[b], work, plan, partial)
+        _standardized_resample(values, group, idx[b], spearman, unweighted, False, counts, rank, standardized[b], work,
+                               plan, partial)
 
 
 @numba.njit(**KERNEL)
@@ -201,10 +203,8 @@ def _bootstrap_dots(values, group, n_values, idx, spearman, plan, yb, out):
     counts, rank, row, work = np.empty(n_values), np.empty(n_values), np.empty(n), np.empty(n)
     partial = np.empty(plan.shape[0])
     for b in range(idx.shape[0]):
-        _standardized_resample(values, group, idx[b], spearman, counts, rank, row, work, plan, partial)
-        for i in range(n):
-            work[i] = row[i] * yb[b, i]
-        out[b] = _pairwise_sum(work, plan, partial)
+        _standardized_resample(values, group, idx[b], spearman, yb[b], True, counts, rank, row, work, plan, partial)
+        out[b] = _pairwise_sum(row, plan, partial)
 
 
 def bootstrap_correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, confidence: float):
