@@ -148,9 +148,11 @@ THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 32)
 CONFIGURATIONS = {"default": {}, "previous": {"dt": 6.25e-5, "fidelity": {"screw_axial": "dynamic"}}}
 
 
-def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default") -> None:
+def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default",
+                      before: str | None = None) -> None:
     """Run the thesis spec with ``runs`` runs per data set in one of :data:`CONFIGURATIONS`, end to end, and print
-    the stages and the rates."""
+    the stages and the rates; with ``before``, the fixed stages on its results before and after
+    (:func:`fixed_stages`)."""
     spec = campaigns.load_spec(SPECS / "thesis_backlash.toml", runs=runs)
     if CONFIGURATIONS[configuration]:
         spec = spec.model_copy(update={"solver": spec.solver.model_copy(update=CONFIGURATIONS[configuration])})
@@ -192,6 +194,8 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "
     estimate = total - per_run_stages + per_run_stages * full / n
     print(f"estimate for 7 x 1000: {estimate / 60:.1f} min ({full / estimate:.2f} runs/s; the runs, margins and "
           "assembly stages scaled, the other stages as measured)")
+    if before:
+        fixed_stages(results, before, tmp)
 
 
 def resampled_results(path: Path, runs: int, out: Path) -> Path:
@@ -311,7 +315,7 @@ def main() -> None:
     if args.thesis:
         for configuration in args.configuration:
             with tempfile.TemporaryDirectory() as tmp:
-                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration)
+                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration, args.before)
         return
     if args.quick:
         args.synthetic, args.runs = True, 10
