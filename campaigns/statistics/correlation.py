@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 from scipy import stats
+from threadpoolctl import threadpool_limits
 
 from campaigns.statistics.defaults import CONFIDENCE
 from numerics.jit import KERNEL
@@ -302,15 +303,20 @@ class RankDesign:
 
 
 def rank_design(X) -> RankDesign:
-    """:class:`RankDesign` of the sampled values ``X`` (shape (n, p)) for :func:`prcc`."""
+    """:class:`RankDesign` of the sampled values ``X`` (shape (n, p)) for :func:`prcc`.
+
+    The factorisation runs on one BLAS thread: a 1000 x 49 QR takes ~8 ms on one core, and 0.2-1 s when OpenBLAS's
+    threads wait for each other on cores other work holds (measured on the shared 2-core machine, load 7-11); the
+    factors are the same bits either way (checked on a 7 x 1000 analysis, docs/performance.md)."""
     X = np.asarray(X, dtype=float)
     varying = np.flatnonzero(np.ptp(X, axis=0) > 0)
     n = X.shape[0]
     if len(varying) == 0 or n < len(varying) + 3:
         return RankDesign(None, None, None)
-    Q, R = np.linalg.qr(np.column_stack([np.ones(n), stats.rankdata(X[:, varying], axis=0)]))
-    if np.abs(np.diag(R)).min() <= 1e-9 * np.abs(np.diag(R)).max():
-        return RankDesign(None, None, None)
-    R_inv = np.linalg.solve(R, np.eye(R.shape[0]))
-    H_diag = (R_inv * R_inv).sum(axis=1)  # diagonal of H = R^-1 R^-T
-    return RankDesign(Q, R_inv, (Q @ R_inv.T[:, 1:]) / H_diag[1:])
+    with threadpool_limits(1, user_api="blas"):  # see the docstring
+        Q, R = np.linalg.qr(np.column_stack([np.ones(n), stats.rankdata(X[:, varying], axis=0)]))
+        if np.abs(np.diag(R)).min() <= 1e-9 * np.abs(np.diag(R)).max():
+            return RankDesign(None, None, None)
+        R_inv = np.linalg.solve(R, np.eye(R.shape[0]))
+        H_diag = (R_inv * R_inv).sum(axis=1)  # diagonal of H = R^-1 R^-T
+        return RankDesign(Q, R_inv, (Q @ R_inv.T[:, 1:]) / H_diag[1:])

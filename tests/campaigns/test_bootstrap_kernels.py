@@ -72,3 +72,17 @@ def test_a_shared_rank_design_gives_the_prcc_of_a_fresh_one():
     design = rank_design(X)
     for y in (X[:, 0] + 0.1 * rng.standard_normal(300), np.exp(X[:, 1]), rng.standard_normal(300)):
         np.testing.assert_array_equal(prcc(X, y, design), prcc(X, y))
+
+
+def test_the_rank_design_on_one_blas_thread_is_the_design_on_several():
+    """:func:`rank_design` pins BLAS to one thread (busy cores): the PRCCs are those of the threaded factorisation."""
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(3)
+    X, y = rng.standard_normal((1000, 49)), rng.standard_normal(1000)
+    single = prcc(X, y, rank_design(X))
+    with threadpool_limits(2, user_api="blas"):
+        Q, R = np.linalg.qr(np.column_stack([np.ones(1000), stats.rankdata(X, axis=0)]))
+        R_inv = np.linalg.solve(R, np.eye(R.shape[0]))
+        threaded = correlation.RankDesign(Q, R_inv, (Q @ R_inv.T[:, 1:]) / (R_inv * R_inv).sum(axis=1)[1:])
+        np.testing.assert_array_equal(prcc(X, y, threaded), single)
