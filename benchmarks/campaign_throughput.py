@@ -7,6 +7,7 @@ Usage::
     python benchmarks/campaign_throughput.py --quick            # synthetic model, 10 runs per data set
     python benchmarks/campaign_throughput.py --thesis 60        # the thesis study end to end, 7 x 60 runs
     python benchmarks/campaign_throughput.py --thesis 60 --configuration default previous   # both, in turn
+    python benchmarks/campaign_throughput.py --stages results.nc --resample 1000   # fixed stages, before and after
 
 ``--thesis N`` times the thesis spec (campaigns/specs/thesis_backlash.toml, N runs per data set) end to
 end on a fresh local cluster of 2 workers, stage by stage (compilation check, cluster start, runs with
@@ -15,6 +16,13 @@ the same cluster, the analysis), and prints runs/s over the whole and the estima
 study (the runs, margins and assembly stages scaled to 7000 runs, the other stages as measured: the audit
 re-runs the same 10 runs per data set whatever N). The runs stage includes each worker's sandbox start-up (a few
 seconds), so a small N overestimates the full study.
+
+``--stages RESULTS`` times the stages after the runs that read only ``results.nc`` (the analysis) on that file,
+with this tree's code and with the code of ``--before`` (a git revision, default :data:`BEFORE`, exported with
+``git archive``), each in a fresh process, and says whether both wrote the same ``analysis.nc``. ``--resample N``
+first grows the file to N runs per data set without running the bench (:func:`resampled_results`), so a small
+real campaign (e.g. ``--thesis 3``'s) gives a results file of the 7 x 1000 study's shape. ``--thesis N`` does the
+same on the results it produced.
 
 For each worker count a local cluster is started first and warmed up (worker
 and sandbox start-up are not campaign throughput); the campaign then runs on it
@@ -32,7 +40,11 @@ through ``scheduler=``. Figures:
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import resource
+import subprocess
+import sys
 import tempfile
 import time
 import tracemalloc
@@ -44,9 +56,16 @@ from distributed import LocalCluster
 from machine import header
 
 import campaigns
+from campaigns.bench.adapter import BenchCatalog
+from campaigns.runner.files import cf_encoding
+from campaigns.runner.sampling import sample
+from campaigns.runner.spec import validate_spec
 from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 
 SPECS = Path(campaigns.__file__).parent / "specs"
+ROOT = Path(__file__).resolve().parents[1]
+#: The code the fixed stages are compared with: main before the stage-cost work (issue 42, item 7).
+BEFORE = "dbe49a67e27e30af4c66c2896f841f666cdd28cc"
 
 SYNTHETIC_SPEC = """
 name = "throughput"
@@ -129,9 +148,11 @@ THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 32)
 CONFIGURATIONS = {"default": {}, "previous": {"dt": 6.25e-5, "fidelity": {"screw_axial": "dynamic"}}}
 
 
-def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default") -> None:
+def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default",
+                      before: str | None = None) -> None:
     """Run the thesis spec with ``runs`` runs per data set in one of :data:`CONFIGURATIONS`, end to end, and print
-    the stages and the rates."""
+    the stages and the rates; with ``before``, the fixed stages on its results before and after
+    (:func:`fixed_stages`)."""
     spec = campaigns.load_spec(SPECS / "thesis_backlash.toml", runs=runs)
     if CONFIGURATIONS[configuration]:
         spec = spec.model_copy(update={"solver": spec.solver.model_copy(update=CONFIGURATIONS[configuration])})
@@ -173,6 +194,97 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "
     estimate = total - per_run_stages + per_run_stages * full / n
     print(f"estimate for 7 x 1000: {estimate / 60:.1f} min ({full / estimate:.2f} runs/s; the runs, margins and "
           "assembly stages scaled, the other stages as measured)")
+    if before:
+        fixed_stages(results, before, tmp)
+
+
+def resampled_results(path: Path, runs: int, out: Path) -> Path:
+    """A results file of ``runs`` runs per data set grown from a small real one at ``path``, without running the
+    bench: the sampled values drawn by the campaign's own sampling (its stored spec at ``runs`` runs, against the
+    bench's catalog), every other
+    per-run variable (status, features, margins, times) drawn with replacement from the real runs of its data set,
+    the features jittered by 0.3 of their spread so that resampled runs do not tie. What the fixed stages cost
+    depends on the shape (data sets, runs, sampled values, features, margins), not on the physics in the numbers;
+    the numbers are not a campaign's."""
+    with xr.open_dataset(path) as real:
+        real = real.load()
+    stored = json.loads(real.attrs["spec_json"])
+    stored["spec"]["runs_per_dataset"] = runs
+    base = stored["spec"]["base"]
+    spec = validate_spec(stored["spec"], BenchCatalog(base["parameters"], base["scene"]))
+    targets = [d.target for d in spec.distributions()]
+    drawn = sample(spec)
+    rng = np.random.default_rng(1)
+    pick = rng.integers(0, real.sizes["run"], (real.sizes["dataset"], runs))
+    variables = {}
+    for name, variable in real.data_vars.items():
+        if variable.dims != ("dataset", "run"):
+            variables[name] = variable
+            continue
+        if name in targets:
+            values = drawn[:, :, targets.index(name)]
+        else:
+            values = np.take_along_axis(variable.values, pick, axis=1)
+            if variable.attrs.get("role") == "feature":
+                values = values + 0.3 * (np.nanstd(variable.values) + 1e-7) * rng.standard_normal(values.shape)
+        variables[name] = xr.DataArray(values, dims=variable.dims, attrs=variable.attrs)
+    coords = {name: real[name] for name in real.coords if name != "run"}
+    coords["run"] = ("run", np.arange(runs, dtype=np.int32), real["run"].attrs)
+    grown = xr.Dataset(variables, coords=coords, attrs={**real.attrs, "spec_json": json.dumps(stored)})
+    grown.to_netcdf(out, engine="netcdf4", encoding=cf_encoding(grown))
+    return out
+
+
+#: What a fresh process runs to time the analysis of ``results.nc`` into ``analysis.nc`` (argv 1 and 2).
+_TIME_ANALYSIS = """
+import sys, time
+start, cpu = time.perf_counter(), time.process_time()
+from campaigns.analysis.campaign_analysis import analyze
+analyze(sys.argv[1], sys.argv[2])
+print(time.perf_counter() - start, time.process_time() - cpu)
+"""
+
+
+def _timed_analysis(code: Path, results: Path, out: Path) -> tuple[float, float]:
+    """Wall and CPU seconds of the analysis of ``results`` by the code under ``code``, in a fresh process (its
+    imports and compiled-code loads included, as a campaign's analysis stage has them)."""
+    done = subprocess.run([sys.executable, "-c", _TIME_ANALYSIS, str(results), str(out)], check=True,
+                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(code)}, cwd=code)
+    wall, cpu = (float(v) for v in done.stdout.split()[-2:])
+    return wall, cpu
+
+
+def _same_analysis(a: Path, b: Path) -> bool:
+    """Whether two ``analysis.nc`` files hold the same numbers and texts (the history attribute aside)."""
+    with xr.open_dataset(a) as x, xr.open_dataset(b) as y:
+        if set(x.variables) != set(y.variables):
+            return False
+        same = all(x[v].dtype == y[v].dtype and np.array_equal(x[v].values, y[v].values,
+                                                               equal_nan=x[v].dtype.kind == "f")
+                   for v in x.variables)
+        return same and {k: v for k, v in x.attrs.items() if k != "history"} == \
+            {k: v for k, v in y.attrs.items() if k != "history"}
+
+
+def fixed_stages(results: Path, before: str, tmp: Path) -> None:
+    """Print the analysis stage's time on ``results`` with this tree's code and with the code at ``before``, their
+    ratio, and whether both wrote the same ``analysis.nc`` (the refactors promise the same bits)."""
+    old = tmp / "before"
+    old.mkdir()
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", before], check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(old)], input=archive, check=True)
+    with xr.open_dataset(results) as ds:
+        shape = f"{ds.sizes['dataset']} x {ds.sizes['run']}"
+    rows = {}
+    for label, code in (("before", old), ("after", ROOT)):
+        rows[label] = _timed_analysis(code, results, tmp / f"analysis-{label}.nc")
+    same = _same_analysis(tmp / "analysis-before.nc", tmp / "analysis-after.nc")
+    (wall_b, cpu_b), (wall_a, cpu_a) = rows["before"], rows["after"]
+    print(f"fixed stages on {results.name} ({shape} runs); before: {before[:10]}, after: this tree")
+    print(f"  {'stage':12s} {'before':>20s} {'after':>20s} {'ratio':>7s}")
+    print(f"  {'analysis':12s} {wall_b:7.1f} s ({cpu_b:5.1f} s CPU) {wall_a:7.1f} s ({cpu_a:5.1f} s CPU) "
+          f"{wall_b / wall_a:6.2f}x")
+    print(f"  analysis.nc before and after: {'identical' if same else 'DIFFERENT (a refactor changed numbers)'}")
 
 
 def main() -> None:
@@ -186,12 +298,24 @@ def main() -> None:
                         help="time the thesis spec end to end with N runs per data set")
     parser.add_argument("--configuration", nargs="+", default=["default"], choices=list(CONFIGURATIONS),
                         help="with --thesis: configurations to time one after the other (default: default)")
+    parser.add_argument("--stages", type=Path, metavar="RESULTS",
+                        help="time the fixed stages on this results.nc before and after (see --before)")
+    parser.add_argument("--resample", type=int, metavar="N",
+                        help="with --stages: grow the file to N runs per data set first (no bench runs)")
+    parser.add_argument("--before", default=BEFORE, help=f"git revision of the code compared (default {BEFORE[:10]})")
     args = parser.parse_args()
     header("campaign throughput", args.quick)
+    if args.stages:
+        with tempfile.TemporaryDirectory() as tmp:
+            results = args.stages
+            if args.resample:
+                results = resampled_results(results, args.resample, Path(tmp) / "resampled.nc")
+            fixed_stages(results, args.before, Path(tmp))
+        return
     if args.thesis:
         for configuration in args.configuration:
             with tempfile.TemporaryDirectory() as tmp:
-                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration)
+                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration, args.before)
         return
     if args.quick:
         args.synthetic, args.runs = True, 10

@@ -14,7 +14,7 @@ import xarray as xr
 from campaigns.analysis.settings import SENSITIVITY_STREAM, AnalysisSettings
 from campaigns.analysis.vocabulary import feature_units, features_of, parameters_of, used
 from campaigns.statistics import sensitivity
-from campaigns.statistics.correlation import bootstrap_correlations, prcc
+from campaigns.statistics.correlation import RankDesign, bootstrap_correlations, prcc, rank_design
 
 
 def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
@@ -33,20 +33,25 @@ def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
     first_order_flag = np.zeros(shape, dtype=np.int8)
     for d, name in enumerate(names):
         row = results.sel(dataset=name)
+        sampled = np.stack([row[p].values for p in parameters]) if parameters else np.empty((0, row.sizes["run"]))
+        designs: dict[bytes, RankDesign] = {}  # the PRCC factorisation per set of runs: features mostly share theirs
         for f, feature in enumerate(features):
             mask = used(results, feature).sel(dataset=name).values
             y = row[feature].values[mask]
             first_order_flag[d, f] = sensitivity.BELOW_MIN_RUNS if len(y) < sensitivity.MIN_RUNS else 0
             if len(y) < settings.min_ok_runs:
                 continue
-            X = np.stack([row[p].values[mask] for p in parameters]) if parameters else np.empty((0, len(y)))
+            X = np.ascontiguousarray(sampled[:, mask])  # row-major as stacked: numpy sums a row pairwise only so
             rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(d, f)))
             idx = rng.integers(0, len(y), (n_boot, len(y)))
             for method in ("pearson", "spearman"):
                 estimate, lower, upper = bootstrap_correlations(X, y, idx, method, confidence)
                 out[method][d, f] = estimate
                 ci[method][d, f, :, 0], ci[method][d, f, :, 1] = lower, upper
-            out["prcc"][d, f] = prcc(X.T, y)
+            design = designs.get(mask.tobytes())
+            if design is None:
+                design = designs[mask.tobytes()] = rank_design(X.T)
+            out["prcc"][d, f] = prcc(X.T, y, design)
             found = sensitivity.first_order(
                 X.T, y, n_boot=sensitivity_boot, confidence=confidence,
                 seed=np.random.SeedSequence(seed, spawn_key=(SENSITIVITY_STREAM, d, f)),
