@@ -30,7 +30,7 @@ import math
 import time
 from collections.abc import Iterable
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 import xarray as xr
@@ -38,6 +38,7 @@ import xarray as xr
 import twin
 import twin.engine.model as engine_model
 from twin.features import MOTION_SPEED_THRESHOLD
+from twin.solver import split_solver
 
 DATASETS = ("ds2", "ds4", "ds6", "ds7")
 SEAL_THRESHOLDS = (5.0e-3, 2.5e-3, 1.0e-3, 0.5e-3, 0.25e-3)   # m/s, halved from the default 5 mm/s
@@ -213,10 +214,10 @@ ACCEPTANCE_PAIRINGS = (
 def thesis_requests(datasets: Iterable[str], runs: Iterable[int], spec_path=None):
     """The thesis campaign's requests of ``runs`` of ``datasets`` (:func:`campaigns.runner.execution.build_request`
     on the spec's own sampled values, untraced): what the campaign would run."""
+    from campaigns.bench.campaign import load_spec
     from campaigns.bench.solver_accuracy import THESIS_SPEC  # lazy: the campaign runner loads only for this study
     from campaigns.runner.execution import build_request
     from campaigns.runner.sampling import sample_run
-    from campaigns.runner.spec import load_spec
 
     spec = load_spec(THESIS_SPEC if spec_path is None else spec_path)
     names = [d.name for d in spec.datasets]
@@ -251,11 +252,12 @@ def run_arm(arm: Arm, requests, lanes: int = 8) -> dict:
             for r in requests]
     guides = engine_model.LINEAR_VELOCITY_THRESHOLD if arm.guide_threshold is None else arm.guide_threshold
     with guide_threshold_set(guides):
-        step = twin.simulate_features(runs[0][0], runs[0][1], duration=0.01, throw=False, outputs=list(first.outputs),
-                                      **options).dt   # the campaign's default step at this fidelity
-        options["dt"] = step * arm.step_factor
+        solver, options = split_solver(options)
+        step = twin.simulate(runs[0][0], runs[0][1], solver=solver, save="features", duration=0.01, throw=False,
+                             outputs=list(first.outputs), **options).dt   # the campaign's default step at this fidelity
+        solver = replace(solver, dt=step * arm.step_factor, lanes=lanes)
         start = time.process_time()
-        summaries = twin.simulate_batch(runs, lanes=lanes, throw=False, outputs=list(first.outputs), **options)
+        summaries = twin.simulate_batch(runs, solver=solver, throw=False, outputs=list(first.outputs), **options)
         cpu = time.process_time() - start
     return {"features": {f: [s.features.get(f, math.nan) for s in summaries] for f in ACCEPTANCE_FEATURES},
             "status": [s.status for s in summaries], "dt": [s.dt for s in summaries], "cpu_per_run": cpu / len(runs)}

@@ -10,10 +10,10 @@ from scipy.stats import t as student_t
 
 import twin
 from app.studies import friction_convergence as fc
+from campaigns.bench.campaign import load_spec
 from campaigns.bench.solver_accuracy import THESIS_SPEC
 from campaigns.runner.execution import build_request
 from campaigns.runner.sampling import sample
-from campaigns.runner.spec import load_spec
 
 PARAMS = twin.load_parameters()
 
