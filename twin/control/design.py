@@ -33,6 +33,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from twin.components import reducer
 from twin.parameters import load_parameters
 from twin.physics.drivetrain import screw_inertia, torsional_stiffness
 from twin.physics.motor import equivalent_inductance, equivalent_resistance
@@ -59,8 +60,7 @@ class LoopDesign:
 
 def _reflected_inertias(p: dict[str, float]) -> tuple[float, float]:
     """Motor-side and screw-side inertias about the reducer output (Eqs. 9.3, 9.7) [kg m^2]."""
-    ratio = p["reducer.ratio"]
-    j_motor_side = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
+    j_motor_side = reducer.reflected_inertia(p)
     screw_j = screw_inertia(p)
     lead_arm = p["ball_screw.lead"] / (2.0 * math.pi)
     sled = (p["sled.master_mass"] + p["sled.slave_mass"]) * lead_arm**2

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import quad
 
+from twin.components import COMPONENTS
 from twin.engine.codes import CONTACT
 from twin.engine.model import contact_force
 from twin.engine.plant import W, internal_forces, work_rows
 from twin.layout import K, S
-from twin.physics.coupling import elasto_backlash_energy
 
 
 def contact_energy(c: np.ndarray, contact_model: int, relative_position: float) -> float:
@@ -36,8 +36,7 @@ def mechanical_energy(x: np.ndarray, model) -> float:
     w = work_rows(1)
     internal_forces(0.0, lane_x, c.reshape(-1, 1), w, 1, model.levels, model.force_table)
     kinetic = 0.5 * (
-        c[K.J_MOTOR_SIDE] * x[S.REDUCER_SPEED] ** 2
-        + c[K.J_SCREW_SIDE] * x[S.SCREW_SPEED] ** 2
+        c[K.J_SCREW_SIDE] * x[S.SCREW_SPEED] ** 2
         + c[K.SCREW_MASS] * x[S.SCREW_AXIAL_SPEED] ** 2
         + c[K.NUT1_MASS] * x[S.NUT1_SPEED] ** 2
         + c[K.NUT2_MASS] * x[S.NUT2_SPEED] ** 2
@@ -45,12 +44,15 @@ def mechanical_energy(x: np.ndarray, model) -> float:
     )
     compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     elastic = (
-        elasto_backlash_energy(x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], c[K.TORSION_STIFFNESS], c[K.REDUCER_BACKLASH])
-        + 0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
+        0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
         + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
         + 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
     )
     contact_model = int(model.levels[CONTACT])
     for nut in (0, 1):
         elastic += contact_energy(c, contact_model, w[W.NUT_DX + nut, 0])
+    for component in COMPONENTS:
+        component_kinetic, component_elastic = component.energy(x, c)
+        kinetic += component_kinetic
+        elastic += component_elastic
     return float(kinetic + elastic)

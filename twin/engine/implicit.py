@@ -11,6 +11,7 @@ import numpy as np
 
 from numerics.elementary import exp
 from numerics.jit import SCALAR
+from twin.components import reducer
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -135,13 +136,10 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
                                  -tangent_arm if rotation else 0.0, DOF_AXIAL, -c[K.SIN_HELIX, lane], position,
                                  c[K.SIN_HELIX, lane])
     # torsional elasto-backlash between reducer and screw
-    deflection = x[S.REDUCER_ANGLE, lane] - x[S.SCREW_ANGLE, lane]
-    if abs(deflection) > 0.5 * c[K.REDUCER_BACKLASH, lane]:
-        elastic = c[K.TORSION_STIFFNESS, lane] * (abs(deflection) - 0.5 * c[K.REDUCER_BACKLASH, lane])
-        rate = x[S.REDUCER_SPEED, lane] - x[S.SCREW_SPEED, lane]
-        damping = c[K.TORSION_DAMPING, lane] if c[K.TORSION_DAMPING, lane] * abs(rate) < elastic else 0.0
-        _add_element(matrix, b, velocity, h, c[K.TORSION_STIFFNESS, lane], damping, DOF_REDUCER, 1.0, DOF_SCREW,
-                     -1.0, DOF_REDUCER, 0.0, DOF_REDUCER, 0.0)
+    engaged, stiffness, damping = reducer.torsion_tangent_at(x, c, lane)
+    if engaged:
+        _add_element(matrix, b, velocity, h, stiffness, damping, DOF_REDUCER, 1.0, DOF_SCREW, -1.0, DOF_REDUCER, 0.0,
+                     DOF_REDUCER, 0.0)
     # preload springs between the nuts
     orientation = c[K.PRELOAD_ORIENTATION, lane]
     compression = c[K.PRELOAD_COMPRESSION, lane] - orientation * (x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane])
@@ -172,10 +170,7 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
                 x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
                 c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane]))
     # viscous and regularised Coulomb slopes of the supports' friction
-    ratio = c[K.RATIO, lane]
-    matrix[DOF_REDUCER, DOF_REDUCER] += h * (c[K.MOTOR_VISCOUS, lane] * ratio * ratio + stribeck_slope(
-        x[S.REDUCER_SPEED, lane], c[K.MR_FRICTION_STATIC, lane], c[K.MR_FRICTION_DYNAMIC, lane], 0.0,
-        c[K.ANGULAR_V_THRESHOLD, lane]))
+    matrix[DOF_REDUCER, DOF_REDUCER] += h * reducer.friction_slope_at(x, c, lane)
     matrix[DOF_SCREW, DOF_SCREW] += h * (c[K.SCREW_DAMPING, lane] + stribeck_slope(
         x[S.SCREW_SPEED, lane], c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
         c[K.SCREW_FRICTION_VISCOUS, lane], c[K.ANGULAR_V_THRESHOLD, lane]))
@@ -188,7 +183,7 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
 
 @numba.njit(**SCALAR)
 def current_loop_jacobian(x, c, u, lane, jacobian):
-    """Jacobian of the full current loop (:func:`twin.engine.plant._drive_electronics`) over
+    """Jacobian of the full current loop (:func:`twin.engine.plant._drive_current_at`) over
     :data:`CURRENT_LOOP_STATES` of lane ``lane`` into ``jacobian[:3, :3]``: the loop is linear (Eq. 9.1, the Hall
     sensor's first-order lag, the analog PI) between the inverter's voltage limits; on the limit the voltage is
     constant and only the anti-windup feedback remains. The back-EMF and temperature couplings are left explicit."""

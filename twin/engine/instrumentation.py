@@ -74,6 +74,7 @@ from sensors.encoder import (
 from sensors.load_cell import load_cell_parameters, preload_load_cell_parameters
 from sensors.resolver import RES_ACCURACY, RES_OFFSET, RES_SIZE, resolver_angle, resolver_parameters
 from sensors.torque_meter import torque_meter_parameters
+from twin.components import reducer
 from twin.engine.codes import ANALOG_SENSORS, CURRENT_LOOP, ENCODERS
 from twin.engine.plant import W, sensed_current
 from twin.layout import K, M, S
@@ -263,7 +264,7 @@ def instruments_advance(t, dt, x, c, w, levels, parameters, states, steps_to_sam
 @numba.njit(**SCALAR)
 def motor_angle_measured(x, c, lane, levels, parameters):
     """Motor angle read by the resolver in lane ``lane`` [rad] (the true one at the ideal level)."""
-    angle = c[K.RATIO, lane] * x[S.REDUCER_ANGLE, lane]
+    angle = reducer.motor_angle_at(x, c, lane)
     if levels[ENCODERS] == IDEAL:
         return angle
     return resolver_angle(parameters[RESOLVER], lane, angle)

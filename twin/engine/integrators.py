@@ -13,7 +13,7 @@ per lane, lane after lane. Either way a lane's numbers depend only on its own ro
 import numba
 import numpy as np
 
-from numerics.jit import KERNEL
+from numerics.jit import KERNEL, SCALAR
 from numerics.linalg import inverse
 from twin.engine.codes import CURRENT_LOOP, CURRENT_LOOP_FULL, PNEUMATICS, PNEUMATICS_FULL
 from twin.engine.implicit import (
@@ -24,7 +24,7 @@ from twin.engine.implicit import (
     dof_active,
     stiff_velocity_system,
 )
-from twin.engine.plant import N_WORK, held_input_propagators, rhs
+from twin.engine.plant import FUSED_LANES, N_WORK, has_lead_error, held_input_propagators, rhs, rhs_at
 from twin.layout import K, S
 
 RK4 = 0
@@ -56,13 +56,25 @@ class Workspace:
         return self.vectors, self.work, self.matrices, self.cache, self.small
 
 
+@numba.njit(**SCALAR)
+def _stage_at(x, k, h, out, j, lane):
+    """``out = x + h k`` of state ``j`` in lane ``lane`` (a Runge-Kutta stage state)."""
+    out[j, lane] = x[j, lane] + h * k[j, lane]
+
+
+@numba.njit(**SCALAR)
+def _rk4_update_at(x, k1, k2, k3, k4, h, j, lane):
+    """RK4's update of state ``j`` in lane ``lane`` from its four slopes."""
+    x[j, lane] += h / 6.0 * (k1[j, lane] + 2.0 * k2[j, lane] + 2.0 * k3[j, lane] + k4[j, lane])
+
+
 @numba.njit(**KERNEL)
 def _stage(x, k, h, out, active):
     """``out[active] = x[active] + h k[active]`` in every lane (the other rows of ``out`` are left as they are)."""
     lanes = x.shape[1]
     for j in active:
         for lane in range(lanes):
-            out[j, lane] = x[j, lane] + h * k[j, lane]
+            _stage_at(x, k, h, out, j, lane)
 
 
 @numba.njit(**KERNEL)
@@ -70,7 +82,7 @@ def _rk4_update(x, k1, k2, k3, k4, h, active):
     lanes = x.shape[1]
     for j in active:
         for lane in range(lanes):
-            x[j, lane] += h / 6.0 * (k1[j, lane] + 2.0 * k2[j, lane] + 2.0 * k3[j, lane] + k4[j, lane])
+            _rk4_update_at(x, k1, k2, k3, k4, h, j, lane)
 
 
 @numba.njit(**KERNEL)
@@ -80,15 +92,43 @@ def _copy(source, target):
             target[j, lane] = source[j, lane]
 
 
+@numba.njit(**SCALAR)
+def _rk4_at(t, x, h, c, u, levels, force_table, k1, k2, k3, k4, xs, w, active, lane, errors):
+    """:func:`rk4_step` of lane ``lane`` alone, fused: its four right-hand sides (:func:`twin.engine.plant.rhs_at`)
+    and stage states one after the other (``errors``: :func:`twin.engine.plant.has_lead_error` of its group)."""
+    for j in range(x.shape[0]):
+        xs[j, lane] = x[j, lane]
+    rhs_at(t, x, c, u, levels, force_table, k1, w, lane, errors)
+    for j in active:
+        _stage_at(x, k1, 0.5 * h, xs, j, lane)
+    rhs_at(t + 0.5 * h, xs, c, u, levels, force_table, k2, w, lane, errors)
+    for j in active:
+        _stage_at(x, k2, 0.5 * h, xs, j, lane)
+    rhs_at(t + 0.5 * h, xs, c, u, levels, force_table, k3, w, lane, errors)
+    for j in active:
+        _stage_at(x, k3, h, xs, j, lane)
+    rhs_at(t + h, xs, c, u, levels, force_table, k4, w, lane, errors)
+    for j in active:
+        _rk4_update_at(x, k1, k2, k3, k4, h, j, lane)
+
+
 @numba.njit(**KERNEL)
 def rk4_step(t, x, h, c, u, levels, force_table, vectors, w, active):
     """Classical 4th-order Runge-Kutta (Hairer, Norsett & Wanner, *Solving ODEs I*, Table 1.2).
 
     ``vectors[0:4]`` receive k1..k4, ``vectors[4]`` the stage state. The stage state starts as a copy of ``x``
     (the rows the fidelity holds, and at the quasi-static screw-axial level the balance's warm start, carried from
-    stage to stage).
+    stage to stage). A group of at most :data:`twin.engine.plant.FUSED_LANES` lanes takes the fused form
+    (:func:`_rk4_at` lane by lane), a larger one the split form, stage by stage over the lanes: the same operations
+    of each lane in the same order, so the same bits.
     """
     k1, k2, k3, k4, xs = vectors[0], vectors[1], vectors[2], vectors[3], vectors[4]
+    lanes = x.shape[1]
+    if lanes <= FUSED_LANES:
+        errors = has_lead_error(c, lanes)
+        for lane in range(lanes):
+            _rk4_at(t, x, h, c, u, levels, force_table, k1, k2, k3, k4, xs, w, active, lane, errors)
+        return
     _copy(x, xs)
     rhs(t, x, c, u, levels, force_table, k1, w)
     _stage(x, k1, 0.5 * h, xs, active)

@@ -15,6 +15,7 @@ import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
 from sensors.acquisition import convert
+from twin.components import reducer
 from twin.control.discrete import pi_step
 from twin.engine import instrumentation as ins
 from twin.engine.codes import PNEUMATICS, PNEUMATICS_FULL
@@ -66,7 +67,7 @@ def guard(x, c, w, lane, levels):
         return 1
     if abs(x[S.NUT1_POSITION, lane]) > c[K.STROKE_LIMIT, lane]:
         return 2
-    if abs(x[S.REDUCER_SPEED, lane] * c[K.RATIO, lane]) > c[K.MAX_MOTOR_SPEED, lane]:
+    if abs(reducer.motor_speed_at(x, c, lane)) > c[K.MAX_MOTOR_SPEED, lane]:
         return 3
     if abs(x[S.CURRENT, lane]) > 5.0 * c[K.MAX_CURRENT, lane]:
         return 4
@@ -108,7 +109,7 @@ def record(row, t, x, c, u, w, lane, memory, levels, force_table):
      row[Signal.SCREW_AXIAL_POSITION]) = ball_screw_outputs(x, c, w, lane)
     row[Signal.MOTOR_CURRENT] = x[S.CURRENT, lane]
     row[Signal.MOTOR_TORQUE] = c[K.TORQUE_CONSTANT, lane] * x[S.CURRENT, lane]
-    row[Signal.MOTOR_SPEED] = c[K.RATIO, lane] * x[S.REDUCER_SPEED, lane]
+    row[Signal.MOTOR_SPEED] = reducer.motor_speed_at(x, c, lane)
     row[Signal.WINDING_TEMPERATURE] = x[S.WINDING_TEMP, lane]
     row[Signal.PRELOAD_FORCE] = w[W.PRELOAD, lane]
     row[Signal.EXTERNAL_FORCE] = w[W.EXTERNAL, lane]

@@ -12,6 +12,7 @@ from scipy.optimize import brentq
 
 from numerics.elementary import sin
 from numerics.linalg import lstsq
+from twin.components import COMPONENTS
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
 from twin.layout import N_CONSTANTS, N_STATES, PARAMETER_CONSTANTS, POSITION_VELOCITY_PAIRS, K, S
@@ -29,7 +30,7 @@ from twin.physics.ball_screw import (
     stiffness_at,
     travel_deviation,
 )
-from twin.physics.drivetrain import screw_inertia, screw_mass, torsional_stiffness
+from twin.physics.drivetrain import screw_inertia, screw_mass
 from twin.physics.guides import abbe_reading_gain
 from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
 from twin.physics.preload import series_stiffness
@@ -110,17 +111,16 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c = np.zeros(N_CONSTANTS)
     for constant, name in PARAMETER_CONSTANTS.items():
         c[constant] = p[name]
-    ratio = p["reducer.ratio"]
     room_temperature = scene.condition("room_temperature")
     # motor and drive (Eqs. 9.1-9.3, Table B.1-B.3): the power-consistent equivalent circuit (twin.physics.motor)
     c[K.R20] = equivalent_resistance(p["motor.winding_resistance_20C"])
     c[K.INDUCTANCE] = equivalent_inductance(p["motor.inductance"])
     c[K.VOLTAGE_LIMIT] = equivalent_voltage_limit(p["drive.dc_bus_voltage"], p["drive.phase_voltage_amplitude_limit"])
-    c[K.J_MOTOR_SIDE] = (p["motor.inertia"] + p["reducer.inertia"]) * ratio**2
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
     c[K.AMBIENT] = room_temperature
-    # torsional chain (Sec. 9.3 "Torque meter", Eq. 9.7)
-    c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
+    # the components of twin.components (the reducer and its torsional chain, Eq. 9.3, Sec. 9.3)
+    for component in COMPONENTS:
+        component.derive_constants(c, p)
     c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
     # screw axial: rear bearing in series with the shaft (Table B.9)
     c[K.SCREW_MASS] = screw_mass(p)

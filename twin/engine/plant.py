@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
+from twin.components import reducer
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -44,7 +45,6 @@ from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
 from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
-from twin.physics.coupling import elasto_backlash
 from twin.physics.friction import stribeck_friction, stribeck_level
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.physics.preload import preload_force
@@ -80,6 +80,9 @@ BALANCE_ITERATIONS = 30
 #: Newton correction [m] below which the quasi-static balance counts as solved: a femtometre, 1e-9 of the
 #: micrometre features and far below any deflection the model resolves.
 BALANCE_TOLERANCE = 1.0e-15
+#: Groups of at most this many lanes take the fused form of the right-hand side (one lane's stages one after the
+#: other), larger ones the split form (one loop over the lanes per stage, vectorised): benchmarks/single_run.py.
+FUSED_LANES = 1
 
 
 def work_rows(lanes: int) -> np.ndarray:
@@ -98,7 +101,7 @@ def lead_deviation(c, lane, angle):
 
 
 @numba.njit(**KERNEL)
-def _has_lead_error(c, lanes):
+def has_lead_error(c, lanes):
     """Whether any lane of the group has a lead error. A lane without one gets ``e = e' = 0`` exactly from
     :func:`lead_deviation`, and adding those zeros changes no bit of its kinematics: skipping the computation for a
     group without lead errors gives every lane the numbers it has in any group."""
@@ -109,34 +112,50 @@ def _has_lead_error(c, lanes):
     return amplitude > 0.0
 
 
-@numba.njit(**KERNEL)
-def _nut_kinematics(x, c, w, lanes, rows):
+# Each stage below is written once, for one lane (``*_at``, a SCALAR function), and composed two ways from that one
+# source: split, one loop over the lanes per stage (the form LLVM vectorises, for groups), and fused, every stage of
+# one lane after the other (:func:`rhs`, :func:`internal_forces` and :func:`measurands` for groups of at most
+# ``FUSED_LANES`` lanes: one lane's state stays in registers, and the stage calls and loop set-ups of the split form
+# are gone). A lane's operations and their order are the same in both, so are its bits (tests/engine/test_lanes.py).
+
+
+@numba.njit(**SCALAR)
+def _nut_kinematics_at(x, c, w, lane, nut, rows, errors):
     """``dx_i`` and its rate without the screw's axial motion (Eq. 9.5 with the lead error,
     :mod:`twin.physics.ball_screw`): ``p(T) phi_i / 2 pi + e(phi_i) - x_ni`` with ``phi_i = theta_s - theta_ni``,
     into ``rows`` and ``rows + 2`` (:data:`W.NUT_KINEMATIC`, or directly :data:`W.NUT_DX` for the dynamic level),
-    and ``e'(phi_i)`` into :data:`W.NUT_LEAD_SLOPE` for the reaction torques."""
-    errors = _has_lead_error(c, lanes)
-    for nut in range(2):
-        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
-        if errors:
-            for lane in range(lanes):
-                arm = c[K.LEAD_ARM, lane]
-                angle = x[S.SCREW_ANGLE, lane] - x[position + 2, lane]
-                rate = x[S.SCREW_SPEED, lane] - x[position + 3, lane]
-                deviation, slope = lead_deviation(c, lane, angle)
-                w[rows + nut, lane] = (arm * angle + deviation) - x[position, lane]
-                w[rows + 2 + nut, lane] = (arm * rate + slope * rate) - x[position + 1, lane]
-                w[W.NUT_LEAD_SLOPE + nut, lane] = slope
-        else:
-            for lane in range(lanes):
-                arm = c[K.LEAD_ARM, lane]
-                w[rows + nut, lane] = arm * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane]) - x[position, lane]
-                w[rows + 2 + nut, lane] = arm * (x[S.SCREW_SPEED, lane] - x[position + 3, lane]) - x[position + 1, lane]
-                w[W.NUT_LEAD_SLOPE + nut, lane] = 0.0
+    and ``e'(phi_i)`` into :data:`W.NUT_LEAD_SLOPE` for the reaction torques; ``errors``: the group has a lead error
+    (:func:`has_lead_error`)."""
+    position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+    arm = c[K.LEAD_ARM, lane]
+    if errors:
+        angle = x[S.SCREW_ANGLE, lane] - x[position + 2, lane]
+        rate = x[S.SCREW_SPEED, lane] - x[position + 3, lane]
+        deviation, slope = lead_deviation(c, lane, angle)
+        w[rows + nut, lane] = (arm * angle + deviation) - x[position, lane]
+        w[rows + 2 + nut, lane] = (arm * rate + slope * rate) - x[position + 1, lane]
+        w[W.NUT_LEAD_SLOPE + nut, lane] = slope
+    else:
+        w[rows + nut, lane] = arm * (x[S.SCREW_ANGLE, lane] - x[position + 2, lane]) - x[position, lane]
+        w[rows + 2 + nut, lane] = arm * (x[S.SCREW_SPEED, lane] - x[position + 3, lane]) - x[position + 1, lane]
+        w[W.NUT_LEAD_SLOPE + nut, lane] = 0.0
 
 
 @numba.njit(**KERNEL)
-def _axial_stiffness(x, c, w, lanes):
+def _nut_kinematics(x, c, w, lanes, rows):
+    """:func:`_nut_kinematics_at` in every lane (the lead-error branch decided once for the group)."""
+    errors = has_lead_error(c, lanes)
+    for nut in range(2):
+        if errors:
+            for lane in range(lanes):
+                _nut_kinematics_at(x, c, w, lane, nut, rows, True)
+        else:
+            for lane in range(lanes):
+                _nut_kinematics_at(x, c, w, lane, nut, rows, False)
+
+
+@numba.njit(**SCALAR)
+def _axial_stiffness_at(x, c, w, lane):
     """Axial stiffness of the screw seen by the nuts [N/m] and its energy-gradient push on the sled [N].
 
     The rear bearing in series with the shaft ``E A / (l0 + x_n1)`` (Sec. 9.3) and, at the ``static``
@@ -149,27 +168,25 @@ def _axial_stiffness(x, c, w, lanes):
     sled position, so the spring energy ``k(x_n1) x_s^2 / 2`` also pushes the sled with
     ``-dE/dx_n1 = k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2``: tiny, but it keeps the model conservative.
     """
-    for lane in range(lanes):
-        length = c[K.SHAFT_LENGTH_0, lane] + x[S.NUT1_POSITION, lane]
-        twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
-        w[W.AXIAL_STIFFNESS, lane] = 1.0 / (1.0 / c[K.BEARING_STIFFNESS, lane] + length / c[K.SHAFT_EA, lane]
-                                            + length * twist)
+    length = c[K.SHAFT_LENGTH_0, lane] + x[S.NUT1_POSITION, lane]
+    twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
+    w[W.AXIAL_STIFFNESS, lane] = 1.0 / (1.0 / c[K.BEARING_STIFFNESS, lane] + length / c[K.SHAFT_EA, lane]
+                                        + length * twist)
 
 
-@numba.njit(**KERNEL)
-def _axial_gradient(x, c, w, lanes):
+@numba.njit(**SCALAR)
+def _axial_gradient_at(x, c, w, lane):
     """The axial spring energy's push on the sled, ``k^2 x_s^2 (1/(E A) + (p/2pi)^2/(G J_p)) / 2`` [N]
-    (:func:`_axial_stiffness`), at the screw's axial displacement of this evaluation."""
-    for lane in range(lanes):
-        stiffness = w[W.AXIAL_STIFFNESS, lane]
-        half_squared = 0.5 * stiffness * stiffness * x[S.SCREW_AXIAL, lane] * x[S.SCREW_AXIAL, lane]
-        twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
-        w[W.AXIAL_GRADIENT, lane] = half_squared / c[K.SHAFT_EA, lane] + half_squared * twist
+    (:func:`_axial_stiffness_at`), at the screw's axial displacement of this evaluation."""
+    stiffness = w[W.AXIAL_STIFFNESS, lane]
+    half_squared = 0.5 * stiffness * stiffness * x[S.SCREW_AXIAL, lane] * x[S.SCREW_AXIAL, lane]
+    twist = c[K.SHAFT_TWIST_COMPLIANCE, lane]
+    w[W.AXIAL_GRADIENT, lane] = half_squared / c[K.SHAFT_EA, lane] + half_squared * twist
 
 
-@numba.njit(**KERNEL)
-def _balance_step(x, c, w, lanes, contact_model):
-    """One Newton step of the quasi-static screw-axial balance in every lane not yet solved.
+@numba.njit(**SCALAR)
+def _balance_step_at(x, c, w, lane, contact_model):
+    """One Newton step of the quasi-static screw-axial balance in one lane (a no-op once it is solved).
 
     ``k(x_n1) x_s + f_1^el(x_s + a_1) + f_2^el(x_s + a_2) = 0``: the rear bearing and shaft against the two
     contacts' elastic forces (:func:`twin.physics.ball_screw.nut_elastic_force`), with ``a_i`` the kinematic part of
@@ -177,29 +194,28 @@ def _balance_step(x, c, w, lanes, contact_model):
     balance's time derivative, ``v_s = -(k_1 b_1 + k_2 b_2 + x_s v_n1 dk/dx_n1) / (k + k_1 + k_2)`` with ``k_i`` the
     contacts' tangent stiffnesses and ``b_i`` the rates of ``a_i``.
     """
-    for lane in range(lanes):
-        position = x[S.SCREW_AXIAL, lane]
-        f1, k1 = nut_elastic_force(
-            position + w[W.NUT_KINEMATIC, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
-            c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
-            c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
-            c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
-        f2, k2 = nut_elastic_force(
-            position + w[W.NUT_KINEMATIC + 1, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
-            c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
-            c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
-            c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
-        stiffness = w[W.AXIAL_STIFFNESS, lane]
-        slope = stiffness + k1 + k2
-        correction = (stiffness * position + f1 + f2) / slope
-        done = w[W.BALANCE_DONE, lane] > 0.0
-        x[S.SCREW_AXIAL, lane] = position if done else position - correction
-        # the rate of the balance, from the tangents at the last iterate (dk/dx_n1 = -k^2 (1/EA + twist))
-        gradient = -stiffness * stiffness * (1.0 / c[K.SHAFT_EA, lane] + c[K.SHAFT_TWIST_COMPLIANCE, lane])
-        rate = -(k1 * w[W.NUT_RATE, lane] + k2 * w[W.NUT_RATE + 1, lane]
-                 + position * gradient * x[S.NUT1_SPEED, lane]) / slope
-        x[S.SCREW_AXIAL_SPEED, lane] = x[S.SCREW_AXIAL_SPEED, lane] if done else rate
-        w[W.BALANCE_DONE, lane] = 1.0 if done or abs(correction) <= BALANCE_TOLERANCE else 0.0
+    position = x[S.SCREW_AXIAL, lane]
+    f1, k1 = nut_elastic_force(
+        position + w[W.NUT_KINEMATIC, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+        c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+        c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+        c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
+    f2, k2 = nut_elastic_force(
+        position + w[W.NUT_KINEMATIC + 1, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+        c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+        c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+        c[K.LOADED_BALLS, lane], contact_model, c[K.LINEAR_CONTACT_STIFFNESS, lane])
+    stiffness = w[W.AXIAL_STIFFNESS, lane]
+    slope = stiffness + k1 + k2
+    correction = (stiffness * position + f1 + f2) / slope
+    done = w[W.BALANCE_DONE, lane] > 0.0
+    x[S.SCREW_AXIAL, lane] = position if done else position - correction
+    # the rate of the balance, from the tangents at the last iterate (dk/dx_n1 = -k^2 (1/EA + twist))
+    gradient = -stiffness * stiffness * (1.0 / c[K.SHAFT_EA, lane] + c[K.SHAFT_TWIST_COMPLIANCE, lane])
+    rate = -(k1 * w[W.NUT_RATE, lane] + k2 * w[W.NUT_RATE + 1, lane]
+             + position * gradient * x[S.NUT1_SPEED, lane]) / slope
+    x[S.SCREW_AXIAL_SPEED, lane] = x[S.SCREW_AXIAL_SPEED, lane] if done else rate
+    w[W.BALANCE_DONE, lane] = 1.0 if done or abs(correction) <= BALANCE_TOLERANCE else 0.0
 
 
 @numba.njit(**SCALAR)
@@ -218,98 +234,141 @@ def _unsolved(w, lanes):
     return remaining > 0.0
 
 
+@numba.njit(**SCALAR)
+def _balance_failed_at(w, lane):
+    """Flag a lane whose balance is still unsolved after :data:`BALANCE_ITERATIONS` (the guard reads it)."""
+    w[W.BALANCE_FAILED, lane] = 1.0 if w[W.BALANCE_DONE, lane] == 0.0 else w[W.BALANCE_FAILED, lane]
+
+
 @numba.njit(**KERNEL)
 def screw_axial_balance(x, c, w, lanes, contact_model):
-    """The quasi-static screw-axial level: solve the balance (:func:`_balance_step`, Newton from the last solution,
-    warm-started by the lane's own ``S.SCREW_AXIAL`` row) in every lane, writing ``S.SCREW_AXIAL`` and
+    """The quasi-static screw-axial level: solve the balance (:func:`_balance_step_at`, Newton from the last
+    solution, warm-started by the lane's own ``S.SCREW_AXIAL`` row) in every lane, writing ``S.SCREW_AXIAL`` and
     ``S.SCREW_AXIAL_SPEED`` of ``x``; a lane still unsolved after :data:`BALANCE_ITERATIONS` is flagged in
-    ``W.BALANCE_FAILED``. Each lane iterates until its own correction is below :data:`BALANCE_TOLERANCE`, so its
-    result does not depend on how long its lane mates need."""
+    ``W.BALANCE_FAILED``. Each lane iterates until its own correction is below :data:`BALANCE_TOLERANCE` (a solved
+    lane's step changes nothing), so its result does not depend on how long its lane mates need."""
     for lane in range(lanes):
         w[W.BALANCE_DONE, lane] = 0.0
     for _ in range(BALANCE_ITERATIONS):
-        _balance_step(x, c, w, lanes, contact_model)
+        for lane in range(lanes):
+            _balance_step_at(x, c, w, lane, contact_model)
         if not _unsolved(w, lanes):
             return
     for lane in range(lanes):
-        w[W.BALANCE_FAILED, lane] = 1.0 if w[W.BALANCE_DONE, lane] == 0.0 else w[W.BALANCE_FAILED, lane]
+        _balance_failed_at(w, lane)
 
 
-@numba.njit(**KERNEL)
-def _relative_motion(x, w, lanes):
+@numba.njit(**SCALAR)
+def _screw_axial_balance_at(x, c, w, lane, contact_model):
+    """:func:`screw_axial_balance` in one lane: the same Newton steps, stopped when this lane is solved."""
+    w[W.BALANCE_DONE, lane] = 0.0
+    for _ in range(BALANCE_ITERATIONS):
+        _balance_step_at(x, c, w, lane, contact_model)
+        if w[W.BALANCE_DONE, lane] > 0.0:
+            return
+    _balance_failed_at(w, lane)
+
+
+@numba.njit(**SCALAR)
+def _relative_motion_at(x, w, lane, nut):
     """``dx_i`` and its rate with the screw's axial displacement (quasi-static level)."""
-    for nut in range(2):
-        for lane in range(lanes):
-            w[W.NUT_DX + nut, lane] = x[S.SCREW_AXIAL, lane] + w[W.NUT_KINEMATIC + nut, lane]
-            w[W.NUT_DV + nut, lane] = x[S.SCREW_AXIAL_SPEED, lane] + w[W.NUT_RATE + nut, lane]
+    w[W.NUT_DX + nut, lane] = x[S.SCREW_AXIAL, lane] + w[W.NUT_KINEMATIC + nut, lane]
+    w[W.NUT_DV + nut, lane] = x[S.SCREW_AXIAL_SPEED, lane] + w[W.NUT_RATE + nut, lane]
 
 
-@numba.njit(**KERNEL)
-def _dynamic_relative_motion(x, w, lanes):
+@numba.njit(**SCALAR)
+def _dynamic_relative_motion_at(x, w, lane, nut):
     """Add the screw's axial displacement and speed (dynamic level) to the kinematic ``dx_i`` rows."""
-    for nut in range(2):
-        for lane in range(lanes):
-            w[W.NUT_DX + nut, lane] += x[S.SCREW_AXIAL, lane]
-            w[W.NUT_DV + nut, lane] += x[S.SCREW_AXIAL_SPEED, lane]
+    w[W.NUT_DX + nut, lane] += x[S.SCREW_AXIAL, lane]
+    w[W.NUT_DV + nut, lane] += x[S.SCREW_AXIAL_SPEED, lane]
 
 
-@numba.njit(**KERNEL)
-def _contacts(c, w, lanes, contact_model):
-    """Axial force and per-sphere normal load of both nuts (Eqs. 9.4-9.6, 7.28, 7.29)."""
-    for nut in range(2):
-        for lane in range(lanes):
-            force, normal, _ = nut_axial_force(
-                w[W.NUT_DX + nut, lane], w[W.NUT_DV + nut, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
-                c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
-                c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
-                c[K.CONTACT_DAMPING, lane], c[K.LOADED_BALLS, lane], contact_model,
-                c[K.LINEAR_CONTACT_STIFFNESS, lane])
-            w[W.NUT_FORCE + nut, lane] = force
-            w[W.NUT_NORMAL + nut, lane] = normal
+@numba.njit(**SCALAR)
+def _contact_at(c, w, lane, nut, contact_model):
+    """Axial force and per-sphere normal load of nut ``nut`` (Eqs. 9.4-9.6, 7.28, 7.29)."""
+    force, normal, _ = nut_axial_force(
+        w[W.NUT_DX + nut, lane], w[W.NUT_DV + nut, lane], c[K.BACKLASH, lane], c[K.COS_HELIX, lane],
+        c[K.CENTRE_DISTANCE, lane], c[K.CONTACT_RADIAL_0, lane], c[K.CONTACT_AXIAL_0, lane],
+        c[K.SIN_ALPHA_0, lane], _stiffness(c, lane), c[K.SIN_ALPHA_MIN, lane], c[K.SIN_ALPHA_SPAN, lane],
+        c[K.CONTACT_DAMPING, lane], c[K.LOADED_BALLS, lane], contact_model,
+        c[K.LINEAR_CONTACT_STIFFNESS, lane])
+    w[W.NUT_FORCE + nut, lane] = force
+    w[W.NUT_NORMAL + nut, lane] = normal
 
 
-@numba.njit(**KERNEL)
-def _couplings(x, c, w, lanes):
+@numba.njit(**SCALAR)
+def _couplings_at(x, c, w, lane):
     """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
-    for lane in range(lanes):
-        w[W.TORQUE, lane] = elasto_backlash(
-            x[S.REDUCER_ANGLE, lane] - x[S.SCREW_ANGLE, lane], x[S.REDUCER_SPEED, lane] - x[S.SCREW_SPEED, lane],
-            c[K.TORSION_STIFFNESS, lane], c[K.TORSION_DAMPING, lane], c[K.REDUCER_BACKLASH, lane])
-        w[W.PRELOAD, lane] = preload_force(
-            x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane], x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane],
-            c[K.PRELOAD_COMPRESSION, lane], c[K.PRELOAD_STIFFNESS, lane], c[K.PRELOAD_DAMPING, lane],
-            c[K.PRELOAD_ORIENTATION, lane])
+    w[W.TORQUE, lane] = reducer.transmitted_torque_at(x, c, lane)
+    w[W.PRELOAD, lane] = preload_force(
+        x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane], x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane],
+        c[K.PRELOAD_COMPRESSION, lane], c[K.PRELOAD_STIFFNESS, lane], c[K.PRELOAD_DAMPING, lane],
+        c[K.PRELOAD_ORIENTATION, lane])
 
 
-@numba.njit(**KERNEL)
-def _external_force(t, x, c, w, lanes, pneumatics, force_table):
+@numba.njit(**SCALAR)
+def _force_demand(t, pneumatics, force_table):
+    """The scene's force demand at ``t`` where the ideal load source applies it, else 0 (shared by a group)."""
+    return profile_value(force_table, t) if pneumatics == PNEUMATICS_IDEAL else 0.0
+
+
+@numba.njit(**SCALAR)
+def _external_force_at(x, c, w, lane, pneumatics, demand):
     """External force on the master nut [N, +x]: the load cell's spring force (full pneumatics), the scene's
-    force demand (ideal source) or nothing (absent)."""
-    demand = profile_value(force_table, t) if pneumatics == PNEUMATICS_IDEAL else 0.0
-    for lane in range(lanes):
-        if pneumatics == PNEUMATICS_FULL:
-            w[W.EXTERNAL, lane] = pn.load_cell_spring_force(
-                x[S.PISTON_POSITION, lane] - c[K.LINK_OFFSET, lane], x[S.NUT1_POSITION, lane],
-                x[S.PISTON_SPEED, lane], x[S.NUT1_SPEED, lane], c[K.LOAD_CELL_STIFFNESS, lane],
-                c[K.LOAD_CELL_DAMPING, lane])
-        else:
-            w[W.EXTERNAL, lane] = demand
+    force demand ``demand`` (ideal source, :func:`_force_demand`) or nothing (absent)."""
+    if pneumatics == PNEUMATICS_FULL:
+        w[W.EXTERNAL, lane] = pn.load_cell_spring_force(
+            x[S.PISTON_POSITION, lane] - c[K.LINK_OFFSET, lane], x[S.NUT1_POSITION, lane],
+            x[S.PISTON_SPEED, lane], x[S.NUT1_SPEED, lane], c[K.LOAD_CELL_STIFFNESS, lane],
+            c[K.LOAD_CELL_DAMPING, lane])
+    else:
+        w[W.EXTERNAL, lane] = demand
+
+
+@numba.njit(**SCALAR)
+def _groove_friction_at(x, c, w, lane, nut, chapter5):
+    """Helix friction force of nut ``nut`` along ``v_t`` [N] (reduced Ch. 5, Eqs. 5.16-5.24) at the ``chapter5``
+    level, else 0."""
+    if not chapter5:
+        w[W.NUT_FRICTION + nut, lane] = 0.0
+        return
+    position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+    speed = tangential_speed(x[S.SCREW_SPEED, lane], x[position + 3, lane], x[S.SCREW_AXIAL_SPEED, lane],
+                             x[position + 1, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane],
+                             c[K.SIN_HELIX, lane])
+    w[W.NUT_FRICTION + nut, lane] = nut_friction_force(
+        w[W.NUT_NORMAL + nut, lane], speed, c[K.LOADED_BALLS, lane], c[K.BALL_RADIUS, lane],
+        c[K.FRICTION_G1, lane], c[K.FRICTION_G2, lane], c[K.FRICTION_G3, lane], c[K.FRICTION_G4, lane],
+        c[K.FRICTION_G5, lane], c[K.FRICTION_G6, lane], c[K.ROLLING_K_GC, lane], c[K.ROLLING_K_RF, lane],
+        c[K.ROLLING_F_V1, lane], c[K.ROLLING_THRESHOLD, lane])
 
 
 @numba.njit(**KERNEL)
-def _groove_friction(x, c, w, lanes):
-    """Helix friction force of each nut along ``v_t`` [N] (reduced Ch. 5, Eqs. 5.16-5.24)."""
+def _internal_forces_at(x, c, w, lane, levels, demand, errors):
+    """:func:`internal_forces` of one lane, fused (``demand``: :func:`_force_demand`; ``errors``:
+    :func:`has_lead_error` of its group). Not inlined: :func:`internal_forces` and :func:`rhs_at` call the one
+    compiled copy (inlining it twice costs compile time and gains nothing measurable)."""
+    contact_model = levels[CONTACT]
+    _axial_stiffness_at(x, c, w, lane)
+    if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
+        for nut in range(2):
+            _nut_kinematics_at(x, c, w, lane, nut, W.NUT_DX, errors)
+        for nut in range(2):
+            _dynamic_relative_motion_at(x, w, lane, nut)
+    else:
+        for nut in range(2):
+            _nut_kinematics_at(x, c, w, lane, nut, W.NUT_KINEMATIC, errors)
+        _screw_axial_balance_at(x, c, w, lane, contact_model)
+        for nut in range(2):
+            _relative_motion_at(x, w, lane, nut)
+    _axial_gradient_at(x, c, w, lane)
     for nut in range(2):
-        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
-        for lane in range(lanes):
-            speed = tangential_speed(x[S.SCREW_SPEED, lane], x[position + 3, lane], x[S.SCREW_AXIAL_SPEED, lane],
-                                     x[position + 1, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane],
-                                     c[K.SIN_HELIX, lane])
-            w[W.NUT_FRICTION + nut, lane] = nut_friction_force(
-                w[W.NUT_NORMAL + nut, lane], speed, c[K.LOADED_BALLS, lane], c[K.BALL_RADIUS, lane],
-                c[K.FRICTION_G1, lane], c[K.FRICTION_G2, lane], c[K.FRICTION_G3, lane], c[K.FRICTION_G4, lane],
-                c[K.FRICTION_G5, lane], c[K.FRICTION_G6, lane], c[K.ROLLING_K_GC, lane], c[K.ROLLING_K_RF, lane],
-                c[K.ROLLING_F_V1, lane], c[K.ROLLING_THRESHOLD, lane])
+        _contact_at(c, w, lane, nut, contact_model)
+    _couplings_at(x, c, w, lane)
+    _external_force_at(x, c, w, lane, levels[PNEUMATICS], demand)
+    chapter5 = levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5
+    for nut in range(2):
+        _groove_friction_at(x, c, w, lane, nut, chapter5)
 
 
 @numba.njit(**KERNEL)
@@ -318,33 +377,61 @@ def internal_forces(t, x, c, w, lanes, levels, force_table):
     through the couplings, the screw-axial balance at the quasi-static level (which writes ``S.SCREW_AXIAL`` and
     ``S.SCREW_AXIAL_SPEED`` of ``x``), the contacts, the preload, the external force and, at the ``chapter5``
     level, the ball-groove friction. What the right-hand side, the recorder and the instruments read."""
+    demand = _force_demand(t, levels[PNEUMATICS], force_table)
+    if lanes <= FUSED_LANES:
+        errors = has_lead_error(c, lanes)
+        for lane in range(lanes):
+            _internal_forces_at(x, c, w, lane, levels, demand, errors)
+        return
     contact_model = levels[CONTACT]
-    _axial_stiffness(x, c, w, lanes)
+    for lane in range(lanes):
+        _axial_stiffness_at(x, c, w, lane)
     if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
         _nut_kinematics(x, c, w, lanes, W.NUT_DX)
-        _dynamic_relative_motion(x, w, lanes)
+        for nut in range(2):
+            for lane in range(lanes):
+                _dynamic_relative_motion_at(x, w, lane, nut)
     else:
         _nut_kinematics(x, c, w, lanes, W.NUT_KINEMATIC)
         screw_axial_balance(x, c, w, lanes, contact_model)
-        _relative_motion(x, w, lanes)
-    _axial_gradient(x, c, w, lanes)
-    _contacts(c, w, lanes, contact_model)
-    _couplings(x, c, w, lanes)
-    _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
+        for nut in range(2):
+            for lane in range(lanes):
+                _relative_motion_at(x, w, lane, nut)
+    for lane in range(lanes):
+        _axial_gradient_at(x, c, w, lane)
+    for nut in range(2):
+        for lane in range(lanes):
+            _contact_at(c, w, lane, nut, contact_model)
+    for lane in range(lanes):
+        _couplings_at(x, c, w, lane)
+    pneumatics = levels[PNEUMATICS]
+    for lane in range(lanes):
+        _external_force_at(x, c, w, lane, pneumatics, demand)
     if levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5:
-        _groove_friction(x, c, w, lanes)
+        for nut in range(2):
+            for lane in range(lanes):
+                _groove_friction_at(x, c, w, lane, nut, True)
     else:
         for nut in range(2):
             for lane in range(lanes):
-                w[W.NUT_FRICTION + nut, lane] = 0.0
+                _groove_friction_at(x, c, w, lane, nut, False)
 
 
 @numba.njit(**KERNEL)
 def measurands(t, x, c, w, lanes, levels, force_table):
     """What the analog instruments measure after a step, without the contacts: the torque through the couplings,
     the preload and the external force into the work rows (the current is read off the state)."""
-    _couplings(x, c, w, lanes)
-    _external_force(t, x, c, w, lanes, levels[PNEUMATICS], force_table)
+    demand = _force_demand(t, levels[PNEUMATICS], force_table)
+    pneumatics = levels[PNEUMATICS]
+    if lanes <= FUSED_LANES:
+        for lane in range(lanes):
+            _couplings_at(x, c, w, lane)
+            _external_force_at(x, c, w, lane, pneumatics, demand)
+        return
+    for lane in range(lanes):
+        _couplings_at(x, c, w, lane)
+    for lane in range(lanes):
+        _external_force_at(x, c, w, lane, pneumatics, demand)
 
 
 @numba.njit(**SCALAR)
@@ -357,11 +444,11 @@ def current_loop_voltage(x, c, u, lane):
     return min(max(demand_voltage, -limit), limit), demand_voltage
 
 
-@numba.njit(**KERNEL)
-def _drive_electronics(x, c, u, dxdt, lanes):
-    """Full current loop: winding current (Eq. 9.1, power-consistent: :mod:`twin.physics.motor`), Hall sensor and
-    analog PI with back-calculation anti-windup."""
-    for lane in range(lanes):
+@numba.njit(**SCALAR)
+def _drive_current_at(x, c, u, dxdt, lane, current_loop):
+    """The drive's current: the full loop (winding current, Eq. 9.1, power-consistent: :mod:`twin.physics.motor`,
+    Hall sensor and analog PI with back-calculation anti-windup) or the ideal lag at the loop's bandwidth."""
+    if current_loop == CURRENT_LOOP_FULL:
         demand = u[U.CURRENT_DEMAND, lane]
         voltage, demand_voltage = current_loop_voltage(x, c, u, lane)
         resistance = winding_resistance(x[S.WINDING_TEMP, lane], c[K.R20, lane], c[K.R_TEMP_COEF, lane])
@@ -370,25 +457,19 @@ def _drive_electronics(x, c, u, dxdt, lanes):
         dxdt[S.CURRENT_PI, lane] = (c[K.CURRENT_KI, lane] * (demand - x[S.HALL_CURRENT, lane])
                                     + (voltage - demand_voltage) / c[K.CURRENT_AW_TIME, lane])
         dxdt[S.HALL_CURRENT, lane] = (x[S.CURRENT, lane] - x[S.HALL_CURRENT, lane]) / c[K.HALL_TAU, lane]
-
-
-@numba.njit(**KERNEL)
-def _motor(x, c, u, dxdt, lanes, current_loop, thermal):
-    """The drive's current (the full loop or the ideal lag at the loop's bandwidth) and the winding temperature
-    (Eq. 9.2, or frozen)."""
-    if current_loop == CURRENT_LOOP_FULL:
-        _drive_electronics(x, c, u, dxdt, lanes)
     else:
-        for lane in range(lanes):
-            dxdt[S.CURRENT, lane] = (u[U.CURRENT_DEMAND, lane] - x[S.CURRENT, lane]) / c[K.CURRENT_LOOP_TAU, lane]
-    if thermal == THERMAL_DYNAMIC:
-        for lane in range(lanes):
-            temperature = x[S.WINDING_TEMP, lane]
-            resistance = winding_resistance(temperature, c[K.R20, lane], c[K.R_TEMP_COEF, lane])
-            dxdt[S.WINDING_TEMP, lane] = winding_temperature_derivative(
-                temperature, c[K.AMBIENT, lane], resistance * x[S.CURRENT, lane] * x[S.CURRENT, lane],
-                c[K.THERMAL_RESISTANCE, lane], c[K.THERMAL_TAU, lane], c[K.HEAT_TRANSFER, lane],
-                c[K.MOTOR_AREA, lane], c[K.EMISSIVITY, lane])
+        dxdt[S.CURRENT, lane] = (u[U.CURRENT_DEMAND, lane] - x[S.CURRENT, lane]) / c[K.CURRENT_LOOP_TAU, lane]
+
+
+@numba.njit(**SCALAR)
+def _winding_thermal_at(x, c, dxdt, lane):
+    """The winding temperature (Eq. 9.2) at the ``dynamic`` motor-thermal level."""
+    temperature = x[S.WINDING_TEMP, lane]
+    resistance = winding_resistance(temperature, c[K.R20, lane], c[K.R_TEMP_COEF, lane])
+    dxdt[S.WINDING_TEMP, lane] = winding_temperature_derivative(
+        temperature, c[K.AMBIENT, lane], resistance * x[S.CURRENT, lane] * x[S.CURRENT, lane],
+        c[K.THERMAL_RESISTANCE, lane], c[K.THERMAL_TAU, lane], c[K.HEAT_TRANSFER, lane],
+        c[K.MOTOR_AREA, lane], c[K.EMISSIVITY, lane])
 
 
 @numba.njit(**SCALAR)
@@ -398,75 +479,64 @@ def _lead_error_torque(w, lane):
     return w[W.NUT_LEAD_SLOPE, lane] * w[W.NUT_FORCE, lane] + w[W.NUT_LEAD_SLOPE + 1, lane] * w[W.NUT_FORCE + 1, lane]
 
 
-@numba.njit(**KERNEL)
-def _rotation(x, c, w, dxdt, lanes):
-    """Motor-reducer (Eq. 9.3, written for the reducer output angle) and screw rotation (Eq. 9.7)."""
-    for lane in range(lanes):
-        ratio = c[K.RATIO, lane]
-        w_r = x[S.REDUCER_SPEED, lane]
-        torque = w[W.TORQUE, lane]
-        friction_mr = stribeck_friction(w_r, c[K.MR_FRICTION_STATIC, lane], c[K.MR_FRICTION_DYNAMIC, lane],
-                                        c[K.MR_FRICTION_RATE, lane], 0.0, c[K.ANGULAR_V_THRESHOLD, lane])
-        drive = (c[K.TORQUE_CONSTANT, lane] * x[S.CURRENT, lane] * c[K.EFFICIENCY, lane]
-                 - c[K.MOTOR_VISCOUS, lane] * ratio * w_r) * ratio
-        dxdt[S.REDUCER_ANGLE, lane] = w_r
-        dxdt[S.REDUCER_SPEED, lane] = (drive - friction_mr - torque) / c[K.J_MOTOR_SIDE, lane]
-        # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
-        w_s = x[S.SCREW_SPEED, lane]
-        friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
-                                       c[K.SCREW_FRICTION_RATE, lane], c[K.SCREW_FRICTION_VISCOUS, lane],
-                                       c[K.ANGULAR_V_THRESHOLD, lane])
-        screw_1, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
-                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-        screw_2, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
-                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-        dxdt[S.SCREW_ANGLE, lane] = w_s
-        dxdt[S.SCREW_SPEED, lane] = (torque - c[K.SCREW_DAMPING, lane] * w_s - friction_s
-                                     - c[K.LEAD_ARM, lane] * (w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
-                                     - _lead_error_torque(w, lane) + screw_1 + screw_2) / c[K.J_SCREW_SIDE, lane]
+@numba.njit(**SCALAR)
+def _rotation_at(x, c, w, dxdt, lane):
+    """Motor-reducer (Eq. 9.3, :func:`twin.components.reducer.reducer_rhs_at`) and screw rotation (Eq. 9.7)."""
+    torque = w[W.TORQUE, lane]
+    reducer.reducer_rhs_at(x, c, torque, dxdt, lane)
+    # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
+    w_s = x[S.SCREW_SPEED, lane]
+    friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
+                                   c[K.SCREW_FRICTION_RATE, lane], c[K.SCREW_FRICTION_VISCOUS, lane],
+                                   c[K.ANGULAR_V_THRESHOLD, lane])
+    screw_1, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
+                                                   c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    screw_2, _, _, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
+                                                   c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    dxdt[S.SCREW_ANGLE, lane] = w_s
+    dxdt[S.SCREW_SPEED, lane] = (torque - c[K.SCREW_DAMPING, lane] * w_s - friction_s
+                                 - c[K.LEAD_ARM, lane] * (w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
+                                 - _lead_error_torque(w, lane) + screw_1 + screw_2) / c[K.J_SCREW_SIDE, lane]
 
 
-@numba.njit(**KERNEL)
-def _screw_axial(x, c, w, dxdt, lanes):
+@numba.njit(**SCALAR)
+def _screw_axial_at(x, c, w, dxdt, lane):
     """Screw axial motion at the dynamic level: rear bearing in series with the shaft (and its twist) to the
     contacts (Sec. 9.3)."""
-    for lane in range(lanes):
-        _, _, axial_1, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
-                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-        _, _, axial_2, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
-                                                       c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-        dxdt[S.SCREW_AXIAL, lane] = x[S.SCREW_AXIAL_SPEED, lane]
-        dxdt[S.SCREW_AXIAL_SPEED, lane] = (
-            -(w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
-            - w[W.AXIAL_STIFFNESS, lane] * x[S.SCREW_AXIAL, lane] + axial_1 + axial_2
-            - c[K.SCREW_AXIAL_DAMPING, lane] * x[S.SCREW_AXIAL_SPEED, lane]) / c[K.SCREW_MASS, lane]
+    _, _, axial_1, _ = friction_generalised_forces(w[W.NUT_FRICTION, lane], c[K.PITCH_RADIUS, lane],
+                                                   c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    _, _, axial_2, _ = friction_generalised_forces(w[W.NUT_FRICTION + 1, lane], c[K.PITCH_RADIUS, lane],
+                                                   c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    dxdt[S.SCREW_AXIAL, lane] = x[S.SCREW_AXIAL_SPEED, lane]
+    dxdt[S.SCREW_AXIAL_SPEED, lane] = (
+        -(w[W.NUT_FORCE, lane] + w[W.NUT_FORCE + 1, lane])
+        - w[W.AXIAL_STIFFNESS, lane] * x[S.SCREW_AXIAL, lane] + axial_1 + axial_2
+        - c[K.SCREW_AXIAL_DAMPING, lane] * x[S.SCREW_AXIAL_SPEED, lane]) / c[K.SCREW_MASS, lane]
 
 
-@numba.njit(**KERNEL)
-def _nuts(x, c, w, dxdt, lanes, rotation):
-    """The nuts (Eq. 9.8): the master carries the external force, the preload acts between them; their roll on the
+@numba.njit(**SCALAR)
+def _nut_at(x, c, w, dxdt, lane, nut, rotation):
+    """Nut ``nut`` (Eq. 9.8): the master carries the external force, the preload acts between them; its roll on the
     linear guides against the contact torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
-    for nut in range(2):
-        position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
-        master = 1.0 if nut == 0 else 0.0
-        for lane in range(lanes):
-            _, nut_torque, _, nut_axial = friction_generalised_forces(
-                w[W.NUT_FRICTION + nut, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-            guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
-                x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
-                c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
-            # the preload pushes the nuts apart (O, orientation +1) or draws them together (X, -1)
-            preload = (1.0 - 2.0 * master) * c[K.PRELOAD_ORIENTATION, lane] * w[W.PRELOAD, lane]
-            master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
-            dxdt[position, lane] = x[position + 1, lane]
-            dxdt[position + 1, lane] = (w[W.NUT_FORCE + nut, lane] + nut_axial - guide + preload + master_loads
-                                        ) / c[K.NUT1_MASS + NUT_CONSTANT_STRIDE * nut, lane]
-            if rotation == NUT_ROTATION_ON:
-                dxdt[position + 2, lane] = x[position + 3, lane]
-                dxdt[position + 3, lane] = (c[K.LEAD_ARM, lane] * w[W.NUT_FORCE + nut, lane]
-                                            + w[W.NUT_LEAD_SLOPE + nut, lane] * w[W.NUT_FORCE + nut, lane] + nut_torque
-                                            - c[K.GUIDE_ROLL_STIFFNESS, lane] * x[position + 2, lane]
-                                            - c[K.GUIDE_ROLL_DAMPING, lane] * x[position + 3, lane]) / c[K.J_NUT, lane]
+    position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
+    master = 1.0 if nut == 0 else 0.0
+    _, nut_torque, _, nut_axial = friction_generalised_forces(
+        w[W.NUT_FRICTION + nut, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
+    guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
+        x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
+        c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+    # the preload pushes the nuts apart (O, orientation +1) or draws them together (X, -1)
+    preload = (1.0 - 2.0 * master) * c[K.PRELOAD_ORIENTATION, lane] * w[W.PRELOAD, lane]
+    master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
+    dxdt[position, lane] = x[position + 1, lane]
+    dxdt[position + 1, lane] = (w[W.NUT_FORCE + nut, lane] + nut_axial - guide + preload + master_loads
+                                ) / c[K.NUT1_MASS + NUT_CONSTANT_STRIDE * nut, lane]
+    if rotation == NUT_ROTATION_ON:
+        dxdt[position + 2, lane] = x[position + 3, lane]
+        dxdt[position + 3, lane] = (c[K.LEAD_ARM, lane] * w[W.NUT_FORCE + nut, lane]
+                                    + w[W.NUT_LEAD_SLOPE + nut, lane] * w[W.NUT_FORCE + nut, lane] + nut_torque
+                                    - c[K.GUIDE_ROLL_STIFFNESS, lane] * x[position + 2, lane]
+                                    - c[K.GUIDE_ROLL_DAMPING, lane] * x[position + 3, lane]) / c[K.J_NUT, lane]
 
 
 @numba.njit(**SCALAR)
@@ -483,42 +553,71 @@ def seal_bristle(x, c, lane):
     return force, rate
 
 
+@numba.njit(**SCALAR)
+def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
+    """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11) of one lane: the one home of the
+    load system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design).
+    ``seal`` is the seal-friction level's code: the regularised Eq. 7.63 or the elasto-plastic bristle law."""
+    dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
+        x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
+        c[K.VALVE_MIN, lane], c[K.VALVE_MAX, lane], c[K.VALVE_FREQUENCY, lane], c[K.VALVE_DAMPING, lane])
+    p1 = x[S.CHAMBER1_PRESSURE, lane]
+    p2 = x[S.CHAMBER2_PRESSURE, lane]
+    temperature = c[K.AIR_TEMPERATURE, lane]
+    g1, g2 = pn.chamber_mass_flows(
+        x[S.SPOOL_POSITION, lane], p1, p2, c[K.P_SUPPLY, lane], c[K.P_ATMOSPHERE, lane],
+        c[K.MAX_CONDUCTANCE, lane], c[K.LEAKAGE_FRACTION, lane], c[K.CRITICAL_RATIO, lane],
+        c[K.REFERENCE_DENSITY, lane], c[K.REFERENCE_TEMPERATURE, lane], temperature, temperature,
+        c[K.LAMINAR_RATIO, lane])
+    v1, dv1, v2, dv2 = pn.chamber_volumes(x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], c[K.AREA1, lane],
+                                          c[K.AREA2, lane], c[K.DEAD_VOLUME1, lane], c[K.DEAD_VOLUME2, lane],
+                                          c[K.STROKE, lane])
+    dxdt[S.CHAMBER1_PRESSURE, lane] = pn.chamber_pressure_derivative(
+        p1, g1, v1, dv1, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
+    dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
+        p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
+    dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
+    if seal == SEAL_FRICTION_ELASTO_PLASTIC:
+        friction, dxdt[S.SEAL_DEFLECTION, lane] = seal_bristle(x, c, lane)
+    else:
+        friction = stribeck_friction(x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane],
+                                     c[K.CYLINDER_FRICTION_DYNAMIC, lane], c[K.CYLINDER_FRICTION_RATE, lane],
+                                     c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane])
+    dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration_under_friction(
+        p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
+        c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
+        friction, c[K.STROKE, lane], c[K.DAMPER_TRAVEL, lane], c[K.DAMPER_STIFFNESS, lane],
+        c[K.DAMPER_DAMPING, lane], c[K.END_STOP_STIFFNESS, lane])
+
+
 @numba.njit(**KERNEL)
 def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal):
-    """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11): the one home of the load
-    system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design).
-    ``seal`` is the seal-friction level's code: the regularised Eq. 7.63 or the elasto-plastic bristle law."""
+    """:func:`_pneumatics_at` in every lane."""
     for lane in range(lanes):
-        dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
-            x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
-            c[K.VALVE_MIN, lane], c[K.VALVE_MAX, lane], c[K.VALVE_FREQUENCY, lane], c[K.VALVE_DAMPING, lane])
-        p1 = x[S.CHAMBER1_PRESSURE, lane]
-        p2 = x[S.CHAMBER2_PRESSURE, lane]
-        temperature = c[K.AIR_TEMPERATURE, lane]
-        g1, g2 = pn.chamber_mass_flows(
-            x[S.SPOOL_POSITION, lane], p1, p2, c[K.P_SUPPLY, lane], c[K.P_ATMOSPHERE, lane],
-            c[K.MAX_CONDUCTANCE, lane], c[K.LEAKAGE_FRACTION, lane], c[K.CRITICAL_RATIO, lane],
-            c[K.REFERENCE_DENSITY, lane], c[K.REFERENCE_TEMPERATURE, lane], temperature, temperature,
-            c[K.LAMINAR_RATIO, lane])
-        v1, dv1, v2, dv2 = pn.chamber_volumes(x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], c[K.AREA1, lane],
-                                              c[K.AREA2, lane], c[K.DEAD_VOLUME1, lane], c[K.DEAD_VOLUME2, lane],
-                                              c[K.STROKE, lane])
-        dxdt[S.CHAMBER1_PRESSURE, lane] = pn.chamber_pressure_derivative(
-            p1, g1, v1, dv1, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
-        dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
-            p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
-        dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
-        if seal == SEAL_FRICTION_ELASTO_PLASTIC:
-            friction, dxdt[S.SEAL_DEFLECTION, lane] = seal_bristle(x, c, lane)
-        else:
-            friction = stribeck_friction(x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane],
-                                         c[K.CYLINDER_FRICTION_DYNAMIC, lane], c[K.CYLINDER_FRICTION_RATE, lane],
-                                         c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane])
-        dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration_under_friction(
-            p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
-            c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
-            friction, c[K.STROKE, lane], c[K.DAMPER_TRAVEL, lane], c[K.DAMPER_STIFFNESS, lane],
-            c[K.DAMPER_DAMPING, lane], c[K.END_STOP_STIFFNESS, lane])
+        _pneumatics_at(x, c, u, w, dxdt, lane, seal)
+
+
+@numba.njit(**SCALAR)
+def _derivatives_at(x, c, u, w, dxdt, lane, levels):
+    """The derivatives of one lane from its work rows (:func:`_internal_forces_at`), fused."""
+    _drive_current_at(x, c, u, dxdt, lane, levels[CURRENT_LOOP])
+    if levels[MOTOR_THERMAL] == THERMAL_DYNAMIC:
+        _winding_thermal_at(x, c, dxdt, lane)
+    _rotation_at(x, c, w, dxdt, lane)
+    if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
+        _screw_axial_at(x, c, w, dxdt, lane)
+    for nut in range(2):
+        _nut_at(x, c, w, dxdt, lane, nut, levels[NUT_ROTATION])
+    if levels[PNEUMATICS] == PNEUMATICS_FULL:
+        _pneumatics_at(x, c, u, w, dxdt, lane, levels[SEAL_FRICTION])
+
+
+@numba.njit(**KERNEL)
+def rhs_at(t, x, c, u, levels, force_table, dxdt, w, lane, errors):
+    """:func:`rhs` of lane ``lane`` alone, fused (``errors``: :func:`has_lead_error` of its group): the per-sample
+    form a fused integrator step composes (:mod:`twin.engine.integrators`)."""
+    _internal_forces_at(x, c, w, lane, levels, _force_demand(t, levels[PNEUMATICS], force_table), errors)
+    _derivatives_at(x, c, u, w, dxdt, lane, levels)
 
 
 @numba.njit(**KERNEL)
@@ -528,7 +627,8 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
     Only the derivatives of the states the group's fidelity levels keep are written; the integrators advance only
     those (:attr:`twin.engine.model.Model.active`). At the quasi-static screw-axial level the balance writes
     ``S.SCREW_AXIAL`` and ``S.SCREW_AXIAL_SPEED`` of ``x`` (states it removes from integration; each lane's row
-    is also its Newton warm start).
+    is also its Newton warm start). A group of at most ``FUSED_LANES`` lanes takes the fused form, the others the
+    split form (the same stages, the same bits).
 
     Parameters
     ----------
@@ -545,12 +645,31 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
         Outputs: the derivatives and the work rows (:class:`W`).
     """
     lanes = x.shape[1]
+    if lanes <= FUSED_LANES:
+        errors = has_lead_error(c, lanes)
+        for lane in range(lanes):
+            rhs_at(t, x, c, u, levels, force_table, dxdt, w, lane, errors)
+        return
     internal_forces(t, x, c, w, lanes, levels, force_table)
-    _motor(x, c, u, dxdt, lanes, levels[CURRENT_LOOP], levels[MOTOR_THERMAL])
-    _rotation(x, c, w, dxdt, lanes)
+    current_loop = levels[CURRENT_LOOP]
+    if current_loop == CURRENT_LOOP_FULL:
+        for lane in range(lanes):
+            _drive_current_at(x, c, u, dxdt, lane, CURRENT_LOOP_FULL)
+    else:
+        for lane in range(lanes):
+            _drive_current_at(x, c, u, dxdt, lane, current_loop)
+    if levels[MOTOR_THERMAL] == THERMAL_DYNAMIC:
+        for lane in range(lanes):
+            _winding_thermal_at(x, c, dxdt, lane)
+    for lane in range(lanes):
+        _rotation_at(x, c, w, dxdt, lane)
     if levels[SCREW_AXIAL] == SCREW_AXIAL_DYNAMIC:
-        _screw_axial(x, c, w, dxdt, lanes)
-    _nuts(x, c, w, dxdt, lanes, levels[NUT_ROTATION])
+        for lane in range(lanes):
+            _screw_axial_at(x, c, w, dxdt, lane)
+    rotation = levels[NUT_ROTATION]
+    for nut in range(2):
+        for lane in range(lanes):
+            _nut_at(x, c, w, dxdt, lane, nut, rotation)
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
         pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[SEAL_FRICTION])
 

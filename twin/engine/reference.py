@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from twin.components import COMPONENTS
 from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW, instruments_advance
 from twin.engine.loop import acquisition_sample, controller_init, guard, record, speed_sample
 from twin.engine.plant import internal_forces, measurands, rhs, work_rows
@@ -27,17 +28,19 @@ from twin.layout import N_INPUTS, STATUS_NONFINITE, STATUS_OK, STATUS_OUT_OF_BOU
 
 METHODS = {"scipy_radau": "Radau", "scipy_lsoda": "LSODA", "scipy_bdf": "BDF", "scipy_rk45": "RK45"}
 
-# Absolute tolerance per state, relative to the size of what each state resolves:
+# Absolute tolerance per state (a component's of twin.components from its module), relative to the size of what each
+# state resolves:
 # positions to 1e-13 m (1e-7 of a micrometre feature), angles to 1e-12 rad, speeds to 1e-10,
 # currents to 1e-10 A, temperature to 1e-8 K, spool to 1e-12, pressures to 1e-4 Pa.
 _ATOL_BY_STATE = {
-    S.CURRENT: 1e-10, S.WINDING_TEMP: 1e-8, S.REDUCER_ANGLE: 1e-12, S.REDUCER_SPEED: 1e-10, S.SCREW_ANGLE: 1e-12,
+    S.CURRENT: 1e-10, S.WINDING_TEMP: 1e-8, S.SCREW_ANGLE: 1e-12,
     S.SCREW_SPEED: 1e-10, S.SCREW_AXIAL: 1e-13, S.SCREW_AXIAL_SPEED: 1e-10, S.NUT1_POSITION: 1e-13,
     S.NUT1_SPEED: 1e-10, S.NUT1_ANGLE: 1e-12, S.NUT1_ANGULAR_SPEED: 1e-10, S.NUT2_POSITION: 1e-13,
     S.NUT2_SPEED: 1e-10, S.NUT2_ANGLE: 1e-12, S.NUT2_ANGULAR_SPEED: 1e-10, S.HALL_CURRENT: 1e-10,
     S.CURRENT_PI: 1e-8, S.SPOOL_POSITION: 1e-12, S.SPOOL_SPEED: 1e-9, S.CHAMBER1_PRESSURE: 1e-4,
     S.CHAMBER2_PRESSURE: 1e-4, S.PISTON_POSITION: 1e-13, S.PISTON_SPEED: 1e-10,
     S.SEAL_DEFLECTION: 1e-13,
+    **{state: tolerance for component in COMPONENTS for state, tolerance in component.ABSOLUTE_TOLERANCES.items()},
 }
 
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.components import reducer
 from twin.engine.model import contact_constants, contact_position_for_force
 from twin.errors import OptionError
 from twin.fidelity.requests import requested_levels
@@ -147,7 +148,7 @@ class SceneNeeds:
         """Largest motor speed the position demand asks for [rad/s]."""
         position = self._sampled(self.scene.position_table())
         speed = np.max(np.abs(np.diff(position))) / PROFILE_GRID if position.size > 1 else 0.0
-        return speed / self.params.value("ball_screw.lead") * 2.0 * math.pi * self.params.value("reducer.ratio")
+        return reducer.motor_speed(speed / self.params.value("ball_screw.lead") * 2.0 * math.pi, self.params.values())
 
     def _sampled(self, table: np.ndarray) -> np.ndarray:
         times = np.arange(0.0, self.scene.duration + PROFILE_GRID, PROFILE_GRID)
