@@ -88,7 +88,7 @@ def test_the_reference_integrator_takes_the_reducers_tolerances():
 
 def test_the_derived_constants_are_the_only_ones_the_reducer_writes():
     c = np.full(N_CONSTANTS, np.nan)
-    reducer.derive_constants(c, twin.load_parameters("bench").values())
+    reducer.derive_constants(c, twin.load_parameters("bench").values(), twin.load_scene("nominal"))
     assert sorted(np.flatnonzero(np.isfinite(c))) == sorted([K.J_MOTOR_SIDE, K.TORSION_STIFFNESS])
 
 

@@ -7,6 +7,6 @@ name (numba compiles calls, not tables). The other parts of the bench are still 
 (docs/architecture.md, "Components").
 """
 
-from twin.components import reducer
+from twin.components import preload, reducer
 
-COMPONENTS = (reducer,)
+COMPONENTS = (reducer, preload)

@@ -27,6 +27,7 @@ import numba
 import numpy as np
 
 from numerics.jit import SCALAR
+from twin.components.conditions import Conditions
 from twin.layout import K, S
 from twin.physics.coupling import elasto_backlash, elasto_backlash_energy
 from twin.physics.drivetrain import torsional_stiffness
@@ -51,10 +52,11 @@ def motor_speed(output_speed: float, p: Mapping[str, float]) -> float:
     return output_speed * p["reducer.ratio"]
 
 
-def derive_constants(c: np.ndarray, p: Mapping[str, float]) -> None:
+def derive_constants(c: np.ndarray, p: Mapping[str, float], scene: Conditions) -> None:
     """Fill the reducer's derived constants into ``c`` (layout :class:`twin.layout.K`): the reflected inertia and
     the series torsional stiffness of reducer, couplings and torque meter (:func:`twin.physics.drivetrain.
-    torsional_stiffness`). Its other constants copy a parameter (their ``Entry.parameter``)."""
+    torsional_stiffness`); the scene's conditions do not enter. Its other constants copy a parameter (their
+    ``Entry.parameter``)."""
     c[K.J_MOTOR_SIDE] = reflected_inertia(p)
     c[K.TORSION_STIFFNESS] = torsional_stiffness(p)
 

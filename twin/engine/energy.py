@@ -42,11 +42,9 @@ def mechanical_energy(x: np.ndarray, model) -> float:
         + c[K.NUT2_MASS] * x[S.NUT2_SPEED] ** 2
         + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
     )
-    compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     elastic = (
         0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
         + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
-        + 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
     )
     contact_model = int(model.levels[CONTACT])
     for nut in (0, 1):

@@ -11,7 +11,7 @@ import numpy as np
 
 from numerics.elementary import exp
 from numerics.jit import SCALAR
-from twin.components import reducer
+from twin.components import preload, reducer
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -141,12 +141,8 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
         _add_element(matrix, b, velocity, h, stiffness, damping, DOF_REDUCER, 1.0, DOF_SCREW, -1.0, DOF_REDUCER, 0.0,
                      DOF_REDUCER, 0.0)
     # preload springs between the nuts
-    orientation = c[K.PRELOAD_ORIENTATION, lane]
-    compression = c[K.PRELOAD_COMPRESSION, lane] - orientation * (x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane])
-    if compression > 0.0:
-        rate = x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane]
-        spring = c[K.PRELOAD_STIFFNESS, lane]
-        damping = c[K.PRELOAD_DAMPING, lane] if c[K.PRELOAD_DAMPING, lane] * abs(rate) < spring * compression else 0.0
+    engaged, spring, damping = preload.tangent_at(x, c, lane)
+    if engaged:
         _add_element(matrix, b, velocity, h, spring, damping, DOF_NUT2, 1.0, DOF_NUT1, -1.0, DOF_NUT1, 0.0,
                      DOF_NUT1, 0.0)
     # screw axial bearing + shaft; guides' roll springs; load cell

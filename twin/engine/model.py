@@ -13,6 +13,7 @@ from scipy.optimize import brentq
 from numerics.elementary import sin
 from numerics.linalg import lstsq
 from twin.components import COMPONENTS
+from twin.components.preload import assembled_compression
 from twin.control.force_loop_design import operating_point
 from twin.errors import SceneError
 from twin.layout import N_CONSTANTS, N_STATES, PARAMETER_CONSTANTS, POSITION_VELOCITY_PAIRS, K, S
@@ -33,7 +34,6 @@ from twin.physics.ball_screw import (
 from twin.physics.drivetrain import screw_inertia, screw_mass
 from twin.physics.guides import abbe_reading_gain
 from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
-from twin.physics.preload import series_stiffness
 from twin.scenes import Scene
 
 CURVATURE_FORMULAS = {"thesis": hertz.FORMULA_THESIS, "iso": hertz.FORMULA_ISO}
@@ -120,7 +120,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.AMBIENT] = room_temperature
     # the components of twin.components (the reducer and its torsional chain, Eq. 9.3, Sec. 9.3)
     for component in COMPONENTS:
-        component.derive_constants(c, p)
+        component.derive_constants(c, p, scene)
     c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
     # screw axial: rear bearing in series with the shaft (Table B.9)
     c[K.SCREW_MASS] = screw_mass(p)
@@ -137,12 +137,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     # nuts, guides (Eq. 9.8, Eq. 7.63): the slave nut carries a share of the guide friction law
     c[K.NUT1_GUIDE_FRICTION_SHARE] = 1.0
     c[K.NUT2_GUIDE_FRICTION_SHARE] = p["sled.slave_friction_fraction"]
-    # preload (Secs. 9.2-9.3)
-    preload = scene.condition("preload")
-    c[K.PRELOAD_STIFFNESS] = (series_stiffness(p["preload.spring_stiffness"], p["preload.load_cell_stiffness"])
-                              if preload > 0 else 0.0)
-    c[K.PRELOAD_DAMPING] = p["preload.damping"] if preload > 0 else 0.0
-    c[K.PRELOAD_ORIENTATION] = 1.0 if scene.condition("preload_configuration") == "O" else -1.0
+    preload = scene.condition("preload")  # the preload set's constants: twin.components.preload
     c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
     c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
     c[K.SCALE_READING_GAIN] = scale_reading_gain(p, room_temperature)
@@ -414,7 +409,7 @@ def initial_state(c: np.ndarray, contact_model: int, preload: float, zero_proced
         return preload_equilibrium(c, contact_model, preload, nut_rotation)
     x = np.zeros(N_STATES)
     x[S.WINDING_TEMP] = c[K.AMBIENT]
-    c[K.PRELOAD_COMPRESSION] = preload / c[K.PRELOAD_STIFFNESS] if preload > 0.0 else 0.0
+    c[K.PRELOAD_COMPRESSION] = assembled_compression(c, preload)
     return x
 
 
@@ -443,6 +438,5 @@ def preload_equilibrium(c: np.ndarray, contact_model: int, preload: float, nut_r
                 angle = lead_travel(c, -angle)[1] * force / c[K.GUIDE_ROLL_STIFFNESS]
         x[ang] = angle
         x[pos] = lead_travel(c, -x[ang])[0] - contact_position_for_force(c, contact_model, force)
-    c[K.PRELOAD_COMPRESSION] = (preload / c[K.PRELOAD_STIFFNESS]
-                                + orientation * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION]))
+    c[K.PRELOAD_COMPRESSION] = assembled_compression(c, preload, x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     return x

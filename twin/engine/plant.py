@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from twin.components import reducer
+from twin.components import preload, reducer
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -47,7 +47,6 @@ from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_d
 from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
 from twin.physics.friction import stribeck_friction, stribeck_level
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
-from twin.physics.preload import preload_force
 from twin.scenes.profiles import profile_value
 
 
@@ -300,10 +299,7 @@ def _contact_at(c, w, lane, nut, contact_model):
 def _couplings_at(x, c, w, lane):
     """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
     w[W.TORQUE, lane] = reducer.transmitted_torque_at(x, c, lane)
-    w[W.PRELOAD, lane] = preload_force(
-        x[S.NUT2_POSITION, lane] - x[S.NUT1_POSITION, lane], x[S.NUT2_SPEED, lane] - x[S.NUT1_SPEED, lane],
-        c[K.PRELOAD_COMPRESSION, lane], c[K.PRELOAD_STIFFNESS, lane], c[K.PRELOAD_DAMPING, lane],
-        c[K.PRELOAD_ORIENTATION, lane])
+    w[W.PRELOAD, lane] = preload.force_at(x, c, lane)
 
 
 @numba.njit(**SCALAR)
@@ -525,11 +521,10 @@ def _nut_at(x, c, w, dxdt, lane, nut, rotation):
     guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
         x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
         c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
-    # the preload pushes the nuts apart (O, orientation +1) or draws them together (X, -1)
-    preload = (1.0 - 2.0 * master) * c[K.PRELOAD_ORIENTATION, lane] * w[W.PRELOAD, lane]
+    preload_share = preload.nut_share_at(c, w[W.PRELOAD, lane], lane, master)
     master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
     dxdt[position, lane] = x[position + 1, lane]
-    dxdt[position + 1, lane] = (w[W.NUT_FORCE + nut, lane] + nut_axial - guide + preload + master_loads
+    dxdt[position + 1, lane] = (w[W.NUT_FORCE + nut, lane] + nut_axial - guide + preload_share + master_loads
                                 ) / c[K.NUT1_MASS + NUT_CONSTANT_STRIDE * nut, lane]
     if rotation == NUT_ROTATION_ON:
         dxdt[position + 2, lane] = x[position + 3, lane]
