@@ -29,8 +29,7 @@ import twin
 import twin.simulation
 from twin.engine import cuda as engine_cuda
 from twin.engine import group
-from twin.engine.cuda import loop_arguments
-from twin.engine.group import solve_group
+from twin.engine.group import loop_arguments, solve_group
 from twin.engine.loop import run_loop
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -47,9 +46,10 @@ def _groups() -> dict[str, dict]:
             for f, seed in ((1.0, 101), (1.02, 102))]
     with _captured(captured):
         twin.simulate_batch(runs, duration=0.01, solver=twin.Solver(lanes=2))                  # RK4 at 125 us: 80 steps
+        twin.simulate("ds3", params, duration=0.005, rng=7, solver=twin.Solver("rosenbrock_w2"))  # 62.5 us: 80 steps
         twin.simulate_batch(runs, duration=0.01, fidelity={"screw_axial": "dynamic"},
                             solver=twin.Solver("imex_euler", lanes=2))                         # 62.5 us: 160 steps
-    return dict(zip(("rk4", "imex_euler"), captured, strict=True))
+    return dict(zip(("rk4", "rosenbrock_w2", "imex_euler"), captured, strict=True))
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +68,7 @@ def compared(tmp_path_factory):
     return {k: (g["results"], {n: simulated[f"{k}.{n}"] for n in RESULTS}) for k, g in groups.items()}
 
 
-@pytest.mark.parametrize("method", ["rk4", "imex_euler"])
+@pytest.mark.parametrize("method", ["rk4", "rosenbrock_w2", "imex_euler"])
 def test_a_thread_per_run_gives_the_cpu_lane_engines_bits(compared, method):
     cpu, gpu = compared[method]
     assert cpu["steps_done"].min() > 0 and np.all(cpu["status"] == 0)  # the runs ran to the end on the CPU

@@ -22,12 +22,10 @@ import numpy as np
 from numba import cuda
 
 from numerics import cuda_target
-from twin.engine.group import Solved, group_key
-from twin.engine.instrumentation import N_INSTRUMENTS, STATE_ROW, Instruments, group_timing
-from twin.engine.integrators import Workspace
+from twin.engine.group import Solved, loop_arguments, solved
+from twin.engine.instrumentation import Instruments
 from twin.engine.loop import run_loop
 from twin.engine.model import Model
-from twin.layout import N_MEMORY, N_SIGNALS, N_STATES
 
 #: Threads per block. Not tuned: the kernel is large (every law inlined), so its registers, not the block size,
 #: bound the occupancy; two warps keep a block's scheduling simple (docs/gpu.md: nothing has been timed on a GPU).
@@ -56,7 +54,7 @@ def unavailable() -> str:
 @cuda.jit(cache=True)
 def _kernel(x, c, levels, position_table, force_table, active, pairs, n_steps, dt, speed_every, position_every,
             output_every, jacobian_every, method, parameters, states, noise, memory, output, tolerance, vectors, w,
-            matrices, cache, small, status, bound, steps_done, rows_written):
+            matrices, cache, small, inputs, alive, guard_memory, initial, status, bound, steps_done, rows_written):
     """``run_loop`` of lane ``i`` on thread ``i``, on its own columns (and its own slot of ``small``)."""
     i = cuda.grid(1)
     if i < x.shape[1]:
@@ -64,7 +62,8 @@ def _kernel(x, c, levels, position_table, force_table, active, pairs, n_steps, d
                  speed_every, position_every, output_every, jacobian_every, method, parameters[:, :, i:i + 1],
                  states[:, :, i:i + 1], noise[:, :, i:i + 1], memory[:, i:i + 1], output[:, :, i:i + 1], tolerance,
                  vectors[:, :, i:i + 1], w[:, i:i + 1], matrices[:, :, i:i + 1], cache[:, i:i + 1], small[i],
-                 status[i:i + 1], bound[i:i + 1], steps_done[i:i + 1], rows_written[i:i + 1])
+                 inputs[:, i:i + 1], alive[i:i + 1], guard_memory[:, i:i + 1], initial[:, i:i + 1], status[i:i + 1],
+                 bound[i:i + 1], steps_done[i:i + 1], rows_written[i:i + 1])
 
 
 def solve_group_cuda(models: Sequence[Model], instruments: Sequence[Instruments], *, n_steps: int, dt: float,
@@ -86,51 +85,13 @@ def solve_group_cuda(models: Sequence[Model], instruments: Sequence[Instruments]
     cuda_target.prepare()
     arguments = loop_arguments(models, instruments, n_steps=n_steps, dt=dt, speed_every=speed_every,
                                position_every=position_every, output_every=output_every, jacobian_every=jacobian_every,
-                               method=method, tolerance=tolerance, slots=len(models))
+                               method=method, tolerance=tolerance, slot_per_lane=True)
     lanes = len(models)
     per_launch = runs_per_launch(arguments, lanes)
     shared = {name: cuda.to_device(arguments[name]) for name in SHARED}
     for first in range(0, lanes, per_launch):
         _launch(arguments, shared, slice(first, min(first + per_launch, lanes)))
     return solved(arguments)
-
-
-def loop_arguments(models: Sequence[Model], instruments: Sequence[Instruments], *, n_steps: int, dt: float,
-                   speed_every: int, position_every: int, output_every: int, jacobian_every: int, method: int,
-                   tolerance: np.ndarray, slots: int = 1) -> dict:
-    """``run_loop``'s arguments for the runs ``models`` by name, in its order, as
-    :func:`twin.engine.group.solve_group` builds them; ``small`` with one slot per lane where ``slots`` > 1.
-    (To move into twin.engine.group, which solve_group then calls: issue 43's step 1.)"""
-    if not models or len(models) != len(instruments):
-        raise ValueError("solve_group: one Instruments per Model, at least one run")
-    key = (group_key(models[0]), group_timing(instruments[0]))
-    if any((group_key(m), group_timing(i)) != key for m, i in zip(models[1:], instruments[1:], strict=True)):
-        raise ValueError("solve_group: the runs differ in fidelity levels, integrated states, demand tables or their "
-                         "analog channels' timing")
-    lanes = len(models)
-    first = models[0]
-    rows = n_steps // output_every + 1 if output_every > 0 else 0
-    vectors, work, matrices, cache, small = Workspace(N_STATES, lanes).arrays()
-    return dict(
-        x=np.ascontiguousarray(np.stack([m.initial_state for m in models], axis=1)),
-        c=np.ascontiguousarray(np.stack([m.constants for m in models], axis=1)),
-        levels=first.levels, position_table=first.position_table, force_table=first.force_table,
-        active=first.active, pairs=first.pairs, n_steps=n_steps, dt=dt, speed_every=speed_every,
-        position_every=position_every, output_every=output_every, jacobian_every=jacobian_every, method=method,
-        parameters=np.ascontiguousarray(np.stack([i.parameters for i in instruments], axis=2)),
-        states=np.zeros((N_INSTRUMENTS, STATE_ROW, lanes)),
-        noise=np.ascontiguousarray(np.stack([i.noise for i in instruments], axis=2)),
-        memory=np.zeros((N_MEMORY, lanes)), output=np.full((rows, N_SIGNALS, lanes), np.nan), tolerance=tolerance,
-        vectors=vectors, w=work, matrices=matrices, cache=cache,
-        small=small if slots == 1 else np.zeros((slots, *small.shape)),
-        status=np.zeros(lanes, dtype=np.int64), bound=np.zeros(lanes, dtype=np.int64),
-        steps_done=np.zeros(lanes, dtype=np.int64), rows_written=np.zeros(lanes, dtype=np.int64))
-
-
-def solved(arguments: dict) -> Solved:
-    """The results ``run_loop`` left in its ``arguments`` (:func:`loop_arguments`)."""
-    return Solved(arguments["x"], arguments["memory"], arguments["output"], arguments["status"], arguments["bound"],
-                  arguments["steps_done"], arguments["rows_written"])
 
 
 def runs_per_launch(arguments: dict, lanes: int) -> int:
