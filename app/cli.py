@@ -17,7 +17,7 @@ from app.service.command import add_serve_parser
 from twin.engine.integrators import INTEGRATORS
 from twin.errors import InputError, SimulationFailed
 from twin.scenes import split_targets
-from twin.solver import DEFAULT_SOLVER, solver_label
+from twin.solver import DEFAULT_SOLVER, ENGINES, solver_label
 
 
 def _parse_assignment(text: str) -> tuple[str, float | str]:
@@ -85,7 +85,7 @@ def cmd_scenes(args) -> int:
 
 #: The ``twin simulate`` options that are fields of :class:`twin.Solver`: one given makes the run's solver, one left
 #: out (``None``) takes the object's default, so the defaults have one home.
-SOLVER_OPTIONS = ("integrator", "dt")
+SOLVER_OPTIONS = ("integrator", "dt", "engine")
 
 
 def _solver(args) -> twin.Solver:
@@ -221,7 +221,9 @@ def cmd_campaign_run(args) -> int:
     from campaigns.runner.files import CampaignInterrupted
 
     _check_bounds(workers=args.workers)
-    spec = campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout)
+    if args.engine is not None:
+        twin.Solver(engine=args.engine)  # an engine that cannot run here is refused before the spec is read
+    spec = _with_engine(campaigns.load_spec(args.spec, runs=args.runs, timeout=args.timeout), args.engine)
     _warn(spec.warnings)
     out = args.out or Path("out") / spec.name
     print(f"campaign {spec.name}: {estimate(spec, workers=args.workers, run_function=_bench_run()).describe()}")
@@ -245,10 +247,24 @@ def cmd_campaign_run(args) -> int:
     return 0
 
 
+def _with_engine(spec, engine: str | None):
+    """The spec with its ``[solver]`` table's ``engine`` replaced by ``--engine`` (validated as the spec's own)."""
+    if engine is None:
+        return spec
+    from pydantic import ValidationError
+
+    try:
+        solver = type(spec.solver).model_validate({**spec.solver.model_dump(), "engine": engine})
+    except ValidationError as exc:
+        raise InputError("command line", [f"--engine: {error['msg']}" for error in exc.errors()]) from None
+    return spec.model_copy(update={"solver": solver})
+
+
 def resume_command(args, out: Path) -> str:
     """The ``twin campaign run`` command that resumes this one: the same spec and options, plus ``--resume``."""
     words = ["twin", "campaign", "run", str(args.spec), "--out", str(out)]
-    for option, value in (("--runs", args.runs), ("--timeout", args.timeout), ("--scheduler", args.scheduler)):
+    for option, value in (("--runs", args.runs), ("--timeout", args.timeout), ("--scheduler", args.scheduler),
+                          ("--engine", args.engine)):
         if value is not None:
             words += [option, f"{value:g}" if isinstance(value, float) else str(value)]
     if args.workers != 2:
@@ -590,6 +606,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"fixed-step method (default {DEFAULT_SOLVER.integrator}; twin.Solver, docs/accuracy.md)")
     p.add_argument("--dt", type=float, help="integration step [s] (default: the method's step at the run's "
                                             "fidelity, twin.Solver.step)")
+    p.add_argument("--engine", choices=ENGINES, help=f"where the compiled loop runs (default {DEFAULT_SOLVER.engine}; "
+                                                     "cuda: an NVIDIA GPU, docs/gpu.md)")
     p.add_argument("--duration", type=float, help="override the scene duration [s]")
     p.add_argument("--fidelity", type=_parse_fidelity, default="auto", metavar="auto|full|SUBSYSTEM=LEVEL,...",
                    help="subsystem fidelity (see `twin fidelity levels`; default auto: the cheapest the scene allows)")
@@ -631,6 +649,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="address of an existing dask scheduler (instead of a local cluster)")
     p.add_argument("--resume", action="store_true", help="skip finished chunks of an interrupted run")
     p.add_argument("--timeout", type=float, help="wall-clock budget of one run [s] (overrides execution.timeout)")
+    p.add_argument("--engine", choices=ENGINES, help="where the compiled loop runs (overrides solver.engine; cuda: "
+                                                     "an NVIDIA GPU, one run per thread, docs/gpu.md)")
     p.add_argument("--allow-version-mix", action="store_true",
                    help="on --resume, accept chunks computed by another BenchTwin/numpy/numba/scipy version "
                         "or model code")

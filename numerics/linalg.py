@@ -43,19 +43,50 @@ def matmul(a, b):
 
 @numba.njit(cache=True)
 def solve(a, b):
-    """``x`` with ``a x = b`` for a square ``a`` and a 2-D right-hand side ``b`` (both real or both complex).
-
-    Gaussian elimination with partial pivoting (the largest modulus in the column; the first one on a tie).
-    ``a`` and ``b`` are not modified.
+    """``x`` with ``a x = b`` for a square ``a`` and a 2-D right-hand side ``b`` (both real or both complex), by
+    :func:`_eliminate`. ``a`` and ``b`` are not modified.
 
     Raises
     ------
     ZeroDivisionError
         If ``a`` is singular to working precision (an exactly zero pivot).
     """
-    n = a.shape[0]
-    m = a.copy()
     x = b.copy()
+    if not _eliminate(a.copy(), x):
+        raise ZeroDivisionError("singular matrix")
+    return x
+
+
+@numba.njit(cache=True)
+def inverse_into(m, out):
+    """``m^-1`` into ``out`` (square, of ``m``'s size; ``m`` is overwritten), allocating nothing: :func:`solve`
+    against the identity, the same operations in the same order, for the compiled loop (which also runs as a CUDA
+    kernel, where nothing may be allocated or raised).
+
+    Returns
+    -------
+    bool
+        ``False`` if ``m`` is singular to working precision; ``out`` is then all NaN, so that whatever uses it
+        turns non-finite and the loop's guard stops the run (instead of an exception the GPU cannot raise).
+    """
+    n = m.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 1.0 if i == j else 0.0
+    if _eliminate(m, out):
+        return True
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = np.nan
+    return False
+
+
+@numba.njit(cache=True)
+def _eliminate(m, x):
+    """Solve ``m y = x`` in place: ``x`` becomes ``y``, ``m`` is overwritten. Gaussian elimination with partial
+    pivoting (the largest modulus in the column; the first one on a tie). ``False`` (``x`` left part-way) if ``m``
+    is singular to working precision (an exactly zero pivot)."""
+    n = m.shape[0]
     for k in range(n):
         pivot_row = k
         largest = abs(m[k, k])
@@ -63,7 +94,7 @@ def solve(a, b):
             if abs(m[i, k]) > largest:
                 pivot_row, largest = i, abs(m[i, k])
         if largest == 0.0:
-            raise ZeroDivisionError("singular matrix")
+            return False
         if pivot_row != k:
             for j in range(n):
                 m[k, j], m[pivot_row, j] = m[pivot_row, j], m[k, j]
@@ -81,13 +112,7 @@ def solve(a, b):
             for k in range(i + 1, n):
                 acc -= m[i, k] * x[k, j]
             x[i, j] = acc / m[i, i]
-    return x
-
-
-@numba.njit(cache=True)
-def inverse(a):
-    """``a^-1`` by :func:`solve` against the identity."""
-    return solve(a, np.eye(a.shape[0], dtype=a.dtype))
+    return True
 
 
 @numba.njit(cache=True)

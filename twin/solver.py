@@ -13,6 +13,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
+from twin.engine import group
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.reference import METHODS as REFERENCE_METHODS
 from twin.errors import OptionError
@@ -27,6 +28,8 @@ MAX_DT = 1e-3
 #: Lanes of a group (:func:`twin.simulate_batch`): a multiple of the vector width (4 doubles with AVX2, 8 with
 #: AVX-512) that fills two registers; the results do not depend on it.
 DEFAULT_LANES = 8
+#: The engines of the compiled loop: the CPU lane engine, or one run per CUDA thread (:mod:`twin.engine.cuda`).
+ENGINES = ("cpu", "cuda")
 
 
 @dataclass(frozen=True)
@@ -52,7 +55,13 @@ class Solver:
         demonstrate what it catches.
     lanes : int
         Runs :func:`twin.simulate_batch` advances together in one group (>= 1, default 8); the numbers do not
-        depend on it.
+        depend on it. On the ``cuda`` engine a group is what one call hands the GPU (a thread per run; a group
+        larger than the device's memory is split into launches), so thousands, not 8.
+    engine : {"cpu", "cuda"}
+        Where the compiled loop runs: the CPU lane engine (default) or an NVIDIA GPU, one run per thread
+        (:mod:`twin.engine.cuda`, docs/gpu.md: the same bits where no libm function is reached, else within the
+        numerical floor). ``cuda`` is refused at once where no GPU and driver are present, and with a ``scipy_*``
+        method.
 
     Raises
     ------
@@ -65,6 +74,7 @@ class Solver:
     rtol: float = 1e-10
     local_error_guard: bool = True
     lanes: int = DEFAULT_LANES
+    engine: str = "cpu"
 
     def __post_init__(self):
         problems = []
@@ -80,8 +90,30 @@ class Solver:
             problems.append(f"local_error_guard: {self.local_error_guard!r} must be True or False")
         if not (isinstance(self.lanes, int) and not isinstance(self.lanes, bool) and self.lanes >= 1):
             problems.append(f"lanes: {self.lanes!r} must be an int >= 1")
+        problems += self._engine_problems()
         if problems:
             raise OptionError(problems)
+
+    def _engine_problems(self) -> list[str]:
+        if self.engine not in ENGINES:
+            return [f"engine: {self.engine!r} is not one of {', '.join(ENGINES)}"]
+        if self.engine == "cpu":
+            return []
+        if isinstance(self.integrator, str) and self.reference:
+            return [f"engine: 'cuda' runs the compiled loop's fixed-step methods, not {self.integrator!r}"]
+        from twin.engine.cuda import unavailable
+
+        reason = unavailable()
+        return [f"engine: 'cuda' cannot run here: {reason}"] if reason else []
+
+    def group_solver(self):
+        """The function that solves a lane group on this engine: :func:`twin.engine.group.solve_group` or
+        :func:`twin.engine.cuda.solve_group_cuda` (the same arguments, the same :class:`twin.engine.group.Solved`)."""
+        if self.engine == "cuda":
+            from twin.engine.cuda import solve_group_cuda
+
+            return solve_group_cuda
+        return group.solve_group
 
     @property
     def reference(self) -> bool:

@@ -51,6 +51,26 @@ def solve_group(models: Sequence[Model], instruments: Sequence[Instruments], *, 
     ValueError
         If the models do not share a group (:func:`group_key`).
     """
+    arguments = loop_arguments(models, instruments, n_steps=n_steps, dt=dt, speed_every=speed_every,
+                               position_every=position_every, output_every=output_every,
+                               jacobian_every=jacobian_every, method=method, tolerance=tolerance)
+    run_loop(*arguments.values())
+    return solved(arguments)
+
+
+def loop_arguments(models: Sequence[Model], instruments: Sequence[Instruments], *, n_steps: int, dt: float,
+                   speed_every: int, position_every: int, output_every: int, jacobian_every: int, method: int,
+                   tolerance: np.ndarray, slot_per_lane: bool = False) -> dict:
+    """:func:`twin.engine.loop.run_loop`'s arguments for the runs ``models`` (with their ``instruments``), by name
+    in its order: the runs' arrays stacked as lanes, the workspace and the output arrays. ``small`` is the
+    workspace's one slot (the CPU's), or with ``slot_per_lane`` all its slots, lane first (:class:`Workspace`: the
+    CUDA kernel hands thread ``i`` slot ``i``).
+
+    Raises
+    ------
+    ValueError
+        If the models do not share a group (:func:`group_key`).
+    """
     if not models or len(models) != len(instruments):
         raise ValueError("solve_group: one Instruments per Model, at least one run")
     key = (group_key(models[0]), group_timing(instruments[0]))
@@ -59,20 +79,27 @@ def solve_group(models: Sequence[Model], instruments: Sequence[Instruments], *, 
                          "analog channels' timing")
     lanes = len(models)
     first = models[0]
-    x = np.ascontiguousarray(np.stack([m.initial_state for m in models], axis=1))
-    c = np.ascontiguousarray(np.stack([m.constants for m in models], axis=1))
-    parameters = np.ascontiguousarray(np.stack([i.parameters for i in instruments], axis=2))
-    noise = np.ascontiguousarray(np.stack([i.noise for i in instruments], axis=2))
-    states = np.zeros((N_INSTRUMENTS, STATE_ROW, lanes))
-    memory = np.zeros((N_MEMORY, lanes))
     rows = n_steps // output_every + 1 if output_every > 0 else 0
-    output = np.full((rows, N_SIGNALS, lanes), np.nan)
-    workspace = Workspace(N_STATES, lanes)
-    status = np.zeros(lanes, dtype=np.int64)
-    bound = np.zeros(lanes, dtype=np.int64)
-    steps_done = np.zeros(lanes, dtype=np.int64)
-    rows_written = np.zeros(lanes, dtype=np.int64)
-    run_loop(x, c, first.levels, first.position_table, first.force_table, first.active, first.pairs, n_steps, dt,
-             speed_every, position_every, output_every, jacobian_every, method, parameters, states, noise, memory,
-             output, tolerance, *workspace.arrays(), status, bound, steps_done, rows_written)
-    return Solved(x, memory, output, status, bound, steps_done, rows_written)
+    workspace = Workspace(N_STATES, lanes, lanes if slot_per_lane else 1)
+    vectors, work, matrices, cache, small = workspace.arrays()
+    inputs, alive, guard_memory, initial = workspace.loop_arrays()
+    return dict(
+        x=np.ascontiguousarray(np.stack([m.initial_state for m in models], axis=1)),
+        c=np.ascontiguousarray(np.stack([m.constants for m in models], axis=1)),
+        levels=first.levels, position_table=first.position_table, force_table=first.force_table,
+        active=first.active, pairs=first.pairs, n_steps=n_steps, dt=dt, speed_every=speed_every,
+        position_every=position_every, output_every=output_every, jacobian_every=jacobian_every, method=method,
+        parameters=np.ascontiguousarray(np.stack([i.parameters for i in instruments], axis=2)),
+        states=np.zeros((N_INSTRUMENTS, STATE_ROW, lanes)),
+        noise=np.ascontiguousarray(np.stack([i.noise for i in instruments], axis=2)),
+        memory=np.zeros((N_MEMORY, lanes)), output=np.full((rows, N_SIGNALS, lanes), np.nan), tolerance=tolerance,
+        vectors=vectors, w=work, matrices=matrices, cache=cache, small=workspace.slots if slot_per_lane else small,
+        inputs=inputs, alive=alive, guard_memory=guard_memory, initial=initial,
+        status=np.zeros(lanes, dtype=np.int64), bound=np.zeros(lanes, dtype=np.int64),
+        steps_done=np.zeros(lanes, dtype=np.int64), rows_written=np.zeros(lanes, dtype=np.int64))
+
+
+def solved(arguments: dict) -> Solved:
+    """The results :func:`twin.engine.loop.run_loop` left in its ``arguments`` (:func:`loop_arguments`)."""
+    return Solved(arguments["x"], arguments["memory"], arguments["output"], arguments["status"], arguments["bound"],
+                  arguments["steps_done"], arguments["rows_written"])

@@ -14,7 +14,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from numerics.linalg import inverse
+from numerics.linalg import inverse_into
 from twin.engine.codes import CURRENT_LOOP, CURRENT_LOOP_FULL, PNEUMATICS, PNEUMATICS_FULL
 from twin.engine.implicit import (
     CURRENT_LOOP_STATES,
@@ -25,7 +25,7 @@ from twin.engine.implicit import (
     stiff_velocity_system,
 )
 from twin.engine.plant import FUSED_LANES, N_WORK, has_lead_error, held_input_propagators, rhs, rhs_at
-from twin.layout import K, S
+from twin.layout import N_INPUTS, K, S
 
 RK4 = 0
 SEMI_IMPLICIT_EULER = 1
@@ -40,20 +40,40 @@ ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 WORK_VECTORS = 8
 #: Rows of the per-lane cache of the held-input propagators (:func:`twin.engine.plant.held_input_propagators`).
 CACHE_ROWS = 9
+#: Rows under the W-method's matrices: the state :func:`w_matrix` perturbs and its perturbation, per lane.
+PERTURBATION_ROWS = 2
 
 
 class Workspace:
-    """The scratch arrays of a group of ``lanes`` lanes of ``n_states`` states (allocated once per run)."""
+    """The scratch arrays of a group of ``lanes`` lanes of ``n_states`` states, allocated once per run: the compiled
+    loop allocates nothing (it also runs as a CUDA kernel, :mod:`twin.engine.cuda`, where it cannot).
 
-    def __init__(self, n_states: int, lanes: int):
+    ``slots`` holds one lane's small systems at a time (the implicit step's, the W-matrix's copy and inverse): one
+    slot on the CPU, which solves them lane after lane (``small`` is that slot), one per lane where every lane runs
+    on its own thread.
+    """
+
+    def __init__(self, n_states: int, lanes: int, slots: int = 1):
         self.vectors = np.zeros((WORK_VECTORS, n_states, lanes))
         self.work = np.zeros((N_WORK, lanes))
-        self.matrices = np.zeros((n_states, n_states, lanes))   # the W-method's (I - gamma h J)^-1, per lane
+        # the W-method's (I - gamma h J)^-1 per lane, and under it the perturbed state and its perturbation
+        self.matrices = np.zeros((n_states + PERTURBATION_ROWS, n_states, lanes))
         self.cache = np.zeros((CACHE_ROWS, lanes))
-        self.small = np.zeros((N_DOFS + 5, N_DOFS))              # one lane's implicit systems at a time
+        self.slots = np.zeros((slots, max(N_DOFS + 5, 2 * n_states), max(N_DOFS, n_states)))
+        self.small = self.slots[0]
+        # the run loop's held inputs, live lanes, local-error streak and estimate, initial states
+        self.inputs = np.zeros((N_INPUTS, lanes))
+        self.alive = np.ones(lanes, dtype=np.bool_)
+        self.guard = np.zeros((2, lanes))
+        self.initial = np.zeros((n_states, lanes))
 
     def arrays(self) -> tuple:
+        """What a step takes: ``vectors, work, matrices, cache, small``."""
         return self.vectors, self.work, self.matrices, self.cache, self.small
+
+    def loop_arrays(self) -> tuple:
+        """What the run loop adds: ``inputs, alive, guard, initial``."""
+        return self.inputs, self.alive, self.guard, self.initial
 
 
 @numba.njit(**SCALAR)
@@ -161,20 +181,23 @@ def semi_implicit_euler_step(t, x, h, c, u, levels, force_table, vectors, w, act
 
 
 @numba.njit(**KERNEL)
-def w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, active):
+def w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, small, active):
     """``(I - gamma h J)^-1`` of every lane with ``J`` by forward differences of the right-hand side, over the
     integrated states ``active`` (matrix index ``i`` is state ``active[i]``), into ``matrices[:n, :n, lane]``.
 
     Each perturbation is ``sqrt(eps)`` relative to the state's magnitude in its lane, with a floor of 1e-12
     absolute: the ball-groove deflections are micrometres, so the floor must sit far below them. Every lane's
-    state ``j`` is perturbed at once (one right-hand side for all lanes).
+    state ``j`` is perturbed at once (one right-hand side for all lanes). The right-hand sides go to ``vectors[4:6]``
+    (free before the step, :func:`rosenbrock_w2_step` uses ``vectors[0:4]``), each lane's matrix is copied to and
+    inverted in ``small`` (:class:`Workspace`). A singular matrix leaves the lane's matrices NaN, so its step turns
+    non-finite and the loop's guard stops it.
     """
     n = active.shape[0]
     lanes = x.shape[1]
-    f0, column = vectors[5], vectors[6]
+    size = matrices.shape[1]
+    f0, column = vectors[5], vectors[4]
+    saved, delta = matrices[size, 0], matrices[size + 1, 0]
     rhs(t, x, c, u, levels, force_table, f0, w)
-    delta = np.empty(lanes)
-    saved = np.empty(lanes)
     for jj in range(n):
         state = active[jj]
         for lane in range(lanes):
@@ -188,13 +211,13 @@ def w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, active):
                 matrices[ii, jj, lane] = (-ROS2_GAMMA * h * (column[active[ii], lane] - f0[active[ii], lane])
                                           / delta[lane])
             matrices[jj, jj, lane] += 1.0
-    single = np.empty((n, n))
+    single, inverted = small[:n, :n], small[size:size + n, :n]
     for lane in range(lanes):
         for ii in range(n):
             for jj in range(n):
                 single[ii, jj] = matrices[ii, jj, lane]
         # fixed operation order (numerics.linalg): not LAPACK, whose bits depend on the BLAS kernel
-        inverted = inverse(single)
+        inverse_into(single, inverted)
         for ii in range(n):
             for jj in range(n):
                 matrices[ii, jj, lane] = inverted[ii, jj]
@@ -292,8 +315,8 @@ def imex_euler_step(t, x, h, c, u, levels, force_table, vectors, w, cache, small
     model has on some data sets (docs/accuracy.md). It needs the ``dynamic`` screw-axial level (the simulation
     refuses it otherwise).
 
-    ``small`` holds one lane's 8 x 8 mechanical and 3 x 3 current-loop systems at a time, ``cache`` the
-    propagators of every lane.
+    ``small`` holds one lane's 8 x 8 mechanical and 3 x 3 current-loop systems at a time (:class:`Workspace`),
+    ``cache`` the propagators of every lane.
     """
     f = vectors[0]
     lanes = x.shape[1]
@@ -351,5 +374,5 @@ def step(method, t, x, h, c, u, levels, force_table, vectors, w, matrices, cache
         imex_euler_step(t, x, h, c, u, levels, force_table, vectors, w, cache, small, active)
     else:
         if refresh:
-            w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, active)
+            w_matrix(t, x, h, c, u, levels, force_table, vectors, w, matrices, small, active)
         rosenbrock_w2_step(t, x, h, c, u, levels, force_table, vectors, w, matrices, active)

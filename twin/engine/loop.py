@@ -11,7 +11,6 @@ mates, and its own numbers up to the failure are those it has alone.
 import math
 
 import numba
-import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
 from sensors.acquisition import convert
@@ -255,7 +254,7 @@ def _retire(x, x0, lane):
 @numba.njit(**KERNEL)
 def run_loop(x, c, levels, position_table, force_table, active, pairs, n_steps, dt, speed_every, position_every,
              output_every, jacobian_every, method, parameters, states, noise, memory, output, tolerance, vectors, w,
-             matrices, cache, small, status, bound, steps_done, rows_written):
+             matrices, cache, small, inputs, alive, guard_memory, initial, status, bound, steps_done, rows_written):
     """Integrate ``n_steps`` steps of size ``dt`` of every lane of ``x`` (modified in place).
 
     Parameters
@@ -283,18 +282,26 @@ def run_loop(x, c, levels, position_table, force_table, active, pairs, n_steps, 
         Absolute local-error tolerance per state for the finite-but-wrong guard
         (:func:`local_error`, checked every ``LOCAL_ERROR_EVERY`` acquisition instants).
     vectors, w, matrices, cache, small : arrays
-        The integrators' workspace (:class:`twin.engine.integrators.Workspace`).
+        The integrators' workspace (:meth:`twin.engine.integrators.Workspace.arrays`).
+    inputs, alive, guard_memory, initial : arrays
+        The loop's own scratch (:meth:`twin.engine.integrators.Workspace.loop_arrays`), filled here: the inputs the
+        digital loops hold, the live lanes, the local-error streak and estimate, the initial states (a failed lane
+        is put back to them). Passed in, not allocated: the loop also runs as a CUDA kernel.
     status, bound, steps_done, rows_written : 1-D arrays per lane (outputs)
         The run's status code (twin.layout.STATUS_*), the guard's bound code, the steps done and the output rows
         written.
     """
     lanes = x.shape[1]
-    u = np.zeros((2, lanes))
-    alive = np.ones(lanes, dtype=np.bool_)
-    streak = np.zeros(lanes)
-    estimate = np.zeros(lanes)
-    x0 = x.copy()
+    u, x0 = inputs, initial
+    streak, estimate = guard_memory[0], guard_memory[1]
     for lane in range(lanes):
+        for j in range(x.shape[0]):
+            x0[j, lane] = x[j, lane]
+        for j in range(u.shape[0]):
+            u[j, lane] = 0.0
+        alive[lane] = True
+        streak[lane] = 0.0
+        estimate[lane] = 0.0
         status[lane] = STATUS_OK
         bound[lane] = 0
         steps_done[lane] = n_steps
