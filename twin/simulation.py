@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from twin.engine.group import group_key, solve_group
+from twin.engine.group import group_key
 from twin.engine.instrumentation import build_instruments, group_timing
 from twin.engine.integrators import INTEGRATORS
 from twin.engine.model import CURVATURE_FORMULAS, build_model
@@ -239,11 +239,12 @@ def _compiled(prepared: list[_Prepared]) -> list[_Simulated]:
     """One lane group on the compiled loop."""
     run = prepared[0].run
     start = time.perf_counter()
-    solved = solve_group([p.model for p in prepared], [p.instruments for p in prepared], n_steps=run.n_steps,
-                         dt=run.dt, speed_every=run.speed_every, position_every=run.position_every,
-                         output_every=run.output_every if prepared[0].record else 0,
-                         jacobian_every=run.position_every, method=INTEGRATORS[run.solver.integrator],
-                         tolerance=prepared[0].tolerance)
+    solve = run.solver.group_solver()
+    solved = solve([p.model for p in prepared], [p.instruments for p in prepared], n_steps=run.n_steps,
+                   dt=run.dt, speed_every=run.speed_every, position_every=run.position_every,
+                   output_every=run.output_every if prepared[0].record else 0,
+                   jacobian_every=run.position_every, method=INTEGRATORS[run.solver.integrator],
+                   tolerance=prepared[0].tolerance)
     wall_time = (time.perf_counter() - start) / len(prepared)  # a lane's share of the group's wall time
     out = []
     for lane, p in enumerate(prepared):

@@ -257,8 +257,14 @@ class BenchCatalog:
         return lookup_nominal(target, self._parameters, self._conditions)
 
     def support_checks(self, spec) -> tuple[list[str], list[str]]:
-        """The spec's sampled ranges and fixed parameters against the bench's bounds (:func:`support_checks`)."""
-        return support_checks(spec, spec.base.parameters)
+        """The spec's sampled ranges and fixed parameters against the bench's bounds (:func:`support_checks`), and
+        its solver's engine against this machine (a CUDA engine without a GPU is refused before any run)."""
+        problems, warnings = support_checks(spec, spec.base.parameters)
+        try:
+            twin.Solver(engine=spec.solver.engine)
+        except InputError as exc:
+            problems += [f"solver.{p}" for p in exc.problems]
+        return problems, warnings
 
 
 @lru_cache(maxsize=8)

@@ -165,6 +165,8 @@ class Solver(_Strict):
     """
 
     integrator: str = "rk4"  # or any other twin.simulate integrator
+    # the CPU lane engine, or the CUDA one (twin.Solver.engine; docs/gpu.md): refused before any run without a GPU
+    engine: Literal["cpu", "cuda"] = "cpu"
     dt: _bounded(float | None, "dt") = None
     output_dt: _bounded(float | None, "output_dt") = None
     fidelity: str | dict[str, str] = "auto"
@@ -608,7 +610,8 @@ class CampaignSpec(_Strict):
     def canonical(self) -> dict:
         """The spec with its resolved distributions, as plain JSON-ready data.
 
-        ``control_limits`` is left out when it holds the defaults, and ``units``, ``further_sweeps`` and a data
+        ``control_limits`` is left out when it holds the defaults, the solver's ``engine`` when it is the CPU's, and
+        ``units``, ``further_sweeps`` and a data
         set's ``parameters``, ``seeds_from``, ``procedure`` and ``fidelity`` when not used, so specs written before
         they existed keep their hash (and their results directories).
         """
@@ -621,6 +624,8 @@ class CampaignSpec(_Strict):
             spec["units"]["per_test"] = self.per_test_targets()
         if not self.further_sweeps:
             del spec["further_sweeps"]
+        if self.solver.engine == "cpu":  # the default engine: specs written before the CUDA one keep their hash
+            del spec["solver"]["engine"]
         for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
             if not dataset["parameters"]:
                 del dataset["parameters"]
