@@ -24,7 +24,8 @@ def test_the_cpu_engine_is_the_default_and_leaves_the_spec_hash_alone(tmp_path):
     explicit = campaigns.load_spec(_spec(tmp_path, "cpu"))
     assert default.solver.engine == explicit.solver.engine == "cpu"
     assert explicit.spec_hash() == default.spec_hash()
-    assert "engine" not in default.canonical()["spec"]["solver"]  # so a spec written before the engine existed keeps its hash
+    # so a spec written before the engine existed keeps its hash
+    assert "engine" not in default.canonical()["spec"]["solver"]
 
 
 @pytest.mark.skipif(not unavailable(), reason="this machine has a usable GPU: the refusal is for one without")
