@@ -76,7 +76,7 @@ TESTS = {
     "sensors/torque_meter.py": ["tests/sensors/test_sensor_force_torque.py"],
     # the statistics' unit tests; not the end-to-end synthetic campaign (a dask campaign per mutant: minutes) nor
     # the CLI test (a subprocess imports the installed package, not the mutated copy)
-    "campaigns/analysis/campaign_analysis.py": _ANALYSIS_TESTS,
+    "campaigns/statistics/detection.py": _ANALYSIS_TESTS,
     "campaigns/statistics/sensitivity.py": _ANALYSIS_TESTS,
     # the verdict code of the report: known answers on in-memory analyses (no PDF, no campaign)
     "reports/sections/executive.py": ["tests/reports/test_report_verdicts.py"],
@@ -91,7 +91,7 @@ SCOPE = {
 SETS = {
     "physics": [m for m in TESTS if m.startswith("twin/physics/")],
     "sensors": [m for m in TESTS if m.startswith("sensors/")],
-    "analysis": ["campaigns/analysis/campaign_analysis.py", "campaigns/statistics/sensitivity.py"],
+    "analysis": ["campaigns/statistics/detection.py", "campaigns/statistics/sensitivity.py"],
     "reports": ["reports/sections/executive.py", "reports/builder.py", "reports/inputs.py"],
 }
 
@@ -104,7 +104,7 @@ REPLAYS = {
         'verdict = "met"\n    source_words',
         ["tests/reports/test_report_verdicts.py", "tests/reports/test_executive_summary.py"]),
     "analysis verdict always 'met'": (
-        "campaigns/analysis/campaign_analysis.py", "    if upper <= requirement:\n", "    if True:\n",
+        "campaigns/statistics/detection.py", "    if upper <= requirement:\n", "    if True:\n",
         ["tests/campaigns/test_campaign_verdict.py", "-k", "not cli_prints"]),
     "curvature option ignored": (
         "twin/engine/model.py", "contact_constants(c, p, curvature)", 'contact_constants(c, p, "thesis")',
