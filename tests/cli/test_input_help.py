@@ -72,8 +72,8 @@ def test_misspelt_spec_fields_conditions_and_targets_name_the_one_meant(tmp_path
         [observability]
         sweep = []
         """)
-    assert "solver.integrater: unknown field; did you mean 'integrator'? allowed: integrator, engine, dt, output_dt, fidelity" \
-        in problems
+    assert ("solver.integrater: unknown field; did you mean 'integrator'? "
+            "allowed: integrator, engine, dt, output_dt, fidelity") in problems
     assert any(p.startswith("datasets[0].conditions.backlsh: unknown condition backlsh; did you mean 'backlash'?")
                for p in problems), problems
     assert any(p.startswith("uncertainties[0]: unknown parameter 'motor.inertai'; did you mean 'motor.inertia'?")
