@@ -30,6 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (backend must be chosen first)
 import numpy as np  # noqa: E402
 
 import twin  # noqa: E402
+from app.studies.charts import save_png  # noqa: E402
 from twin.engine.codes import CONTACT  # noqa: E402
 from twin.engine.model import build_model, contact_position_for_force  # noqa: E402
 from twin.engine.plant import ball_screw_outputs, internal_forces, work_rows  # noqa: E402
@@ -38,6 +39,8 @@ from twin.layout import K, S  # noqa: E402
 from twin.physics.ball_groove_friction import catalogue_drag_torque  # noqa: E402
 from twin.physics.ball_screw import helix_angle  # noqa: E402
 from twin.scenes import scene_from_dict  # noqa: E402
+
+FIGURE_DPI = 110  # the resolution of the study's PNG figures
 
 RPM = 2.0 * math.pi / 60.0
 SPEEDS_RPM = (100.0, 500.0, 1500.0)  # screw speeds of the efficiency curves (the bench's motor tops 7000/4 rpm)
@@ -189,13 +192,13 @@ def _figure_efficiency(data: dict, directory: Path) -> list[Path]:
     fig, _ = _efficiency_pair(data, np.array(data["loads"]) / 1e3, "force",
                               lambda preload, rpm: f"F_pr {preload / 1e3:.2g} kN, {rpm} rpm", "external force [kN]",
                               "5.6")
-    paths.append(_save(fig, directory / "fig5_6_efficiency_vs_force.png"))
+    paths.append(save_png(fig, directory / "fig5_6_efficiency_vs_force.png", FIGURE_DPI))
 
     fig, axes = _efficiency_pair(data, np.array(data["preloads"]) / 1e3, "preload",
                                  lambda force, rpm: f"F_ext {force / 1e3:.3g} kN, {rpm} rpm", "preload [kN]", "5.7",
                                  transitions=True)
     axes[0].text(0.02, 0.03, "dotted: transition points F_pr = F_ext/2", transform=axes[0].transAxes, fontsize=7)
-    paths.append(_save(fig, directory / "fig5_7_efficiency_vs_preload.png"))
+    paths.append(save_png(fig, directory / "fig5_7_efficiency_vs_preload.png", FIGURE_DPI))
 
     fig, ax = plt.subplots(figsize=(5.5, 4))
     for rpm, values in data["vs_k_rf"].items():
@@ -204,7 +207,7 @@ def _figure_efficiency(data: dict, directory: Path) -> list[Path]:
            title="Fig. 5.8 analogue: nominal F_ext, F_pr")
     ax.grid(alpha=0.3)
     ax.legend()
-    paths.append(_save(fig, directory / "fig5_8_efficiency_vs_krf.png"))
+    paths.append(save_png(fig, directory / "fig5_8_efficiency_vs_krf.png", FIGURE_DPI))
 
     m = data["map"]
     fig, ax = plt.subplots(figsize=(6, 4.5))
@@ -216,7 +219,7 @@ def _figure_efficiency(data: dict, directory: Path) -> list[Path]:
     ax.set(xlabel="external force [kN]", ylabel="preload [kN]", title="Fig. 5.10 analogue (Ch. 5 sharing, 600 rpm)",
            ylim=(0, max(m["preloads"]) / 1e3))
     ax.legend(fontsize=7, loc="upper left")
-    paths.append(_save(fig, directory / "fig5_10_efficiency_map.png"))
+    paths.append(save_png(fig, directory / "fig5_10_efficiency_map.png", FIGURE_DPI))
     return paths
 
 
@@ -229,7 +232,7 @@ def _figure_drag(data: dict, directory: Path) -> Path:
     ax.set(xlabel="preload [N]", ylabel="no-load drag torque [N m]", title="Fig. 7.22 analogue (20 degC)")
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, directory / "fig7_22_drag_torque.png")
+    return save_png(fig, directory / "fig7_22_drag_torque.png", FIGURE_DPI)
 
 
 def _figure_hysteresis(data: dict, directory: Path) -> list[Path]:
@@ -251,7 +254,7 @@ def _figure_hysteresis(data: dict, directory: Path) -> list[Path]:
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    paths = [_save(fig, directory / "fig5_11_positions.png")]
+    paths = [save_png(fig, directory / "fig5_11_positions.png", FIGURE_DPI)]
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
     for b, run in data.items():
         screw = np.array(run["screw"]) * 1e3
@@ -261,7 +264,7 @@ def _figure_hysteresis(data: dict, directory: Path) -> list[Path]:
            title="Fig. 5.12 analogue: backlash hysteresis")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    paths.append(_save(fig, directory / "fig5_12_hysteresis.png"))
+    paths.append(save_png(fig, directory / "fig5_12_hysteresis.png", FIGURE_DPI))
     return paths
 
 
@@ -279,14 +282,7 @@ def _figure_regimes(data: dict, directory: Path) -> Path:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     axes[0].set_ylabel("axial contact force of the screw on the nut [kN]")
-    return _save(fig, directory / "fig5_13_regimes.png")
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_png(fig, directory / "fig5_13_regimes.png", FIGURE_DPI)
 
 
 def run_chapter5(directory: str | Path, params=None, *, dynamic: bool = True) -> dict:

@@ -26,6 +26,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 import twin  # noqa: E402
+from app.studies.charts import save_png  # noqa: E402
 from twin.engine.model import LINEAR_VELOCITY_THRESHOLD, build_model, contact_force  # noqa: E402
 from twin.fidelity import resolve_fidelity  # noqa: E402
 from twin.layout import K  # noqa: E402
@@ -40,6 +41,8 @@ from twin.physics.ball_screw import (  # noqa: E402
 )
 from twin.physics.friction import stribeck_friction  # noqa: E402
 from twin.scenes import load_scene  # noqa: E402
+
+FIGURE_DPI = 100  # the resolution of the study's PNG figures
 
 #: The thesis's scenes of Sec. 7.9.3 (twin/scenes/library/chapter7_*.toml).
 SCENES = ("chapter7_backlash", "chapter7_backlash_300um", "chapter7_backlash_force")
@@ -266,7 +269,7 @@ def _figure_backlash(scene: str, ds: xr.Dataset, found: xr.Dataset, directory: P
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
-    return _save(fig, directory / f"{scene}.png")
+    return save_png(fig, directory / f"{scene}.png", FIGURE_DPI)
 
 
 def _figure_loops(runs: dict[str, xr.Dataset], directory: Path) -> Path:
@@ -280,7 +283,7 @@ def _figure_loops(runs: dict[str, xr.Dataset], directory: Path) -> Path:
            title="Fig. 7.18d analogue: backlash loops (t <= 0.25 s)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(fig, directory / "fig7_18d_loops.png")
+    return save_png(fig, directory / "fig7_18d_loops.png", FIGURE_DPI)
 
 
 def _figure_preload(curve: xr.Dataset, directory: Path) -> Path:
@@ -295,14 +298,7 @@ def _figure_preload(curve: xr.Dataset, directory: Path) -> Path:
            title=f"Fig. 7.19 analogue: b = {curve.attrs['backlash'] * 1e3:g} mm, screw fixed")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(fig, directory / "fig7_19_preload.png")
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save_png(fig, directory / "fig7_19_preload.png", FIGURE_DPI)
 
 
 def run_chapter7(directory: str | Path, params=None, scenes=SCENES) -> xr.Dataset:

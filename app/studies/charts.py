@@ -145,6 +145,14 @@ def campaign_accuracy_chart(judged: xr.Dataset, path: str | Path | None = None) 
     return fig
 
 
+def save_png(fig: plt.Figure, path: Path, dpi: int) -> Path:
+    """``fig`` laid out and written as a PNG at ``path``, then closed: the chapter studies' figures."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def _save(fig: plt.Figure, path: str | Path | None) -> None:
     if path is None:
         return
