@@ -25,12 +25,11 @@ from twin.engine.reference import local_error_tolerance, run_reference
 from twin.errors import InputError, OptionError, SimulationFailed
 from twin.features import FEATURES, N_ACCUMULATORS, finish
 from twin.fidelity import Fidelity, resolve_fidelity
-from twin.fidelity.rules import PROFILE_GRID
+from twin.fidelity.rules import peak_demand_speed
 from twin.layout import BOUND_REASONS, N_MEMORY, N_SIGNALS, SIGNAL_META, STATUS_OK, STATUS_TEXT, M, S, Signal
 from twin.parameters import ParameterSet, load_parameters
 from twin.physics.bristle_friction import rk4_step_problems
 from twin.scenes import ZERO_PROCEDURES, Scene, load_scene
-from twin.scenes.profiles import profile_values
 from twin.solver import DEFAULT_SOLVER, Solver
 
 DEFAULT_OUTPUT_DT = 1.0e-3  # s; the controller's acquisition period
@@ -319,11 +318,8 @@ def _seal_step_problems(scene: Scene, params: ParameterSet, level: str, dt: floa
     diverge is refused before it starts, naming the field. The sliding relaxation grows with the speed: the largest
     the position demand asks for, at least Table 9.3's nominal 0.07 m/s (a scene that holds the sled still can still
     be pushed by its force loop)."""
-    times = np.arange(0.0, scene.duration + PROFILE_GRID, PROFILE_GRID)
-    position = profile_values(scene.position_table(), times)
-    demand = float(np.max(np.abs(np.diff(position)))) / PROFILE_GRID if position.size > 1 else 0.0
     seal = {key: value for key, value in params.values().items() if key.startswith("pneumatics.")}
-    return rk4_step_problems(level, seal, dt, max(demand, NOMINAL_SLED_SPEED))
+    return rk4_step_problems(level, seal, dt, max(peak_demand_speed(scene), NOMINAL_SLED_SPEED))
 
 
 def _features(done: _Simulated) -> dict[str, float]:

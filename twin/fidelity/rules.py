@@ -136,7 +136,7 @@ class SceneNeeds:
 
     @cached_property
     def peak_force_demand(self) -> float:
-        return float(np.max(np.abs(self._sampled(self.scene.force_table()))))
+        return float(np.max(np.abs(_sampled(self.scene, self.scene.force_table()))))
 
     @cached_property
     def peak_contact_load(self) -> float:
@@ -146,13 +146,8 @@ class SceneNeeds:
     @cached_property
     def peak_motor_speed(self) -> float:
         """Largest motor speed the position demand asks for [rad/s]."""
-        position = self._sampled(self.scene.position_table())
-        speed = np.max(np.abs(np.diff(position))) / PROFILE_GRID if position.size > 1 else 0.0
+        speed = peak_demand_speed(self.scene)
         return reducer.motor_speed(speed / self.params.value("ball_screw.lead") * 2.0 * math.pi, self.params.values())
-
-    def _sampled(self, table: np.ndarray) -> np.ndarray:
-        times = np.arange(0.0, self.scene.duration + PROFILE_GRID, PROFILE_GRID)
-        return profile_values(table, times)
 
     @cached_property
     def contact(self) -> np.ndarray:
@@ -160,6 +155,16 @@ class SceneNeeds:
         c = np.zeros(N_CONSTANTS)
         contact_constants(c, self.params.values(), self.curvature)
         return c
+
+
+def peak_demand_speed(scene: Scene) -> float:
+    """Largest sled speed [m/s] the scene's position demand asks for, on the :data:`PROFILE_GRID`."""
+    position = _sampled(scene, scene.position_table())
+    return float(np.max(np.abs(np.diff(position)))) / PROFILE_GRID if position.size > 1 else 0.0
+
+
+def _sampled(scene: Scene, table: np.ndarray) -> np.ndarray:
+    return profile_values(table, np.arange(0.0, scene.duration + PROFILE_GRID, PROFILE_GRID))
 
 
 def _force_demand(needs: SceneNeeds, wanted: bool, decided) -> tuple[bool, str]:
