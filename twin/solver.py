@@ -26,8 +26,9 @@ DEFAULT_DT = 6.25e-5
 #: The coarsest step accepted [s]: above 1 ms the position loop's period is missed.
 MAX_DT = 1e-3
 #: Lanes of a group (:func:`twin.simulate_batch`): a multiple of the vector width (4 doubles with AVX2, 8 with
-#: AVX-512) that fills two registers; the results do not depend on it.
-DEFAULT_LANES = 8
+#: AVX-512), two AVX-512 registers, the campaign's group (``campaigns.bench.adapter.BenchModel.lanes``); faster per
+#: sample than 8 (docs/performance.md, "Lanes per group"); the results do not depend on it.
+DEFAULT_LANES = 16
 #: The engines of the compiled loop: the CPU lane engine, or one run per CUDA thread (:mod:`twin.engine.cuda`).
 ENGINES = ("cpu", "cuda")
 

@@ -24,7 +24,7 @@ from twin.features import FEATURES
 from twin.layout import OUTPUT_NAMES
 from twin.scenes import CONDITIONS, split_targets
 from twin.scenes.profiles import profile_values
-from twin.solver import DEFAULT_DT, solver_label, split_solver
+from twin.solver import DEFAULT_DT, DEFAULT_LANES, solver_label, split_solver
 
 #: Features the bench computes (``twin.simulate`` scalar outputs), with unit and long name: the
 #: declarations of :mod:`twin.features` (a light module: no numba compilation on import).
@@ -357,10 +357,9 @@ class BenchModel:
     groups, the compile warm-up, what a run costs, and the data sets' conditions and loop margins in ``results.nc``.
     """
 
-    #: Runs a group takes at once (the results do not depend on it: :func:`simulate_group`): 16, not the twin's default
-    #: of 8: 14-15 % less CPU per run with the same features (thesis ds1 and ds2 at campaign fidelity,
-    #: docs/performance.md, "The stages after the runs").
-    lanes: int = 16
+    #: Runs a group takes at once (the results do not depend on it: :func:`simulate_group`): the twin's default group
+    #: (docs/performance.md, "The stages after the runs" and "Lanes per group").
+    lanes: int = DEFAULT_LANES
     #: Wall time of one 10 s data-set run at auto fidelity [s] (measured: docs/performance.md, "Campaign runs").
     typical_run_seconds: float = 1.2
     #: The step that time holds for: the twin's default.

@@ -56,7 +56,7 @@ print(" ".join(float(s.features[f]).hex() for s in twin.simulate_batch(
     for f in ("backlash_feature", "backlash_feature_true")))
 print(float(twin.simulate("ds2", save="features", rng=3).features["backlash_feature"]).hex())
 """
-#: The lane group of the child, as the host computes it (in one group of the default 8 lanes).
+#: The lane group of the child, as the host computes it (in one group of the default 16 lanes).
 GROUP = [("ds2", None, 4), ("ds1", None, 5), ("ds5", None, 6)]
 
 

@@ -56,13 +56,13 @@ def test_explain_fidelity_prints_each_choice_and_why():
     result = run("simulate", "ds2", "--duration", "0.2", "--explain-fidelity")
     assert result.returncode == 0, result.stderr
     assert "current_loop          ideal" in result.stdout
-    assert "peak voltage demand" in result.stdout and "integrated states: 17 of 25" in result.stdout
+    assert "peak voltage demand" in result.stdout and "integrated states: 18 of 25" in result.stdout
 
 
 def test_fidelity_option_and_levels_listing():
     result = run("simulate", "ds2", "--duration", "0.2", "--fidelity", "default=full,encoders=ideal")
     assert result.returncode == 0, result.stderr
-    assert "encoders=ideal" in result.stdout and "(24 integrated states)" in result.stdout
+    assert "encoders=ideal" in result.stdout and "(25 integrated states)" in result.stdout
     listing = run("fidelity", "levels")
     assert listing.returncode == 0 and "nut_rotation" in listing.stdout and "removes 4 states" in listing.stdout
 

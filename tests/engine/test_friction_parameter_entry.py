@@ -29,17 +29,19 @@ def test_a_presliding_stiffness_beyond_rk4s_reach_is_refused_naming_the_field_an
 
 def test_a_regularisation_speed_too_small_for_the_step_is_refused_and_a_smaller_step_accepts_it():
     sharp = twin.load_parameters().with_values({"pneumatics.friction_velocity_threshold": 1.0e-5})
+    regularised = {"seal_friction": "regularised"}  # the level whose smoothing speed it is (the default has none)
     with pytest.raises(OptionError, match="pneumatics.friction_velocity_threshold"):
-        twin.simulate("ds4", sharp, duration=SHORT)
+        twin.simulate("ds4", sharp, duration=SHORT, fidelity=regularised)
     # RK4's limit is 2.785 m v_th / F_s = 2.785 * 7.5 kg * 1e-5 m/s / 400 N = 5.2e-7 s (the test's closed form)
-    ok = twin.simulate("ds4", sharp, duration=SHORT, solver=twin.Solver(dt=125e-6 / 256), save="features")
+    ok = twin.simulate("ds4", sharp, duration=SHORT, solver=twin.Solver(dt=125e-6 / 256), save="features",
+                       fidelity=regularised)
     assert ok.status != "" and ok.dt == pytest.approx(125e-6 / 256)
 
 
 def test_the_nominal_seal_passes_at_every_default_step():
     for scene in ("ds1", "ds4", "nominal"):
         twin.simulate(scene, duration=SHORT, save="features")
-        twin.simulate(scene, duration=SHORT, save="features", fidelity={"seal_friction": "elasto_plastic"})
+        twin.simulate(scene, duration=SHORT, save="features", fidelity={"seal_friction": "regularised"})
 
 
 def test_guides_with_breakaway_below_sliding_friction_are_refused_naming_the_field():

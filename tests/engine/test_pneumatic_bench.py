@@ -52,8 +52,11 @@ def test_small_force_step_follows_the_design(scene_factory, designed_loop):
     scene = scene_factory(2.5, force=force).with_conditions({"supply_pressure": SUPPLY})
     # The design's plant has a lossless ball screw; with the Ch. 5 ball-groove friction (issue 18) the master nut's
     # stiction under 4 kN stretches the 2 % settling time to 0.29 s (design 0.19 s; the rise time stays within
-    # 20 %): compare the loop with the plant the design assumes.
-    ds = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET, "ball_groove_friction": "lumped"})
+    # 20 %): compare the loop with the plant the design assumes. The design (twin.control.force_loop_design)
+    # linearises the regularised seal law, so that is the seal level compared here; under the default
+    # elasto-plastic seal the rise time is 22 ms against the design's 18 ms (docs/model.md, "Friction that holds").
+    ds = twin.simulate(scene, fidelity={"default": "full", "analog_sensors": QUIET, "ball_groove_friction": "lumped",
+                                        "seal_friction": "regularised"})
     seg = ds.sel(time=slice(1.5, None))
     times = seg.time.values - 1.5
     twin_info = control.step_info(seg.external_force.values - 4000.0, T=times, SettlingTimeThreshold=0.02)
@@ -113,8 +116,11 @@ def test_unreachable_force_saturates_without_windup(scene_factory, bench):
 
 def test_moving_nut_force_error_bounded(scene_factory):
     """While the sled follows the Fig. 9.6a profile with 4 kN applied, the force error stays below
-    10 % of the demand (measured: 275 N peak, from the piston seal friction at speed reversals)."""
-    ds = twin.simulate("nominal", fidelity={"default": "full", "analog_sensors": QUIET})
+    10 % of the demand (measured: 275 N peak, from the piston seal friction at speed reversals) under the
+    regularised seal law the loop was designed on. Under the default elasto-plastic seal the seals stick at each
+    reversal until breakaway and the peak is 492 N (rms within the bound): a property of the loop against
+    stiction, recorded in docs/model.md ("Friction that holds"), not a bound the design promises."""
+    ds = twin.simulate("nominal", fidelity={"default": "full", "analog_sensors": QUIET, "seal_friction": "regularised"})
     error = (ds.force_demand - ds.external_force).sel(time=slice(1.5, None))
     assert float(np.abs(error).max()) < 400.0
     assert float(np.sqrt((error**2).mean())) < 100.0

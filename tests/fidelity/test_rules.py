@@ -74,10 +74,10 @@ def test_requested_levels_override_auto_and_say_so(bench):
     fidelity = resolve_fidelity(twin.load_scene("ds2"), bench, {"current_loop": "full", "default": "auto"})
     assert fidelity.level("current_loop") == "full" and fidelity.reasons["current_loop"] == "requested"
     full = resolve_fidelity(twin.load_scene("ds2"), bench, "full")
-    # every state but the seals' deflection, integrated only at the opt-in elasto-plastic seal level (twin.levels)
-    assert full.active_states.size == N_STATES - 1 and S.SEAL_DEFLECTION not in full.active_states
-    every = resolve_fidelity(twin.load_scene("ds2"), bench, {"default": "full", "seal_friction": "elasto_plastic"})
-    assert every.active_states.size == N_STATES
+    # every state, the seals' deflection of the elasto-plastic seal level (the full level, twin.levels) included
+    assert full.active_states.size == N_STATES and S.SEAL_DEFLECTION in full.active_states
+    regularised = resolve_fidelity(twin.load_scene("ds2"), bench, {"default": "full", "seal_friction": "regularised"})
+    assert regularised.active_states.size == N_STATES - 1 and S.SEAL_DEFLECTION not in regularised.active_states
 
 
 def test_removed_states_leave_the_integrated_vector(bench):

@@ -122,17 +122,17 @@ def test_contact_oscillation_finds_a_burst_its_frequency_and_when():
 
 
 def test_the_default_arm_is_the_campaigns_run_bit_for_bit_and_the_half_step_halves_it():
-    """The regularised arm at the campaign step is what the campaign's run function returns for the same request
+    """The elasto-plastic arm (the default seal level) at the campaign step is what the campaign's run function returns for the same request
     (same parameters, noise, fidelity and step), to the last bit; the half-step arm runs at half of that step."""
     from campaigns.bench.adapter import simulate_run
 
     arms = {a.name: a for a in fc.acceptance_arms(PARAMS)}
-    study = fc.paired_study([arms["regularised"], arms["elasto_plastic_half_step"]], ["ds4"], range(1),
+    study = fc.paired_study([arms["elasto_plastic"], arms["elasto_plastic_half_step"]], ["ds4"], range(1),
                             progress=lambda line: None)
     request = fc.thesis_requests(["ds4"], range(1))[0]
     campaign = simulate_run(request)
     assert campaign["status"] == "ok" and (study.status == "ok").all()
     for feature in fc.ACCEPTANCE_FEATURES:
-        assert float(study[feature].sel(arm="regularised", dataset="ds4", run=0)) == campaign["features"][feature]
+        assert float(study[feature].sel(arm="elasto_plastic", dataset="ds4", run=0)) == campaign["features"][feature]
     steps = study.dt.sel(dataset="ds4", run=0)
-    assert float(steps.sel(arm="elasto_plastic_half_step")) == float(steps.sel(arm="regularised")) / 2.0
+    assert float(steps.sel(arm="elasto_plastic_half_step")) == float(steps.sel(arm="elasto_plastic")) / 2.0
