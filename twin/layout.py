@@ -178,8 +178,8 @@ COMPONENTS: tuple[Component, ...] = (
         _e("LEAD_WAVE_PHASE", "rad", "phase phi_u of the long-wave variation at the test zero",
            "ball_screw.lead_travel_variation_phase"),
         _e("LEAD_WAVE_AT_ZERO", "1", "sin(phi_u): the long-wave term at the test zero, subtracted"),
-        _e("LEAD_REVOLUTION_AMPLITUDE", "m", "amplitude a_2pi of the travel variation within one revolution",
-           "ball_screw.lead_per_revolution_amplitude"),
+        _e("LEAD_REVOLUTION_AMPLITUDE", "m", "amplitude of the nut's travel variation within one revolution: a_2pi "
+                                             "averaged over the nut's balls (twin.engine.model.lead_constants)"),
         _e("LEAD_REVOLUTION_PHASE", "rad", "phase phi_2pi of the per-revolution variation at the test zero",
            "ball_screw.lead_per_revolution_phase"),
         _e("LEAD_REVOLUTION_AT_ZERO", "1", "sin(phi_2pi): the per-revolution term at the test zero, subtracted"),

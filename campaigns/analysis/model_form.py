@@ -1,11 +1,13 @@
 """The model-form table: what each modelling assumption does to the features and to the verdicts.
 
-A model-form study (``campaigns/specs/model_form.toml``, issue 33) is a campaign whose data sets are baselines and
-one-at-a-time variants: a variant data set is named ``<baseline>__<label>`` and differs from its baseline in exactly
-one scene condition (the *assumption*; the spec states it in both), or in the parameters it fixes alone (a parameter
-variant, named ``<baseline>__<assumption>_<value>``: one assumption may be several parameters, e.g. every
-ball-groove friction coefficient). From the campaign's results and analysis this
-module computes, per assumption and variant, per baseline data set and feature:
+A model-form study (``campaigns/specs/model_form.toml``, issue 33; ``model_form_requirement.toml`` around the 1 µm
+requirement, issue 42) is a campaign whose data sets are baselines and one-at-a-time variants: a variant data set is
+named ``<baseline>__<label>`` and differs from its baseline in exactly one scene condition (the *assumption*; the
+spec states it in both), in the parameters it fixes alone (a parameter variant, named
+``<baseline>__<assumption>_<value>``: one assumption may be several parameters, e.g. every ball-groove friction
+coefficient), or in the level of one fidelity subsystem alone (a model variant: the assumption is the subsystem, e.g.
+the seal's friction law). From the campaign's results and analysis this module computes, per assumption and variant,
+per baseline data set and feature:
 
 * the shift of the feature's mean against the baseline with its t interval at the analysis's confidence
   (:func:`campaigns.statistics.intervals.mean_shift`): of the run-by-run differences when the variant takes its
@@ -15,6 +17,11 @@ module computes, per assumption and variant, per baseline data set and feature:
 * the requirement verdict of the observability sweep with every sweep data set replaced by its variant, computed by
   :func:`campaigns.analysis.observability.observability_sweep` with the analysis's settings and bootstrap stream,
   against the analysis's verdict (both in the vocabulary of :data:`campaigns.statistics.paired_comparison.VERDICTS`);
+* the shift of the detection probability at the requirement (the sweep's, linearly interpolated between the levels
+  around the requirement when none sits at it) with its percentile bootstrap interval, paired where the variant takes
+  its baseline's seeds (run ``i`` of both arms drawn together); a verdict counts as ``changed`` only where the verdicts
+  differ *and* that interval excludes zero, else ``changed_within_noise``: with ~60 runs per level a verdict near its
+  boundary flips between two samples of the same model, and such a flip is not evidence by itself (issue 42 item 6);
 
 and one sentence, :func:`headline`: the assumption that changes the most verdicts or, when none changes one, the one
 whose resolved shift of a feature is largest. :func:`write_model_form` writes it all as ``model_form.nc``.
@@ -31,10 +38,11 @@ import numpy as np
 import xarray as xr
 
 from campaigns.analysis.observability import observability_sweep
-from campaigns.analysis.settings import OBSERVABILITY_STREAM
+from campaigns.analysis.settings import MODEL_FORM_STREAM, OBSERVABILITY_STREAM
+from campaigns.analysis.vocabulary import sweep_levels
 from campaigns.analysis.vocabulary import used as ok_runs
 from campaigns.runner.files import write_netcdf
-from campaigns.statistics.detection import printed_estimate
+from campaigns.statistics.detection import _detection_probabilities, detection_probability, printed_estimate
 from campaigns.statistics.intervals import mean_shift
 
 #: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.
@@ -44,9 +52,14 @@ FILE_NAME = "model_form.nc"
 #: ``shift_status`` values: the interval excludes zero (``resolved``) or not; too few ok runs on either side; or the
 #: study has no such variant of the data set.
 SHIFT_STATUS = ("not_resolved", "resolved", "insufficient_data", "not_run")
-#: ``verdict_change`` values: both verdicts given and equal, given and different, or not both given (insufficient
-#: data on either side, or a sweep data set without this variant).
-VERDICT_CHANGE = ("unchanged", "changed", "not_compared")
+#: ``verdict_change`` values: both verdicts given and equal; given and different, the detection probability at the
+#: requirement shifted beyond its sampling noise (its interval excludes zero); not both given (insufficient data on
+#: either side, or a sweep data set without this variant); given and different within the noise (the interval holds
+#: zero, or no interval: a flip of two samples near the verdict's boundary, not evidence). Appended, so the flag
+#: values of older tables keep their meaning.
+VERDICT_CHANGE = ("unchanged", "changed", "not_compared", "changed_within_noise")
+#: ``assumption_kind`` values: what a variant changes (:func:`variants`).
+ASSUMPTION_KINDS = ("condition", "parameters", "fidelity")
 
 
 @dataclass(frozen=True)
@@ -54,8 +67,10 @@ class Variant:
     """A variant data set: its baseline and the one assumption that differs, with both values as written.
 
     A condition variant changes one scene condition (``assumption`` is its name); a parameter variant fixes
-    parameters (``parameters``, JSON, SI units) and is named ``<baseline>__<assumption>_<value>``. ``paired`` when
-    it takes its baseline's seeds (``seeds_from``): run ``i`` of both is then one unit under two assumptions.
+    parameters (``parameters``, JSON, SI units) and is named ``<baseline>__<assumption>_<value>``; a fidelity variant
+    sets one subsystem's level (``assumption`` is the subsystem, :mod:`twin.levels`; ``"auto"`` where a data set
+    leaves it to the automatic choice). ``kind`` says which (:data:`ASSUMPTION_KINDS`). ``paired`` when it takes
+    its baseline's seeds (``seeds_from``): run ``i`` of both is then one unit under two assumptions.
     """
 
     dataset: str
@@ -65,6 +80,7 @@ class Variant:
     baseline_value: str
     paired: bool = False
     parameters: str = ""
+    kind: str = "condition"
 
     @property
     def label(self) -> str:
@@ -82,7 +98,8 @@ def variants(spec: dict) -> list[Variant]:
     ------
     ValueError
         A ``<baseline>__<label>`` data set whose baseline is not a data set, whose scene differs from it, or that
-        does not differ from it in exactly one condition stated by both or in its fixed parameters alone.
+        does not differ from it in exactly one condition stated by both, in its fixed parameters alone, or in one
+        subsystem's fidelity level alone.
     """
     datasets = {d["name"]: d for d in spec["datasets"]}
     sampled = {u["target"] for u in spec.get("uncertainties", [])}
@@ -103,7 +120,19 @@ def variants(spec: dict) -> list[Variant]:
         conditions = _changed(mine, theirs)
         fixed, fixed_base = entry.get("parameters", {}), base.get("parameters", {})
         parameters = _changed(fixed, fixed_base)
-        if parameters and not conditions:
+        # a data set without levels of its own runs the automatic choice (the spec stores none as absent or null)
+        model, model_base = entry.get("fidelity") or {}, base.get("fidelity") or {}
+        levels = _changed(model, model_base)
+        if levels and not conditions and not parameters:
+            if len(levels) != 1:
+                problems.append(f"{name}: a fidelity variant sets one subsystem's level (differs in: "
+                                f"{', '.join(f'fidelity.{k}' for k in levels)})")
+                continue
+            key = levels[0]
+            found.append(Variant(name, baseline, key, str(model.get(key, "auto")), str(model_base.get(key, "auto")),
+                                 paired, kind="fidelity"))
+            continue
+        if parameters and not conditions and not levels:
             assumption, _, value = label.rpartition("_")
             if not assumption:
                 problems.append(f"{name}: a variant of parameters is named <baseline>__<assumption>_<value>")
@@ -111,11 +140,15 @@ def variants(spec: dict) -> list[Variant]:
             baseline_value = ("set by the data set" if any(k in fixed_base for k in parameters)
                               else "sampled" if any(k in sampled for k in parameters) else "nominal")
             found.append(Variant(name, baseline, assumption, value, baseline_value, paired,
-                                 json.dumps({k: fixed[k] for k in parameters if k in fixed}, sort_keys=True)))
+                                 json.dumps({k: fixed[k] for k in parameters if k in fixed}, sort_keys=True),
+                                 kind="parameters"))
             continue
-        if parameters or len(conditions) != 1 or conditions[0] not in mine or conditions[0] not in theirs:
-            problems.append(f"{name}: must differ from {baseline} in exactly one condition stated by both, or in its "
-                            f"parameters alone (differs in: {', '.join(conditions + parameters) or 'none'})")
+        if (parameters or levels or len(conditions) != 1 or conditions[0] not in mine
+                or conditions[0] not in theirs):
+            differs = conditions + parameters + [f"fidelity.{k}" for k in levels]
+            problems.append(f"{name}: must differ from {baseline} in exactly one condition stated by both, in its "
+                            f"parameters alone, or in one subsystem's fidelity level alone (differs in: "
+                            f"{', '.join(differs) or 'none'})")
             continue
         key = conditions[0]
         found.append(Variant(name, baseline, key, str(mine[key]), str(theirs[key]), paired))
@@ -158,6 +191,80 @@ def _variant_verdict(results: xr.Dataset, spec: dict, by_baseline: dict[str, str
     return str(found["requirement_verdict"].item()), str(found["requirement_statement"].item())
 
 
+def _requirement_weights(levels: np.ndarray, requirement: float) -> dict[int, float]:
+    """``{sweep index: weight}`` whose weighted sum of detection probabilities is the probability at the requirement:
+    the level at it (weight 1), else linear interpolation between the levels around it; empty when the requirement
+    lies outside the sweep."""
+    at = np.flatnonzero(levels == requirement)
+    if len(at):
+        return {int(at[0]): 1.0}
+    below, above = np.flatnonzero(levels < requirement), np.flatnonzero(levels > requirement)
+    if not len(below) or not len(above):
+        return {}
+    lo, hi = int(below[np.argmax(levels[below])]), int(above[np.argmin(levels[above])])
+    w = (requirement - levels[lo]) / (levels[hi] - levels[lo])
+    return {lo: 1.0 - w, hi: w}
+
+
+def detection_shift(results: xr.Dataset, spec: dict, by_baseline: dict[str, str], feature: str, paired: bool,
+                    settings: dict, seed) -> tuple[float, float, float]:
+    """Shift of the detection probability at the requirement, variant minus baseline, and its percentile bootstrap
+    interval at the analysis's confidence: ``(shift, lower, upper)``, all NaN when a data set it needs has fewer used
+    runs than the detection floor (``settings["min_runs"]``) or the requirement lies outside the sweep.
+
+    Each arm's probability is that of :func:`campaigns.statistics.detection.detection_probability` (the threshold
+    from the arm's own reference) at the sweep level at the requirement, or interpolated between the levels around
+    it (:func:`_requirement_weights`). Each bootstrap replicate resamples the runs of every data set it needs, the
+    reference with them; ``paired``: one draw of run indices for both arms (runs used in both; run ``i`` of the
+    variant is run ``i`` of the baseline under the other assumption), else independent draws per arm.
+    """
+    sweep = list(spec["observability"]["sweep"])
+    levels, reference = sweep_levels(results, sweep, settings["condition"], spec["observability"].get("reference"))
+    weights = _requirement_weights(levels, settings["requirement"])
+    nan3 = (math.nan, math.nan, math.nan)
+    if not weights:
+        return nan3
+    used = ok_runs(results, feature)
+    arms = {}
+    for k in sorted({reference, *weights}):
+        base, variant = (results[feature].sel(dataset=n).where(used.sel(dataset=n)).values
+                         for n in (sweep[k], by_baseline[sweep[k]]))
+        if paired:
+            kept = np.isfinite(base) & np.isfinite(variant)
+            arms[k] = (base[kept], variant[kept])
+        else:
+            arms[k] = (base[np.isfinite(base)], variant[np.isfinite(variant)])
+    if min(min(len(a), len(b)) for a, b in arms.values()) < settings["min_runs"]:
+        return nan3
+    far, n_boot = settings["false_alarm_rate"], settings["n_boot"]
+    rng = np.random.default_rng(seed)
+    draws = {}
+    for k, (base, variant) in arms.items():
+        first = rng.integers(0, len(base), (n_boot, len(base)))
+        draws[k] = (first, first if paired else rng.integers(0, len(variant), (n_boot, len(variant))))
+    estimate, replicates = [], []
+    for arm in (0, 1):  # baseline, variant
+        ref = arms[reference][arm]
+        estimate.append(sum(w * detection_probability(ref, arms[k][arm], far) for k, w in weights.items()))
+        replicates.append(sum(w * _detection_probabilities(ref[draws[reference][arm]], arms[k][arm][draws[k][arm]],
+                                                           far) for k, w in weights.items()))
+    alpha = 0.5 * (1.0 - settings["confidence"])
+    lower, upper = np.quantile(replicates[1] - replicates[0], [alpha, 1.0 - alpha])
+    return float(estimate[1] - estimate[0]), float(lower), float(upper)
+
+
+def verdict_change(baseline: str, variant: str, shift_ci: tuple[float, float]) -> str:
+    """The :data:`VERDICT_CHANGE` value of a variant's verdict against the baseline's: ``changed`` only where the
+    verdicts differ and the detection probability's shift at the requirement is resolved (``shift_ci`` excludes
+    zero), ``changed_within_noise`` where they differ without it."""
+    if "insufficient data" in (baseline, variant):
+        return "not_compared"
+    if baseline == variant:
+        return "unchanged"
+    lower, upper = shift_ci
+    return "changed" if lower > 0.0 or upper < 0.0 else "changed_within_noise"
+
+
 def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     """The model-form table of a campaign (see the module docstring and the variables' ``long_name``).
 
@@ -198,14 +305,18 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     verdict = np.empty((len(labels), len(features)), dtype=object)
     statement = np.empty_like(verdict)
     change = np.empty(verdict.shape, dtype=np.int8)
+    detection, detection_ci = np.full(verdict.shape, math.nan), np.full(verdict.shape + (2,), math.nan)
+    first = {label: next(v for v in found if v.label == label) for label in labels}
     for i, label in enumerate(labels):
         by_baseline = {v.baseline: v.dataset for v in found if v.label == label}
         for f, feature in enumerate(features):
             verdict[i, f], statement[i, f] = _variant_verdict(results, spec, by_baseline, feature, f, settings)
-            both = "insufficient data" not in (verdict[i, f], baseline_verdict[f])
+            if "insufficient data" not in (verdict[i, f], baseline_verdict[f]):
+                detection[i, f], detection_ci[i, f, 0], detection_ci[i, f, 1] = detection_shift(
+                    results, spec, by_baseline, feature, first[label].paired, settings,
+                    np.random.SeedSequence(settings["seed"], spawn_key=(MODEL_FORM_STREAM, i, f)))
             change[i, f] = VERDICT_CHANGE.index(
-                "not_compared" if not both else "changed" if verdict[i, f] != baseline_verdict[f] else "unchanged")
-    first = {label: next(v for v in found if v.label == label) for label in labels}
+                verdict_change(baseline_verdict[f], str(verdict[i, f]), tuple(detection_ci[i, f])))
     units = [str(results[f].attrs.get("units", "1")) for f in features]
     feature_units = {"units": units[0]} if len(set(units)) == 1 else {
         "comment": "in the units of each feature, given by the feature_units coordinate"}
@@ -213,11 +324,13 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
     table = xr.Dataset(
         {
             "assumption": ("variant", np.array([first[k].assumption for k in labels], dtype=object),
-                           {"long_name": "the modelling assumption the variant changes: a scene condition, or the "
-                                         "parameters in variant_parameters"}),
+                           {"long_name": "the modelling assumption the variant changes: a scene condition, the "
+                                         "parameters in variant_parameters, or a fidelity subsystem's level"}),
+            "assumption_kind": ("variant", np.array([first[k].kind for k in labels], dtype=object),
+                                {"long_name": "what the variant changes: " + ", ".join(ASSUMPTION_KINDS)}),
             "variant_parameters": ("variant", np.array([first[k].parameters for k in labels], dtype=object),
                                    {"long_name": "the parameters the variant fixes, JSON, SI units (empty for a "
-                                                 "scene condition)"}),
+                                                 "scene condition or a fidelity level)"}),
             "pairing": ("variant", np.array(["paired" if first[k].paired else "independent" for k in labels],
                                             dtype=object),
                         {"long_name": "paired: the variant takes its baseline's seeds (seeds_from), the shift is "
@@ -251,9 +364,21 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
                              "and bootstrap stream as the analysis"}),
             "variant_statement": (("variant", "feature"), statement, {
                 "long_name": "the variant's requirement verdict with its bounds and sample size, in one sentence"}),
+            "detection_shift": (("variant", "feature"), detection, {
+                "units": "1",
+                "long_name": "detection probability at the requirement, variant minus baseline (the sweep level at "
+                             "the requirement, or linear interpolation between the levels around it); NaN where "
+                             "the verdicts are not compared"}),
+            "detection_shift_ci": (("variant", "feature", "bound"), detection_ci, {
+                "units": "1",
+                "long_name": f"{confidence:g} percentile bootstrap interval of detection_shift: every data set it "
+                             "needs resampled, the reference with it; paired variants draw one set of run indices "
+                             "for both arms"}),
             "verdict_change": (("variant", "feature"), change, {
-                "long_name": "whether the variant changes the requirement verdict (not_compared: insufficient data "
-                             "on either side)",
+                "long_name": "whether the variant changes the requirement verdict: changed only where the verdicts "
+                             "differ and detection_shift_ci excludes zero, changed_within_noise where they differ "
+                             "without it (a flip near the boundary, not evidence); not_compared: insufficient data "
+                             "on either side",
                 "flag_values": np.arange(len(VERDICT_CHANGE), dtype=np.int8),
                 "flag_meanings": " ".join(VERDICT_CHANGE)}),
         },
@@ -269,9 +394,12 @@ def model_form_dataset(results: xr.Dataset, analysis: xr.Dataset) -> xr.Dataset:
         "source_spec_hash": results.attrs.get("spec_hash", ""),
         "confidence": confidence,
         "min_ok_runs": min_runs,
-        "method": "one-at-a-time variants of scene conditions or parameters against their baseline data sets; "
+        "method": "one-at-a-time variants of scene conditions, parameters or fidelity levels against their baseline "
+                  "data sets; "
                   "mean shift with a t interval (paired where the variant takes its baseline's seeds, else Welch); "
-                  "requirement verdict of the observability sweep recomputed on the variants",
+                  "requirement verdict of the observability sweep recomputed on the variants, a change counted only "
+                  "where the bootstrap interval of the detection probability's shift at the requirement excludes "
+                  "zero",
     }
     table.attrs["headline"] = headline(table)
     return table
@@ -289,8 +417,9 @@ def shown_quantities(values, half_width: float, unit: str, extra: int = 1) -> li
 
 
 def headline(table: xr.Dataset) -> str:
-    """One sentence from the numbers: the assumption that changes the most requirement verdicts; when none changes
-    one, the assumption with the largest resolved feature shift (ranked by the distance of its interval from zero,
+    """One sentence from the numbers: the assumption that changes the most requirement verdicts (``changed``: beyond
+    their sampling noise); when none changes one, how many differ within that noise and the assumption with the
+    largest resolved feature shift (ranked by the distance of its interval from zero,
     the size the data guarantee), printed rounded to its interval; never a shift the interval does not resolve."""
     assumptions = list(dict.fromkeys(str(a) for a in table["assumption"].values))
     varied = ", ".join(assumptions)
@@ -311,8 +440,11 @@ def headline(table: xr.Dataset) -> str:
                if len(leaders) == 1 else f"{' and '.join(leaders)} move the requirement verdicts most, each changing "
                f"{most} (of {' and '.join(n)} compared)")
         return f"Of the assumptions varied ({varied}), {who}: {'; '.join(cases)}."
+    noisy = int((change == VERDICT_CHANGE.index("changed_within_noise")).sum())
     opening = (f"No assumption varied ({varied}) changes a requirement verdict ({compared} compared"
                + (f", {change.size - compared} not compared: insufficient data" if compared < change.size else "")
+               + (f"; {noisy} differ{'s' if noisy == 1 else ''} within the verdicts' sampling noise, the detection "
+                  "probability's shift at the requirement not resolved" if noisy else "")
                + ")")
     resolved = table["shift_status"].values == SHIFT_STATUS.index("resolved")
     if not resolved.any():

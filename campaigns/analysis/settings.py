@@ -20,6 +20,9 @@ OBSERVABILITY_STREAM = 1_000_003
 SENSITIVITY_STREAM = 1_000_033
 #: Spawn-key tag of the within-unit bootstrap's random stream (:mod:`campaigns.analysis.within_unit`).
 WITHIN_UNIT_STREAM = 1_000_037
+#: Spawn-key tag of the model-form study's paired bootstrap of the detection-probability shift
+#: (:mod:`campaigns.analysis.model_form`).
+MODEL_FORM_STREAM = 1_000_039
 
 
 @dataclass(frozen=True)

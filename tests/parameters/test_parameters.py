@@ -81,3 +81,17 @@ def test_packages_list_their_lazy_names_and_the_version():
     assert set(twin.__all__) <= set(dir(twin)) and "__version__" in dir(twin)
     assert set(campaigns.__all__) <= set(dir(campaigns))
     assert twin.__version__ == metadata.version("benchtwin")
+
+
+def test_a_count_takes_whole_numbers_only(tmp_path):
+    """``integer = true`` marks a count: a fraction is refused with the field and what is allowed, the flag itself
+    must be a boolean."""
+    (tmp_path / "nut.toml").write_text('[balls]\nvalue = 22.0\nunit = "1"\nsource = "x"\nmin = 1.0\ninteger = true\n')
+    nut = twin.load_parameters(tmp_path)
+    assert nut.with_values({"nut.balls": 3}).value("nut.balls") == 3.0
+    with pytest.raises(ParameterError, match=r"nut.balls: value 2.5 1 is not a whole number; allowed: a whole "
+                                             r"number >= 1"):
+        nut.with_values({"nut.balls": 2.5})
+    (tmp_path / "nut.toml").write_text('[balls]\nvalue = 22.0\nunit = "1"\nsource = "x"\ninteger = "yes"\n')
+    with pytest.raises(ParameterError, match="nut.balls.integer: must be true or false"):
+        twin.load_parameters(tmp_path)

@@ -24,6 +24,8 @@ from twin.physics import pneumatics as pn
 from twin.physics.ball_screw import (
     CONTACT_LINEAR,
     STIFFNESS_FIT_DEGREE,
+    ball_angular_pitch,
+    ball_averaging_factor,
     effective_loaded_balls,
     groove_centre_distance,
     helix_angle,
@@ -205,8 +207,23 @@ def lead_constants(c: np.ndarray, p: dict[str, float], room_temperature: float) 
     ``p(T) = p (1 + alpha (T - T_ref))``: Sec. 7.7, Eq. 7.72 in its dimensionally consistent form, with the screw at
     the room temperature of the test (friction heats it by less than 0.4 K in a 10 s test: ``ball_screw.toml``).
     The travel deviation's offsets at the test zero are computed with the same ``sin`` as the compiled law, so
-    that ``e(0) = 0`` exactly.
+    that ``e(0) = 0`` exactly. The per-revolution amplitude is the nut's: ``a_2pi`` averaged over
+    ``ball_screw.lead_per_revolution_averaged_balls`` balls (:func:`twin.physics.ball_screw.ball_averaging_factor`;
+    one ball, the nominal, leaves it bit for bit).
+
+    Raises
+    ------
+    ParameterError
+        When more balls are averaged than the nut holds (``ball_screw.total_balls``).
     """
+    balls = p["ball_screw.lead_per_revolution_averaged_balls"]
+    if balls > p["ball_screw.total_balls"]:
+        raise ParameterError([f"ball_screw.lead_per_revolution_averaged_balls: {balls:g} balls averaged, but the nut "
+                              f"holds {p['ball_screw.total_balls']:g} (ball_screw.total_balls); allowed: a whole "
+                              "number from 1 to that"])
+    pitch = ball_angular_pitch(p["ball_screw.ball_radius"], p["ball_screw.pitch_radius"], p["ball_screw.lead"])
+    c[K.LEAD_REVOLUTION_AMPLITUDE] = p["ball_screw.lead_per_revolution_amplitude"] * ball_averaging_factor(
+        int(balls), pitch)
     expansion = p["ball_screw.thermal_expansion_coefficient"] * (
         room_temperature - p["ball_screw.thermal_reference_temperature"])
     c[K.LEAD_ARM] = c[K.LEAD_ARM_NOMINAL] * (1.0 + expansion)

@@ -4,8 +4,8 @@ A parameter set is a directory of TOML files, one per component; a parameter's
 full name is ``<file stem>.<key>``. Each entry carries ``value``, ``unit`` and
 exactly one of ``source`` (a datasheet table or thesis equation) or
 ``assumption`` (the reasoning behind a value the thesis does not give), plus
-optional bounds ``min`` / ``gt`` / ``max`` that every override is checked
-against. See ``docs/architecture.md``.
+optional bounds ``min`` / ``gt`` / ``max`` (and ``integer = true`` for a count) that every
+override is checked against. See ``docs/architecture.md``.
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ BUILTIN_DIR = Path(__file__).parent
 PLAUSIBLE_FACTOR = 100.0
 #: Values a :class:`ParameterSet`'s repr shows (the rest: :meth:`ParameterSet.to_frame`).
 _REPR_VALUES = 3
-_ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "table_9_5", "table_9_5_extension"}
+_ALLOWED_KEYS = {"value", "unit", "source", "assumption", "min", "gt", "max", "integer", "table_9_5",
+                 "table_9_5_extension"}
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,7 @@ class Parameter:
     min: float | None = None
     gt: float | None = None
     max: float | None = None
+    integer: bool = False  # a count: only whole numbers are allowed
     table_9_5: str | None = None
     table_9_5_extension: str | None = None  # an uncertainty the bench has that Table 9.5 does not list (issue 33)
 
@@ -60,6 +62,8 @@ class Parameter:
             parts.append(f">= {self.min:g}")
         if self.max is not None:
             parts.append(f"<= {self.max:g}")
+        if self.integer:
+            return f"a whole number {' and '.join(parts)}".rstrip()
         return " and ".join(parts) if parts else "any finite number"
 
     def resolved(self, value: float | str) -> float | str:
@@ -90,6 +94,8 @@ class Parameter:
             or (self.max is not None and value > self.max)
         ):
             return f"{self.name}: value {value:g} {self.unit} is out of range; allowed: {self.allowed()}"
+        if self.integer and value != math.floor(value):
+            return f"{self.name}: value {value:g} {self.unit} is not a whole number; allowed: {self.allowed()}"
         return None
 
 
@@ -285,6 +291,8 @@ def _parse_entry(name: str, entry) -> tuple[Parameter | None, list[str]]:
     for bound in ("min", "gt", "max"):
         if bound in entry and not isinstance(entry[bound], (int, float)):
             problems.append(f"{name}.{bound}: must be a number")
+    if "integer" in entry and not isinstance(entry["integer"], bool):
+        problems.append(f"{name}.integer: must be true or false")
     if problems:
         return None, problems
     parameter = Parameter(
@@ -296,6 +304,7 @@ def _parse_entry(name: str, entry) -> tuple[Parameter | None, list[str]]:
         min=entry.get("min"),
         gt=entry.get("gt"),
         max=entry.get("max"),
+        integer=entry.get("integer", False),
         table_9_5=entry.get("table_9_5"),
         table_9_5_extension=entry.get("table_9_5_extension"),
     )

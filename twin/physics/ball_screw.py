@@ -237,6 +237,22 @@ def helix_angle(lead: float, pitch_radius: float) -> float:
     return math.atan(lead / (2.0 * math.pi * pitch_radius))
 
 
+def ball_angular_pitch(ball_radius: float, pitch_radius: float, lead: float) -> float:
+    """Screw angle between neighbouring balls of a circuit, ``d = 2 pi (2 r_b) / sqrt((2 pi r_m)^2 + p^2)`` [rad]:
+    touching balls (no spacers), one ball diameter apart along the helix, whose turn is ``sqrt((2 pi r_m)^2 + p^2)``
+    long (0.395 rad for Table 7.5)."""
+    return 2.0 * math.pi * (2.0 * ball_radius) / math.hypot(2.0 * math.pi * pitch_radius, lead)
+
+
+def ball_averaging_factor(balls: int, angular_pitch: float) -> float:
+    """Factor on a travel variation sinusoidal in screw angle once the nut averages it over ``balls`` balls
+    ``angular_pitch`` apart: ``sin(N d / 2) / (N sin(d / 2))``, the mean of ``N`` equal sines a phase ``d`` apart
+    about the middle ball (the Dirichlet kernel: Gradshteyn & Ryzhik, *Table of Integrals*, 7th ed., 1.341.1). Equal
+    contact stiffnesses put the nut at the mean of its balls' groove positions. Exactly 1 for one ball (``x / x``);
+    negative where the balls span between one and two periods (-0.216 for 22 balls 0.395 rad apart)."""
+    return math.sin(balls * angular_pitch / 2.0) / (balls * math.sin(angular_pitch / 2.0))
+
+
 @numba.njit(**SCALAR)
 def nut_axial_tangent(relative_position, relative_velocity, backlash, cos_helix, centre_distance, radial_0, axial_0,
                       sin_alpha_0, stiffness_coefficients, sin_alpha_min, sin_alpha_span, damping_b_h, loaded_balls,
