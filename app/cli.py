@@ -300,8 +300,27 @@ def _print_analysis(path: Path) -> None:
         print("control robustness (loop margins of every run against the design limits):")
     for line in control:
         print(f"  {line}")
+    _print_model_form(path.parent)
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
+
+
+def _print_model_form(folder: Path) -> None:
+    """A model-form study's table beside the analysis: its headline, then each variant's requirement verdict per
+    feature with the detection probability's shift at the requirement and whether it changes the verdict."""
+    import xarray as xr
+
+    from campaigns.analysis.model_form import FILE_NAME, variant_lines
+
+    path = folder / FILE_NAME
+    if not path.is_file():
+        return
+    with xr.open_dataset(path, engine="netcdf4") as handle:
+        table = handle.load()
+    print(f"wrote {path}")
+    print(f"model form: {table.attrs['headline']}")
+    for line in variant_lines(table):
+        print(f"  {line}")
 
 
 def _undecided(analysis) -> list[tuple[str, str, str]]:

@@ -466,6 +466,24 @@ def headline(table: xr.Dataset) -> str:
             f"n = {int(table['n_variant'].values[i, d, f])} and {int(table['n_baseline'].values[i, d, f])} runs).")
 
 
+def variant_lines(table: xr.Dataset) -> list[str]:
+    """One line per variant and feature whose verdicts were compared: the variant's verdict statement, the shift of
+    the detection probability at the requirement with its interval, and the verdict change (``verdict_change``)."""
+    lines = []
+    for i, variant in enumerate(table["variant"].values):
+        for f, feature in enumerate(table["feature"].values):
+            change = VERDICT_CHANGE[int(table["verdict_change"].values[i, f])]
+            if change == "not_compared":
+                continue
+            shift = float(table["detection_shift"].values[i, f])
+            low, high = (float(v) for v in table["detection_shift_ci"].values[i, f])
+            lines.append(f"{variant}, {feature}: {table['variant_statement'].values[i, f]} "
+                         f"(baseline {table['baseline_verdict'].values[f]}; detection probability at the requirement "
+                         f"{shift:+.2f}, {float(table.attrs['confidence']) * 100:g} % interval {low:+.2f} to "
+                         f"{high:+.2f}): {change.replace('_', ' ')}")
+    return lines
+
+
 def is_model_form(results: xr.Dataset) -> bool:
     """Whether a campaign is a model-form study (a data set named ``<baseline>__<label>``)."""
     return any(SEPARATOR in str(n) for n in results["dataset"].values)

@@ -182,6 +182,11 @@ def test_the_table_states_resolved_shifts_and_the_verdict_an_assumption_changes(
     assert table.attrs["headline"] == ("Of the assumptions varied (noise_path, cylinder), noise_path moves the "
                                        "requirement verdicts most, changing 1 of its 1 compared verdicts: "
                                        "noise_path=recorded, f: met → not met.")
+    # the command line's lines: one per compared verdict, the change read from the same table
+    lines = model_form.variant_lines(table)
+    assert len(lines) == 2 and lines[0].startswith("noise_path=recorded, f: ") and lines[0].endswith(": changed")
+    assert "(baseline met; detection probability at the requirement" in lines[0]
+    assert lines[1].startswith("cylinder=detached, f: ") and lines[1].endswith(": unchanged")
 
 
 def test_without_a_verdict_change_the_headline_names_the_largest_resolved_shift():
