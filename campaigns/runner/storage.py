@@ -518,9 +518,8 @@ def build_results(spec: CampaignSpec, samples: np.ndarray, chunks: list[dict]) -
         "flag_values": np.arange(len(STATUSES), dtype=np.int8), "flag_meanings": " ".join(STATUSES)})
     data_vars["failure_reason"] = (dims, reason, {"long_name": "why the run failed (empty when ok)"})
     data_vars["integrator"] = (dims, integrator, {
-        "long_name": "method and step that solved the run, e.g. 'rk4 at 62.5 us' (the solver's 'auto' chooses per "
-                     "run: twin.engine.solver_choice; a method alone: written before the step was recorded; empty: "
-                     "not recorded)"})
+        "long_name": "method and step that solved the run, e.g. 'rk4 at 62.5 us' (a method alone: written before "
+                     "the step was recorded; empty: not recorded)"})
     data_vars["t_reached"] = (dims, t_reached, {"units": "s", "long_name": "simulated time reached"})
     data_vars["wall_time"] = (dims, wall_time,
                               {"units": "s", "long_name": "wall-clock time of the run (machine dependent)"})
