@@ -45,6 +45,7 @@ from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
 from twin.scenes import split_targets
 from twin.scenes.procedure import procedure_problems
+from twin.solver import MAX_DT
 from twin.tomlfiles import read_inheriting
 
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
@@ -60,8 +61,8 @@ MAX_RUNS_PER_DATASET = 20_000
 #: ``--workers`` against the same table.
 BOUNDS = {
     # the finest step of the work-precision ladder (125 us / 1024, docs/accuracy.md); below it a 10 s procedure is
-    # over 1e8 steps (hours per run) for no accuracy the twin can show; above 1 ms the controller's period is missed
-    "dt": (1.0e-7, 1.0e-3, "s", "integration step"),
+    # over 1e8 steps (hours per run) for no accuracy the twin can show; the coarsest is the solver's own (MAX_DT)
+    "dt": (1.0e-7, MAX_DT, "s", "integration step"),
     # at least 10 samples per 1 ms acquisition period; at most one sample per second (the shortest procedure is 10 s)
     "output_dt": (1.0e-4, 1.0, "s", "output spacing"),
     # the longest built-in test procedure is 10 s; a procedure 60 times longer is a mistake, not a test
