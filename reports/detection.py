@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES
+from campaigns.analysis.vocabulary import BACKLASH_REQUIREMENT, SWEEP_QUANTITIES, marked_features
 from reports.figures import Points, detection, level_axis, literal
 from reports.phrases import decision
 from reports.units import axis_label, display_scale, number
@@ -73,10 +73,12 @@ def sweep_quantity(analysis) -> tuple[str, np.ndarray, float, str]:
 
 
 def _pairs(analysis) -> list[tuple[str, str | None]]:
-    """Each measured feature with its ideal-sensor counterpart (``<feature>_true``) when the analysis holds it."""
+    """Each measured feature the sweep is about (:func:`campaigns.analysis.vocabulary.marked_features`) with its
+    ideal-sensor counterpart (``<feature>_true``) when the sweep is about that too."""
     features = [str(f) for f in analysis["feature"].values]
-    return [(f, f + "_true" if f + "_true" in features else None)
-            for f in features if not (f.endswith("_true") and f.removesuffix("_true") in features)]
+    marked = marked_features(analysis)
+    return [(f, f + "_true" if f + "_true" in marked else None)
+            for f in marked if not (f.endswith("_true") and f.removesuffix("_true") in features)]
 
 
 def _decision_label(analysis, feature: str, scale: float, shown: str, quantity_name: str) -> str:

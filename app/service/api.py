@@ -17,22 +17,24 @@ from pydantic import BaseModel
 import campaigns
 from app.service.auth import COOKIE_NAME, identify, require
 from app.service.registry import FINAL_STATES
-from app.service.submission import ANSWER_FIGURE, SUBMITTED_NAME, input_dir, output_dir, prepare
+from app.service.submission import ANSWER_FIGURE_NAME, SUBMITTED_NAME, input_dir, output_dir, prepare
 from campaigns.runner.budget import estimate
 from campaigns.runner.spec import SpecError
 
 router = APIRouter()
 
-#: The files of a campaign that may be downloaded: name -> (where, file name, media type). Nothing else is served.
+#: The files every campaign may have: name -> (where, file name, media type). With the page-1 figures its summary lists
+#: (:func:`campaign_files`), nothing else is served.
 FILES = {
     "results.nc": ("out", "results.nc", "application/x-netcdf"),
     "analysis.nc": ("out", "analysis.nc", "application/x-netcdf"),
     "report.html": ("out", "report.html", "text/html; charset=utf-8"),
     "report.pdf": ("out", "report.pdf", "application/pdf"),
-    ANSWER_FIGURE: ("out", ANSWER_FIGURE, "image/png"),
     "spec": ("input", SUBMITTED_NAME, "text/plain; charset=utf-8"),
     "spec.json": ("out", "spec.json", "application/json"),
 }
+#: Files shown in the browser rather than downloaded (the page-1 figures too).
+INLINE = ("report.html", "report.pdf", "spec", "spec.json")
 #: The generated report is shown as it is: its own CSS and embedded figures, no scripts, no external loads.
 REPORT_POLICY = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'none'"
 _PATH = re.compile(r"^[A-Za-z_][\w.\[\]]*$")
@@ -149,19 +151,33 @@ def _iso(t: float | None) -> str | None:
     return datetime.fromtimestamp(t, UTC).isoformat(timespec="seconds") if t else None
 
 
-def available_files(registry, campaign_id: str) -> list[str]:
-    return [name for name in FILES if served_file(registry, campaign_id, name) is not None]
+def figures(record: dict) -> list[dict[str, str]]:
+    """The page-1 figures a finished campaign's summary lists (``{"name", "caption"}``, one per fault sweep, as the
+    runner drew them: :func:`app.service.runner.answer_figures`), those of a figure's name alone."""
+    listed = (record["summary"] or {}).get("figures", [])
+    return [f for f in listed if ANSWER_FIGURE_NAME.match(f["name"])]
+
+
+def campaign_files(record: dict) -> dict[str, tuple[str, str, str]]:
+    """The files of a campaign that may be downloaded, as :data:`FILES`: those and the page-1 figures its summary
+    lists. Nothing else is served."""
+    return {**FILES, **{f["name"]: ("out", f["name"], "image/png") for f in figures(record)}}
+
+
+def available_files(registry, record: dict) -> list[str]:
+    return [name for name in campaign_files(record) if served_file(registry, record, name) is not None]
 
 
 def _file(campaign_dir: Path, where: str, file: str) -> Path:
     return (output_dir(campaign_dir) if where == "out" else input_dir(campaign_dir)) / file
 
 
-def served_file(registry, campaign_id: str, name: str) -> Path | None:
-    """The file ``name`` of a campaign if it may be served: a regular file at its own place inside the campaign's
-    directory, reached through no symbolic link (one planted in the output cannot lead outside); else None."""
-    where, file, _ = FILES[name]
-    path = _file(registry.campaign_dir(campaign_id), where, file)
+def served_file(registry, record: dict, name: str) -> Path | None:
+    """The file ``name`` of a campaign (one of :func:`campaign_files`) if it may be served: a regular file at its own
+    place inside the campaign's directory, reached through no symbolic link (one planted in the output cannot lead
+    outside); else None."""
+    where, file, _ = campaign_files(record)[name]
+    path = _file(registry.campaign_dir(record["id"]), where, file)
     try:
         real = path.resolve(strict=True)
         expected = registry.data.resolve(strict=True) / path.relative_to(registry.data)
@@ -199,7 +215,7 @@ def describe(registry, record: dict, now: float) -> dict:
         "error": record["error"],
         "summary": record["summary"] or {},
         "files": {name: f"/api/v1/campaigns/{campaign_id}/files/{name}"
-                  for name in available_files(registry, campaign_id)},
+                  for name in available_files(registry, record)},
         "page": f"/campaigns/{campaign_id}",
     }
 
@@ -298,19 +314,21 @@ def cancel_campaign(request: Request, campaign_id: str) -> dict:
             responses={**AUTHENTICATED, 404: {"description": "unknown campaign, a name not in the list, not written "
                                                              "yet, or not a regular file of the campaign", **_ERROR}})
 def get_file(request: Request, campaign_id: str, name: str):
-    """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``detection.png`` (the report's page-1
-    figure), ``spec`` (as submitted), ``spec.json`` (canonical) (role ``read``). Any other name is 404."""
+    """One of ``results.nc``, ``analysis.nc``, ``report.html``, ``report.pdf``, ``spec`` (as submitted),
+    ``spec.json`` (canonical), and the report's page-1 figure of each fault sweep the campaign's summary lists
+    (``detection.png``, ``detection_preload.png``) (role ``read``). Any other name is 404."""
     caller(request)
-    if name not in FILES:
-        raise HTTPException(404, f"no file {name!r}; available names: {', '.join(FILES)}")
     record = _record(request, campaign_id)
-    media = FILES[name][2]
-    path = served_file(request.app.state.registry, record["id"], name)
+    files = campaign_files(record)
+    if name not in files:
+        raise HTTPException(404, f"no file {name!r}; available names: {', '.join(files)}")
+    media = files[name][2]
+    path = served_file(request.app.state.registry, record, name)
     if path is None:
         raise HTTPException(404, f"{name} of campaign {campaign_id} does not exist (yet)")
     download = name if name != "spec" else f"{record['name']}.toml"
     headers = {"Content-Security-Policy": REPORT_POLICY} if name == "report.html" else {}
-    inline = name in ("report.html", "report.pdf", ANSWER_FIGURE, "spec", "spec.json")
+    inline = name in INLINE or name not in FILES
     return FileResponse(path, media_type=media, filename=download, headers=headers,
                         content_disposition_type="inline" if inline else "attachment")
 

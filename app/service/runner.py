@@ -5,8 +5,9 @@ calls) with ``resume=True``: a campaign interrupted by a stopped or killed serve
 chunk files, re-running only the runs without a record. The runner records in the registry the stage
 (from the pipeline's announcements), the progress (read from the chunk files every
 ``PROGRESS_PERIOD`` seconds), and at the end the state and the verdict statements of the analysis,
-verbatim as :func:`campaigns.analysis.campaign_analysis.summary` words them, with the report's page-1 figure
-(:func:`reports.detection.detection_answer`) drawn beside the results and its caption, for the campaign page.
+verbatim as :func:`campaigns.analysis.campaign_analysis.summary` words them, with the report's page-1 figure of each
+fault sweep (:func:`reports.detection.detection_answer`) drawn beside the results and listed with its caption, for the
+campaign page.
 
 It holds ``campaigns/<id>/.lock`` (:class:`campaigns.runner.storage.OutputLock`) for its whole life: a
 restarted server that finds the lock held knows this runner outlived the old server and waits for it
@@ -29,11 +30,11 @@ import xarray as xr
 
 from app.pipeline import run_campaign_pipeline
 from app.service.registry import Registry
-from app.service.submission import ANSWER_FIGURE, load_frozen, output_dir
+from app.service.submission import answer_figure_name, load_frozen, output_dir
 from campaigns.analysis.campaign_analysis import summary
 from campaigns.runner.files import CampaignInterrupted
 from campaigns.runner.storage import CampaignError, OutputLock
-from reports.detection import detection_answer
+from reports.detection import detection_answer, sweep_views
 from reports.errors import ReportError
 from twin.errors import InputError
 
@@ -118,10 +119,10 @@ def run(data: Path, campaign_id: str, workers: int, scheduler: str | None) -> in
             watcher.join()
         with xr.open_dataset(outputs.analysis, engine="netcdf4") as analysis:
             statements, warnings = summary(analysis)
-            caption = answer_figure(analysis, out)
+            figures = answer_figures(analysis, out)
         registry.transition(campaign_id, ("running",), state="done", stage="done", stage_message="",
                             finished_at=time.time(),
-                            summary={"statements": statements, "warnings": warnings, "figure_caption": caption})
+                            summary={"statements": statements, "warnings": warnings, "figures": figures})
         print(f"[{time.strftime('%H:%M:%S')}] done", flush=True)
         return 0
     except CampaignInterrupted as stop:  # the executor's SIGTERM (cancel, server stop): it records the outcome
@@ -140,17 +141,23 @@ def run(data: Path, campaign_id: str, workers: int, scheduler: str | None) -> in
         lock.release()
 
 
-def answer_figure(analysis: xr.Dataset, out: Path) -> str:
-    """Draw the report's page-1 figure into ``out/detection.png``; its caption, or "" when the analysis has no sweep
-    (then no file). Moved into place whole, so the page never serves half a file."""
-    answer = detection_answer(analysis)
-    if answer is None:
-        return ""
-    png, caption = answer
-    partial = out / f"{ANSWER_FIGURE}.partial"
-    partial.write_bytes(png)
-    os.replace(partial, out / ANSWER_FIGURE)
-    return caption
+def answer_figures(analysis: xr.Dataset, out: Path) -> list[dict[str, str]]:
+    """Draw the report's page-1 figure of each fault sweep into ``out`` (``detection.png`` for the first,
+    :func:`app.service.submission.answer_figure_name`); ``{"name", "caption"}`` of each, in the sweeps' order, empty
+    when the analysis has no sweep (then no file). Each is moved into place whole, so the page never serves half a
+    file."""
+    figures = []
+    for key, view in sweep_views(analysis):
+        answer = detection_answer(view)
+        if answer is None:
+            continue
+        png, caption = answer
+        name = answer_figure_name(key)
+        partial = out / f"{name}.partial"
+        partial.write_bytes(png)
+        os.replace(partial, out / name)
+        figures.append({"name": name, "caption": caption})
+    return figures
 
 
 def main(argv: list[str] | None = None) -> int:

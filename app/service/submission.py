@@ -35,14 +35,25 @@ from twin.parameters import available_parameter_sets
 BUILTIN_SPECS = Path(campaigns.__file__).parent / "specs"
 SUBMITTED_NAME = "submitted.toml"
 SPEC_NAME = "spec.toml"
-#: The answer in a picture, the report's page-1 figure (reports.detection.detection_answer), which the runner draws
-#: beside the results for the campaign page.
-ANSWER_FIGURE = "detection.png"
+#: What a page-1 figure's file name may look like (:func:`answer_figure_name`): the API serves no other name as one.
+ANSWER_FIGURE_NAME = re.compile(r"^detection(_[a-z]+)?\.png$")
 #: What a scene or parameter-set name may look like in a submitted spec (no path, no file name).
 _BARE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_-]*$")
 #: Deepest nesting of tables and arrays accepted: the built-in specs nest 4 deep; far deeper is an attack on the
 #: parser and on everything that walks the spec recursively afterwards (validation, the spec hash's JSON).
 MAX_NESTING = 16
+
+
+def answer_figure_name(key: str) -> str:
+    """The file of a fault sweep's answer in a picture, the report's page-1 figure
+    (:func:`reports.detection.detection_answer`), which the runner draws beside the results for the campaign page:
+    ``detection.png`` for the first sweep, ``detection_preload.png`` for a further preload sweep (``key``: the sweep's
+    variable suffix in the analysis, :func:`campaigns.analysis.vocabulary.sweep_key`)."""
+    return f"detection{key}.png"
+
+
+#: The first sweep's figure (the one of a spec with one sweep).
+ANSWER_FIGURE = answer_figure_name("")
 
 
 def builtin_specs() -> list[str]:

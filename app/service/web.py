@@ -1,9 +1,10 @@
 """The web page: server-rendered HTML (Jinja2) with a little JavaScript that polls the JSON API.
 
 Pages: the campaign list (state, progress bar), the submit form (validation errors beside the spec),
-a campaign page (verdict statements of the analysis with the report's page-1 figure, live progress, failures,
-links to the report and the data files), and the login form. A browser signs in by pasting a token into the login
-form; the server answers with an HttpOnly, SameSite=Strict cookie holding it (see :mod:`app.service.auth`).
+a campaign page (verdict statements of the analysis with the report's page-1 figure of each fault sweep, live
+progress, failures, links to the report and the data files), and the login form. A browser signs in by pasting a
+token into the login form; the server answers with an HttpOnly, SameSite=Strict cookie holding it (see
+:mod:`app.service.auth`).
 """
 
 from __future__ import annotations
@@ -19,14 +20,15 @@ from fastapi.responses import HTMLResponse, RedirectResponse
 from fastapi.templating import Jinja2Templates
 
 from app.service.api import (
-    FILES,
     PayloadTooLarge,
     QueueFull,
     builtin_spec_texts,
     caller,
+    campaign_files,
     cancel_campaign_as,
     describe,
     error_list,
+    figures,
     read_limited,
     submit,
 )
@@ -168,7 +170,8 @@ def campaign_page(request: Request, campaign_id: str):
     campaign = describe(registry, record, _now())
     owner = who["role"] == "admin" or record["submitted_by"] == who["name"]
     can_cancel = record["state"] not in FINAL_STATES and owner
-    return _page(request, "campaign.html.j2", who=who, c=campaign, can_cancel=can_cancel, file_names=list(FILES))
+    return _page(request, "campaign.html.j2", who=who, c=campaign, can_cancel=can_cancel,
+                 file_names=list(campaign_files(record)), figures=figures(record))
 
 
 @router.post("/campaigns/{campaign_id}/cancel")

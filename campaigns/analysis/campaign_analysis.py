@@ -37,6 +37,7 @@ from campaigns.analysis.separation import separation
 from campaigns.analysis.settings import AnalysisSettings
 from campaigns.analysis.vocabulary import (
     SWEEP_QUANTITIES,
+    marked_features,
     requirement_of,
     runs_text,
     stored_spec,
@@ -104,18 +105,23 @@ def summary(analysis: xr.Dataset) -> tuple[list[str], list[str]]:
     tuple of list of str
         ``(statements, warnings)``: ``"<feature>: <requirement_statement>"`` per feature, then
         ``"<feature> (<condition> sweep): ..."`` for each further fault sweep (a within-unit campaign's
-        ``"<feature> within unit: <within_unit_requirement_statement>"`` after it), and one warning per feature
-        with data sets below ``min_ok_runs`` ok runs.
+        ``"<feature> within unit: <within_unit_requirement_statement>"`` after it), each sweep's for the features it
+        marks (:func:`campaigns.analysis.vocabulary.marked_features`) alone, and one warning per feature with data
+        sets below ``min_ok_runs`` ok runs.
     """
     statements, warnings = [], []
     min_ok_runs = int(analysis.attrs["min_ok_runs"])
     further = sorted(str(v) for v in analysis.data_vars if str(v).startswith("requirement_statement_"))
+    marked = {key: marked_features(analysis, key)
+              for key in ["", *(name.removeprefix("requirement_statement") for name in further)]}
     for feature in (str(f) for f in analysis["feature"].values):
-        statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
+        if feature in marked[""]:
+            statements.append(f"{feature}: {analysis['requirement_statement'].sel(feature=feature).item()}")
         for name in further:  # each further fault sweep's verdict (campaigns.analysis.vocabulary.sweep_key)
-            statements.append(f"{feature} ({name.removeprefix('requirement_statement_')} sweep): "
-                              f"{analysis[name].sel(feature=feature).item()}")
-        if "within_unit_requirement_statement" in analysis:
+            if feature in marked[name.removeprefix("requirement_statement")]:
+                statements.append(f"{feature} ({name.removeprefix('requirement_statement_')} sweep): "
+                                  f"{analysis[name].sel(feature=feature).item()}")
+        if "within_unit_requirement_statement" in analysis and feature in marked[""]:
             statements.append(f"{feature} within unit: "
                               f"{analysis['within_unit_requirement_statement'].sel(feature=feature).item()}")
         n_used = analysis["n_used"].sel(feature=feature)

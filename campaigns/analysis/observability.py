@@ -20,6 +20,8 @@ from campaigns.analysis.vocabulary import (
     REQUIREMENT_SOURCE,
     RESOLUTION_ATTRS,
     STATEMENT_ATTRS,
+    SWEEP_FEATURE,
+    SWEEP_FEATURE_ATTRS,
     SWEEP_QUANTITIES,
     VERDICT_ATTRS,
     features_of,
@@ -27,6 +29,7 @@ from campaigns.analysis.vocabulary import (
     requirement_of,
     runs_text,
     stored_spec,
+    sweep_features,
     sweep_levels,
     sweeps_of,
     used,
@@ -304,7 +307,9 @@ def observability_analysis(results: xr.Dataset, settings: AnalysisSettings) -> x
     ``SeedSequence(seed, spawn_key=(OBSERVABILITY_STREAM, f))``); each further sweep's carry its
     :func:`campaigns.analysis.vocabulary.sweep_key` (``requirement_verdict_preload`` along ``sweep_point_preload``,
     the ``sweep`` attribute naming the condition, its verdict's attributes the requirement), with their own streams
-    ``(OBSERVABILITY_STREAM, f, k)`` for the k-th sweep. A within-unit campaign's sweep takes one test per unit, and
+    ``(OBSERVABILITY_STREAM, f, k)`` for the k-th sweep. Every feature gets each sweep's verdict; each sweep's
+    :data:`~campaigns.analysis.vocabulary.SWEEP_FEATURE` marks those its table's ``features`` names (all by default),
+    the ones page 1 and the printed summary give. A within-unit campaign's sweep takes one test per unit, and
     its statement says so."""
     spec = stored_spec(results)
     features = features_of(results)
@@ -354,6 +359,9 @@ def _sweep_analysis(results: xr.Dataset, features: list[str], table: dict, setti
     levels = f"sweep_{SWEEP_QUANTITIES[condition][0].replace(' ', '_')}"
     combined = xr.concat([s.drop_vars(levels) for s in per_feature], dim="feature")
     combined[levels] = per_feature[0][levels]
+    marked = sweep_features(table, features)
+    combined[SWEEP_FEATURE] = ("feature", np.array([f in marked for f in features], dtype=np.int8),
+                               SWEEP_FEATURE_ATTRS)
     return combined
 
 

@@ -21,6 +21,15 @@ VERDICT_ATTRS = {"long_name": "verdict on the Table 9.3 requirement: met / not m
 STATEMENT_ATTRS = {
     "long_name": "the verdict on the Table 9.3 requirement with the estimate, its bounds and the sample size, "
                  "in one sentence"}
+#: The analysis's mark of the features a sweep's verdicts are about (``features`` of its ``[[observability]]``
+#: table; every feature when it names none), with the sweep's :func:`sweep_key`: ``sweep_feature_preload``.
+SWEEP_FEATURE = "sweep_feature"
+SWEEP_FEATURE_ATTRS = {
+    "long_name": "whether the sweep's verdict is about the feature (the features of its [[observability]] table; "
+                 "every feature when it names none): page 1 and the printed summary give the marked ones",
+    "flag_values": np.array([0, 1], dtype=np.int8),
+    "flag_meanings": "other_feature sweep_feature",
+}
 RESOLUTION_ATTRS = {
     "long_name": "how far the sweep resolves the minimum detectable level: resolved (a sweep level lies strictly "
                  "inside the bootstrap bounds: the value is printed), between_adjacent_levels (the bracket of two "
@@ -85,6 +94,23 @@ def sweeps_of(spec: dict) -> list[tuple[str, dict]]:
     and the ``further_sweeps`` of a spec written with ``[[observability]]`` tables; empty without a sweep."""
     tables = [spec["observability"], *spec.get("further_sweeps", [])]
     return [(sweep_key(k, t.get("condition", "backlash")), t) for k, t in enumerate(tables) if t["sweep"]]
+
+
+def sweep_features(table: dict, features: list[str]) -> list[str]:
+    """The features a stored sweep table's verdicts are about, in the campaign's order: those its ``features`` names
+    (left out of the stored spec when empty), else every one of ``features``."""
+    named = table.get("features") or features
+    return [f for f in features if f in named]
+
+
+def marked_features(analysis: xr.Dataset, key: str = "") -> list[str]:
+    """The features the analysis marks as the verdicts of the sweep with :func:`sweep_key` ``key`` are about
+    (:data:`SWEEP_FEATURE`); every feature when it has no mark (an analysis written before sweeps named theirs)."""
+    features = [str(f) for f in analysis["feature"].values]
+    name = SWEEP_FEATURE + key
+    if name not in analysis:
+        return features
+    return [f for f, marked in zip(features, analysis[name].values, strict=True) if marked]
 
 
 def is_within_unit(spec: dict) -> bool:

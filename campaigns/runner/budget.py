@@ -11,8 +11,9 @@ never costs more than its budget (``execution.timeout`` and the kill grace): the
 
 The disk estimate covers what a campaign writes, at its peak: the chunk files, ``results.nc`` twice (a
 rewrite, e.g. the fidelity audit's attributes, writes a new copy beside the old one before replacing it), the
-fidelity audit's own campaign, and ``analysis.nc``. The figures per run are measured on real files
-(``tests/campaigns/test_campaign_budget.py`` checks the estimate against them).
+fidelity audit's own campaign, and ``analysis.nc``. The figures per run are measured on real files (docs/performance.md,
+"The figures behind the campaign code's constants"); ``tests/campaigns/test_budget_analysis_variables.py`` checks the
+count of ``analysis.nc``'s variables against what the analysis writes.
 """
 
 from __future__ import annotations
@@ -45,8 +46,12 @@ VARIABLE_BYTES = 7_000
 #: Variables of results.nc besides the sampled values, features, margins, traces and conditions (status, its flag,
 #: failure reason, integrator, t_reached, wall_time, the margin note, the coordinates).
 RESULTS_VARIABLES = 12
-#: Variables of analysis.nc besides two per margin (quantiles, worst case): its statistics, verdicts, coordinates.
-ANALYSIS_VARIABLES = 45
+#: Variables of analysis.nc of a spec with one fault sweep besides two per margin figure (quantiles, worst case): its
+#: statistics, the sweep's verdicts and levels, the control-limit verdicts, the coordinates.
+ANALYSIS_VARIABLES = 62
+#: Variables each further fault sweep adds to analysis.nc (its verdicts, levels, feature mark and sweep coordinate:
+#: ``campaigns.analysis.observability``).
+SWEEP_VARIABLES = 13
 #: Margin figures the bench stores per run (4 loops x 4 figures, ``campaigns.bench.adapter.margin_variables``): counted
 #: for every run function, a few hundred bytes of slack for the others.
 MARGIN_FIGURES = 16
@@ -114,6 +119,12 @@ def _campaign_bytes(spec: CampaignSpec, runs_per_dataset: int, trace_samples: in
     return chunk_files + 2 * len(spec.to_json()), results + trace_bytes  # spec.json (indented) beside the chunks
 
 
+def analysis_variables(spec: CampaignSpec) -> int:
+    """The netCDF variables of the spec's ``analysis.nc``: the statistics and a sweep's, two per margin figure, and
+    those of each further fault sweep."""
+    return ANALYSIS_VARIABLES + 2 * MARGIN_FIGURES + SWEEP_VARIABLES * len(spec.further_sweeps)
+
+
 def estimate(spec: CampaignSpec, run_function: RunModel, *, workers: int = 2, runs: int | None = None) -> Estimate:
     """Estimate the cost of ``runs`` runs of ``spec`` (default: all of them)."""
     total = len(spec.datasets) * spec.runs_per_dataset
@@ -122,7 +133,7 @@ def estimate(spec: CampaignSpec, run_function: RunModel, *, workers: int = 2, ru
     chunks, results = _campaign_bytes(spec, spec.runs_per_dataset, samples)
     audit_runs = min(spec.fidelity_audit.runs, spec.runs_per_dataset)
     audit = sum(_campaign_bytes(spec, audit_runs, samples, traces=False)) + FILE_BYTES if audit_runs >= 2 else 0
-    analysis = (FILE_BYTES + (ANALYSIS_VARIABLES + 2 * MARGIN_FIGURES) * VARIABLE_BYTES
+    analysis = (FILE_BYTES + analysis_variables(spec) * VARIABLE_BYTES
                 + total * RUN_RESULTS_BYTES)  # the statistics, the per-run margin verdicts and their texts
     per_run = run_seconds(spec, run_function)
     wall = per_run * runs / max(1, workers) if per_run is not None else None

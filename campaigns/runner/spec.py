@@ -45,6 +45,7 @@ from twin.fidelity import requested_levels
 from twin.scenes import CONDITIONS as SCENE_CONDITIONS
 from twin.scenes import split_targets
 from twin.scenes.procedure import procedure_problems
+from twin.solver import MAX_DT
 from twin.tomlfiles import read_inheriting
 
 #: Largest ``runs_per_dataset`` a spec may ask for. At 20 000 runs the Monte Carlo standard error of a
@@ -60,8 +61,8 @@ MAX_RUNS_PER_DATASET = 20_000
 #: ``--workers`` against the same table.
 BOUNDS = {
     # the finest step of the work-precision ladder (125 us / 1024, docs/accuracy.md); below it a 10 s procedure is
-    # over 1e8 steps (hours per run) for no accuracy the twin can show; above 1 ms the controller's period is missed
-    "dt": (1.0e-7, 1.0e-3, "s", "integration step"),
+    # over 1e8 steps (hours per run) for no accuracy the twin can show; the coarsest is the solver's own (MAX_DT)
+    "dt": (1.0e-7, MAX_DT, "s", "integration step"),
     # at least 10 samples per 1 ms acquisition period; at most one sample per second (the shortest procedure is 10 s)
     "output_dt": (1.0e-4, 1.0, "s", "output spacing"),
     # the longest built-in test procedure is 10 s; a procedure 60 times longer is a mistake, not a test
@@ -367,6 +368,10 @@ class Observability(_Strict):
     and the requirement is Table 9.3's 1 µm. For ``"preload"`` (preload loss) the reference is
     named by ``reference`` (the healthy preload), the fault size is the loss ``preload_ref -
     preload``, and ``requirement`` [N] with its ``requirement_source`` must be given.
+
+    ``features`` names the campaign's features the sweep's verdicts are about (those that respond to its fault:
+    the backlash features for a backlash sweep, the drag torque for a preload loss); page 1 and the printed summary
+    give the verdicts of those alone. Empty (the default): every feature of the campaign.
     """
 
     sweep: list[str] = []
@@ -374,6 +379,7 @@ class Observability(_Strict):
     reference: str | None = None
     requirement: float | None = Field(default=None, gt=0)
     requirement_source: str = ""
+    features: list[str] = []
 
 
 #: Rows of the bench's table that change from test to test of one unit, besides the scene conditions (room
@@ -611,7 +617,7 @@ class CampaignSpec(_Strict):
         """The spec with its resolved distributions, as plain JSON-ready data.
 
         ``control_limits`` is left out when it holds the defaults, the solver's ``engine`` when it is the CPU's, and
-        ``units``, ``further_sweeps`` and a data
+        ``units``, ``further_sweeps``, a sweep's ``features`` and a data
         set's ``parameters``, ``seeds_from``, ``procedure`` and ``fidelity`` when not used, so specs written before
         they existed keep their hash (and their results directories).
         """
@@ -624,6 +630,9 @@ class CampaignSpec(_Strict):
             spec["units"]["per_test"] = self.per_test_targets()
         if not self.further_sweeps:
             del spec["further_sweeps"]
+        for table in [spec["observability"], *spec.get("further_sweeps", [])]:
+            if not table["features"]:  # every feature: specs written before sweeps named theirs keep their hash
+                del table["features"]
         if self.solver.engine == "cpu":  # the default engine: specs written before the CUDA one keep their hash
             del spec["solver"]["engine"]
         for dataset in spec["datasets"]:  # left out when not used, so specs written before them keep their hash
@@ -703,6 +712,8 @@ def cross_field_problems(data: dict) -> list[str]:
         if isinstance(sweep, list):
             problems += [f"{path}{p}" for p in _sweep_problems([n for n in sweep if isinstance(n, str)], datasets,
                                                                   observability)]
+        problems += [f"{path}.features: {p}" for p in _sweep_feature_problems(observability.get("features"),
+                                                                               data.get("features"))]
     conditions = [t.get("condition", "backlash") for _, t in tables]
     twice = sorted({c for c in conditions if isinstance(c, str) and conditions.count(c) > 1})
     if twice:
@@ -808,6 +819,25 @@ def _sweep_problems(sweep: list[str], datasets: list[dict], observability: dict)
         problems.append(f".requirement: required for a {condition} sweep (the fault size to detect)")
     if len(sweep) < 2:
         problems.append(f".sweep: needs the reference and at least one {condition} level")
+    return problems
+
+
+def _sweep_feature_problems(named, features) -> list[str]:
+    """A sweep's ``features`` against the campaign's: each one of them, once (entries of the wrong type are field
+    errors)."""
+    if not isinstance(named, list) or not isinstance(features, list):
+        return []
+    allowed = [f for f in features if isinstance(f, str)]
+    names = [n for n in named if isinstance(n, str)]
+    problems = []
+    unknown = [n for n in names if n not in allowed]
+    if unknown:
+        hints = "".join(spelling_hint(n, allowed) for n in unknown)
+        problems.append(f"{', '.join(map(repr, unknown))} not among the campaign's features; {hints}allowed: "
+                        f"{', '.join(allowed)} (leave the list out for all of them)")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        problems.append(f"{', '.join(twice)} listed twice")
     return problems
 
 

@@ -8,8 +8,9 @@ Every decision is read from ``analysis.nc`` (the verdicts are computed once, in
   UNDETERMINED: the bounds straddle the requirement, the runs cannot tell yet, with the runs that would decide it
   (``runs_to_decide``, ``margin_limit_runs_to_decide``) or why no number of runs would; NO DATA: too few runs.
 * One line per requirement: the minimum detectable fault size per measured feature (the ideal-sensor reading beside
-  it) for each fault sweep of the spec (backlash, preload loss), and each design limit of the loop margins over
-  every loop; then each sweep's detection figure.
+  it) for each fault sweep of the spec (backlash, preload loss), the features its ``[[observability]]`` table names
+  alone (every feature when it names none), and each design limit of the loop margins over every loop; then each
+  sweep's detection figure.
 
 Then the comparison with another design and the measured tests (when given), the data sets, the strongest influences,
 the failures, the model check, and a glossary of the terms used.
@@ -23,6 +24,7 @@ import math
 import numpy as np
 
 from campaigns.analysis.campaign_analysis import mean_text
+from campaigns.analysis.vocabulary import marked_features
 from campaigns.statistics.paired_comparison import worst_verdict
 from campaigns.workflows.diagnosis import p_text
 from reports.builder import SUMMARY_INFLUENCES, Builder
@@ -130,7 +132,7 @@ def observability_decision(b: Builder, feature: str, analysis=None) -> Callout:
                                                      if math.isfinite(runs) else "too few for any verdict."))
     text = f"{decision(verdict)} — {what}: {text}"
     true = b.true_of(feature)
-    if true is not None and true in a["feature"].values:
+    if true is not None and true in marked_features(a):
         true_verdict = str(a["requirement_verdict"].sel(feature=true).item())
         text += f" With ideal sensors: {decision(true_verdict)}."
     return Callout(text, tone(verdict), "observability")
@@ -313,7 +315,7 @@ def build(b: Builder):
     if not verdicts:
         yield Callout(NO_VERDICT, "info", "observability")
     for key, view in sweep_views(a) if verdicts else ():
-        for feature in b.measured:
+        for feature in (f for f in b.measured if f in marked_features(view)):  # the features the sweep is about
             yield observability_decision(b, feature, view)
             if not key and (within := within_unit_decision(b, feature)) is not None:
                 yield within

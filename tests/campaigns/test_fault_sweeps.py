@@ -163,3 +163,112 @@ def test_the_printed_summary_gives_each_sweeps_verdict():
         assert f"{feature}: {two['requirement_statement'].sel(feature=feature).item()}" in statements
         assert (f"{feature} (preload sweep): {two['requirement_statement_preload'].sel(feature=feature).item()}"
                 in statements)
+
+
+# --- each sweep's features (the features its verdicts are about) ---
+
+def test_a_sweep_names_its_features_and_leaving_them_out_keeps_the_hash(tmp_path):
+    """Absent or empty, a sweep's ``features`` is every feature: the spec, and its hash, as before sweeps named
+    theirs (the thesis and golden specs keep their results directories); named, it is part of the spec."""
+    plain = load(write_spec(tmp_path, '[[observability]]\nsweep = ["ds4", "ds6", "ds2"]\n'))
+    empty = load(write_spec(tmp_path, '[[observability]]\nsweep = ["ds4", "ds6", "ds2"]\nfeatures = []\n'))
+    named = load(write_spec(tmp_path, '[[observability]]\nsweep = ["ds4", "ds6", "ds2"]\n'
+                                      'features = ["backlash_feature"]\n'))
+    assert empty.spec_hash() == plain.spec_hash() != named.spec_hash()
+    assert "features" not in json.loads(plain.to_json())["spec"]["observability"]
+    assert named.observability.features == ["backlash_feature"]
+
+
+@pytest.mark.parametrize(("table", "path"), [
+    ('[observability]\nsweep = ["ds4", "ds6", "ds2"]\nfeatures = ["backlash_featur"]\n', "observability.features"),
+    ('[[observability]]\nsweep = ["ds4", "ds6"]\n[[observability]]\ncondition = "preload"\nreference = "ds4"\n'
+     'requirement = 200.0\nsweep = ["ds4", "ds5"]\nfeatures = ["drag_torque_feature"]\n', "observability[1].features"),
+])
+def test_a_feature_the_campaign_does_not_measure_is_one_problem_naming_the_allowed(tmp_path, table, path):
+    with pytest.raises(SpecError) as error:
+        load(write_spec(tmp_path, table))
+    named = [p for p in error.value.problems if p.startswith(f"{path}: ")]
+    assert len(named) == 1, error.value.problems
+    assert "allowed: backlash_feature, backlash_feature_true" in named[0]
+
+
+def test_a_feature_named_twice_is_refused(tmp_path):
+    with pytest.raises(SpecError) as error:
+        load(write_spec(tmp_path, '[observability]\nsweep = ["ds4", "ds6", "ds2"]\n'
+                                  'features = ["backlash_feature", "backlash_feature"]\n'))
+    assert "observability.features: backlash_feature listed twice" in error.value.problems
+
+
+def _two_feature_results(spec_data: dict, runs: int = 60) -> xr.Dataset:
+    """:func:`_results` with a second feature ``g`` = preload loss x 1e-8 m/N + noise (0.1 µm), blind to the
+    backlash, and ``f`` blind to the preload loss: each sweep's verdict is about one of them."""
+    results = _results(spec_data, runs=runs)
+    backlash, preload = results["condition_backlash"].values, results["condition_preload"].values
+    rng = np.random.default_rng(11)
+    shape = results["f"].shape
+    f = backlash[:, None] + 0.1e-6 * rng.standard_normal(shape)
+    g = ((1000.0 - preload) * 1e-8)[:, None] + 0.1e-6 * rng.standard_normal(shape)
+    return results.assign(
+        f=(("dataset", "run"), f, {"role": "feature", "units": "m"}),
+        g=(("dataset", "run"), g, {"role": "feature", "units": "m"}),
+        **{"p.gain": (("dataset", "run"), rng.uniform(-1, 1, shape), {"role": "sampled", "units": "1"}),
+           "failure_reason": (("dataset", "run"), np.full(shape, "", dtype=object)),
+           "wall_time": (("dataset", "run"), np.ones(shape))},
+    ).assign_coords(run=np.arange(runs)).assign_attrs(spec_hash="ab" * 32)
+
+
+TWO_SWEEPS = {"name": "two", "description": "", "base": {"scene": "nominal"},
+              "datasets": [{"name": n} for n in ["b0", "b1", "b5", "p800", "p600"]],
+              "observability": {**BACKLASH, "features": ["f"]}, "further_sweeps": [{**PRELOAD, "features": ["g"]}]}
+
+
+@pytest.fixture(scope="module")
+def two_sweeps():
+    from campaigns.analysis.campaign_analysis import analysis_dataset
+
+    results = _two_feature_results(TWO_SWEEPS)
+    return results, analysis_dataset(results, n_boot=50, sensitivity_boot=10)
+
+
+def test_the_analysis_marks_each_sweeps_features(two_sweeps):
+    """Every feature gets each sweep's verdict (the analysis's shape does not depend on the list); the mark says which
+    the sweep is about, and without a list every feature is marked."""
+    _, analysis = two_sweeps
+    assert analysis["sweep_feature"].values.tolist() == [1, 0]  # features f, g
+    assert analysis["sweep_feature_preload"].values.tolist() == [0, 1]
+    assert analysis["requirement_verdict"].sel(feature="f").item() == "met"  # 1 µm moves f 10 sigma
+    assert analysis["requirement_verdict_preload"].sel(feature="g").item() == "met"  # 200 N moves g 20 sigma
+    unnamed = observability_analysis(_two_feature_results({"observability": BACKLASH, "further_sweeps": [PRELOAD]}),
+                                     AnalysisSettings(n_boot=50))
+    assert unnamed["sweep_feature"].values.tolist() == unnamed["sweep_feature_preload"].values.tolist() == [1, 1]
+
+
+def test_the_printed_summary_gives_each_sweep_its_own_features(two_sweeps):
+    from campaigns.analysis.campaign_analysis import summary
+
+    _, analysis = two_sweeps
+    statements, _ = summary(analysis)
+    assert [s.split(": ", 1)[0] for s in statements] == ["f", "g (preload sweep)"]
+
+
+def test_page_one_gives_each_sweep_its_own_features_in_words_and_pictures(two_sweeps, monkeypatch):
+    """Page 1: the backlash requirement's decision with f alone, the preload loss's with g alone, and each sweep's
+    figure with that feature's points and verdict alone."""
+    import reports.detection
+    from reports.builder import Builder
+    from reports.inputs import Inputs
+    from reports.model import Callout
+    from reports.sections import executive
+
+    drawn = []
+    draw = reports.detection.detection
+    monkeypatch.setattr(reports.detection, "detection", lambda series, **kw: drawn.append(
+        ([s.label for s in series], [b[0] for b in kw["bounds"]])) or draw(series, **kw))
+    results, analysis = two_sweeps
+    inputs = Inputs(results, analysis, None, json.loads(results.attrs["spec_json"]), (), False)
+    page = executive.build(Builder(inputs))
+    decisions = [c.text for c in page if isinstance(c, Callout) and " — Detect a " in c.text]
+    assert [d.split(":", 1)[0] for d in decisions] == ["GO — Detect a 1 µm backlash (Table 9.3) with f",
+                                                       "GO — Detect a 200 N preload loss (test) with g"]
+    assert [(labels, [b.split(":")[0] for b in bounds]) for labels, bounds in drawn] == [(["f"], ["f"]),
+                                                                                        (["g"], ["g"])]

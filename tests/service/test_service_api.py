@@ -153,8 +153,8 @@ def test_a_small_thesis_campaign_runs_to_done_and_matches_the_cli(service, tmp_p
     with xr.open_dataset(files["analysis.nc"]) as analysis:
         statements, warnings = summary(analysis)
         answer = detection_answer(analysis.load())
-    caption = answer[1] if answer is not None else ""
-    assert record["summary"] == {"statements": statements, "warnings": warnings, "figure_caption": caption}
+    figures = [{"name": ANSWER_FIGURE, "caption": answer[1]}] if answer is not None else []
+    assert record["summary"] == {"statements": statements, "warnings": warnings, "figures": figures}
     assert statements
     figure = reader.get(f"/api/v1/campaigns/{campaign_id}/files/{ANSWER_FIGURE}")
     assert (figure.status_code, figure.content) == ((200, answer[0]) if answer is not None else (404, figure.content))
