@@ -36,7 +36,10 @@ def build(b: Builder):
     runs = attrs.pop("fidelity_audit_runs", None)
     yield Paragraph(
         f"The campaign asked for fidelity '{requested}': with 'auto' each subsystem of the twin runs at the cheapest "
-        "level the scene and its outputs allow (twin/fidelity/rules.toml). The audit re-runs the first "
+        "level the scene and its outputs allow (twin/fidelity/rules.toml), where that level measurably pays: a scene "
+        "whose stored speedup of the automatic levels is below the rules' min_lane_speedup runs the full model "
+        "(twin/fidelity/speed.toml), and a fault sweep runs one set of levels, its most detailed member's. A data "
+        "set on the full model meets its audit trivially (the same model twice). The audit re-runs the first "
         + (f"{runs} " if runs else "")
         + "runs of every data set at full fidelity with the same parameters and noise and judges each feature by "
         "the paired part of the accuracy rule (docs/accuracy.md): met when the 95 % Student-t interval of the mean "

@@ -63,8 +63,9 @@ def test_the_current_loop_mode_is_beyond_rk4_at_the_drive_period():
     the load: RK4's limit 2.785 / |lambda| is 122 us, below the drive period. Cross-check of two Jacobians: the
     current-loop block's analytic one (twin.engine.implicit.current_loop_jacobian) against the finite-difference
     one of the whole bench at the initial state (nothing else is that fast with the nuts unloaded), to 1e-3: the
-    block leaves out the back-EMF and temperature couplings (measured 3.5e-4). With the ideal current loop of the
-    automatic fidelity the whole bench's limit is above the drive period."""
+    block leaves out the back-EMF and temperature couplings (measured 3.5e-4). With the ideal current loop the rules
+    choose the whole bench's limit is above the drive period (the rules alone: ds4's stored speedup keeps "auto" on
+    the full model, twin/fidelity/speed.toml)."""
     model = _model("ds4", "full")
     block = np.zeros((3, 3))
     current_loop_jacobian(column(model.initial_state.copy()), column(model.constants), np.zeros((N_INPUTS, 1)), 0,
@@ -72,7 +73,10 @@ def test_the_current_loop_mode_is_beyond_rk4_at_the_drive_period():
     analytic = largest_stable_step(np.linalg.eigvals(block))
     assert 120e-6 < analytic < DRIVE_PERIOD
     assert _rk4_limit(model) == pytest.approx(analytic, rel=1e-3)
-    assert _rk4_limit(_model("ds4", "auto")) > DRIVE_PERIOD
+    scene, params = twin.load_scene("ds4"), twin.load_parameters()
+    rules = resolve_fidelity(scene, params, speed_file=None)
+    assert rules.level("current_loop") == "ideal"
+    assert _rk4_limit(build_model(scene, params, rules)) > DRIVE_PERIOD
 
 
 def test_the_axial_mode_with_loaded_contacts_is_beyond_rk4_at_the_drive_period():

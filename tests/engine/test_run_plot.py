@@ -13,7 +13,8 @@ from twin.plotting import plot_run
 def ds2_plot():
     import matplotlib.pyplot as plt
 
-    ds = twin.simulate(twin.load_scene("ds2").with_duration(1.5))
+    # without the winding temperature (ds2 runs the full model, twin/fidelity/speed.toml): six panels
+    ds = twin.simulate(twin.load_scene("ds2").with_duration(1.5), fidelity={"motor_thermal": "frozen"})
     fig = plot_run(ds)
     yield ds, fig
     plt.close(fig)

@@ -1,4 +1,6 @@
-"""Automatic fidelity selection: rules as data, each decision explained, bad input refused."""
+"""Automatic fidelity selection: rules as data, each decision explained, bad input refused.
+
+The rules alone (``speed_file=None``): the gate by measured speed is tests/fidelity/test_speed_gate.py."""
 
 import os
 
@@ -23,7 +25,7 @@ def test_every_subsystem_decided_and_explained(bench):
 def test_thesis_data_set_keeps_what_its_feature_needs(bench):
     """ds2 asks for the Eq. 9.12 feature on measured and true signals: the encoders and the Hertz contact stay,
     the cylinder stays (it is fixed to the sled), the current loop and the thermal model go."""
-    levels = resolve_fidelity(twin.load_scene("ds2"), bench).levels
+    levels = resolve_fidelity(twin.load_scene("ds2"), bench, speed_file=None).levels
     assert levels["encoders"] == "full" and levels["contact"] == "variable_angle"
     assert levels["pneumatics"] == "full"
     assert levels["current_loop"] == "ideal" and levels["motor_thermal"] == "frozen"
@@ -34,7 +36,7 @@ def test_all_outputs_means_full_detail_where_it_shows(bench):
     """A scene naming no outputs asks for all of them: every subsystem an output can see keeps its full level. The
     one reduction is the screw's axial mass (the quasi-static level, the automatic choice whatever the outputs): its
     3.8-4.8 kHz mode lies far above every motion a scene commands, so no output resolves it."""
-    fidelity = resolve_fidelity(twin.load_scene("nominal"), bench)
+    fidelity = resolve_fidelity(twin.load_scene("nominal"), bench, speed_file=None)
     reduced = {name for name, level in fidelity.levels.items() if level != SUBSYSTEMS[name].full}
     assert reduced == {"screw_axial"} and fidelity.level("screw_axial") == "quasi_static"
     assert "axial mode" in fidelity.reasons["screw_axial"]
@@ -42,29 +44,30 @@ def test_all_outputs_means_full_detail_where_it_shows(bench):
 
 
 def test_position_only_study_drops_the_encoders(bench):
-    fidelity = resolve_fidelity(twin.load_scene("ds4"), bench, outputs=["backlash_feature_true", "nut1_position"])
+    fidelity = resolve_fidelity(twin.load_scene("ds4"), bench, outputs=["backlash_feature_true", "nut1_position"],
+                                speed_file=None)
     assert fidelity.level("encoders") == "ideal"
     assert fidelity.level("contact") == "variable_angle"
 
 
 def test_motor_only_outputs_linearise_the_contact(bench):
-    fidelity = resolve_fidelity(twin.load_scene("ds4"), bench, outputs=["motor_speed"])
+    fidelity = resolve_fidelity(twin.load_scene("ds4"), bench, outputs=["motor_speed"], speed_file=None)
     assert fidelity.level("contact") == "linear"
 
 
 def test_rules_react_to_parameters(bench):
     """Soft guides make the nut roll visible: the rule keeps it; a weak DC bus keeps the full current loop."""
     scene = twin.load_scene("ds5")
-    soft = resolve_fidelity(scene, bench.with_values({"sled.guide_roll_stiffness": 300.0}))
+    soft = resolve_fidelity(scene, bench.with_values({"sled.guide_roll_stiffness": 300.0}), speed_file=None)
     assert soft.level("nut_rotation") == "on" and "limit 5 nm" in soft.reasons["nut_rotation"]
-    weak_bus = resolve_fidelity(scene, bench.with_values({"drive.dc_bus_voltage": 100.0}))
+    weak_bus = resolve_fidelity(scene, bench.with_values({"drive.dc_bus_voltage": 100.0}), speed_file=None)
     assert weak_bus.level("current_loop") == "full" and "of the inverter's limit" in weak_bus.reasons["current_loop"]
 
 
 def test_thermal_rule_follows_duration_when_the_current_loop_is_full(bench):
     outputs = ["backlash_feature", "motor_current"]  # the current keeps the full loop
-    short = resolve_fidelity(twin.load_scene("ds5").with_duration(5.0), bench, outputs=outputs)
-    long = resolve_fidelity(twin.load_scene("ds5").with_duration(60.0), bench, outputs=outputs)
+    short = resolve_fidelity(twin.load_scene("ds5").with_duration(5.0), bench, outputs=outputs, speed_file=None)
+    long = resolve_fidelity(twin.load_scene("ds5").with_duration(60.0), bench, outputs=outputs, speed_file=None)
     assert short.level("current_loop") == "full"
     assert short.level("motor_thermal") == "frozen" and "duration / tau_w = 0.042" in short.reasons["motor_thermal"]
     assert long.level("motor_thermal") == "dynamic"
@@ -81,11 +84,11 @@ def test_requested_levels_override_auto_and_say_so(bench):
 
 
 def test_removed_states_leave_the_integrated_vector(bench):
-    fidelity = resolve_fidelity(twin.load_scene("ds2"), bench)
+    fidelity = resolve_fidelity(twin.load_scene("ds2"), bench, speed_file=None)
     removed = set(fidelity.removed_states)
     assert {S.HALL_CURRENT, S.CURRENT_PI, S.WINDING_TEMP, S.NUT1_ANGLE, S.NUT2_ANGULAR_SPEED} <= removed
     assert not removed & set(fidelity.active_states.tolist())
-    ds = twin.simulate("ds2", duration=0.2)
+    ds = twin.simulate("ds2", duration=0.2, fidelity=dict(fidelity.levels))
     assert ds.attrs["integrated_states"] == fidelity.active_states.size == ds.sizes["state"]
     assert "winding_temp" not in ds.state.values and "winding_temperature" not in ds
 
@@ -130,11 +133,11 @@ def test_force_demand_condition_as_data(tmp_path, bench):
     """A rules file is data: a project may drop the cylinder on force-free tests (the shipped rules do not,
     see rules.toml) and the decision cites the condition."""
     rules = tmp_path / "rules.toml"
-    rules.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n[[rules]]\n'
-                     'subsystem = "pneumatics"\n'
+    rules.write_text('[settings]\ncontact_load_allowance = 200.0\nhot_winding_temperature_rise = 130.0\n'
+                     'min_lane_speedup = 1.10\n[[rules]]\nsubsystem = "pneumatics"\n'
                      'level = "absent"\nbecause = "cylinder disconnected for force-free tests"\nforce_demand = false\n')
-    free = resolve_fidelity(twin.load_scene("ds2"), bench, rules_file=rules)
-    loaded = resolve_fidelity(twin.load_scene("ds3"), bench, rules_file=rules)
+    free = resolve_fidelity(twin.load_scene("ds2"), bench, rules_file=rules, speed_file=None)
+    loaded = resolve_fidelity(twin.load_scene("ds3"), bench, rules_file=rules, speed_file=None)
     assert free.level("pneumatics") == "absent" and "force demand none" in free.reasons["pneumatics"]
     assert loaded.level("pneumatics") == "full" and "force demand present" in loaded.reasons["pneumatics"]
 

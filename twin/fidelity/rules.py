@@ -6,13 +6,17 @@ outputs it must produce. :func:`resolve_fidelity` turns a requested fidelity
 one level per subsystem of :data:`twin.levels.SUBSYSTEMS` and the
 reason for it. The rules themselves are data (``rules.toml``); this module
 only evaluates their conditions, and every condition reports its numbers.
+
+The gate: on a scene whose stored speedup of the automatic levels (``speed.toml``, measured by
+``benchmarks/fidelity_speed.py``) is below the rules' ``min_lane_speedup``, ``"auto"`` keeps the full level
+of every subsystem the rules would simplify (docs/fidelity.md, "Fidelity that pays").
 """
 
 from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from pathlib import Path
@@ -31,9 +35,14 @@ from twin.scenes import Scene
 from twin.scenes.profiles import profile_values
 
 RULES_FILE = Path(__file__).with_name("rules.toml")
+#: The stored lane-engine speedup of the automatic levels per built-in scene (``benchmarks/fidelity_speed.py --write``).
+SPEED_FILE = Path(__file__).with_name("speed.toml")
+#: Fields of ``speed.toml``'s ``[measurement]``: what the stored ratios were measured on.
+MEASUREMENT_FIELDS = ("machine", "date", "load", "lanes", "repeats")
 PROFILE_GRID = 1.0e-3  # s: demand profiles are sampled at the acquisition period to find their peak speed
 RULE_KEYS = {"subsystem", "level", "because"}
-SETTINGS = ("contact_load_allowance", "hot_winding_temperature_rise")  # the [settings] the conditions read
+SETTINGS = ("contact_load_allowance", "hot_winding_temperature_rise",  # the [settings] the conditions read
+            "min_lane_speedup")  # and the gate
 
 
 @dataclass(frozen=True)
@@ -121,6 +130,77 @@ def _parsed_rules(path: Path, mtime_ns: int, size: int) -> tuple[dict, list[dict
     if problems:
         raise OptionError(problems)
     return settings, rules
+
+
+def load_speedups(path: Path = SPEED_FILE) -> dict[str, float]:
+    """Parse and check a speed file: ``{scene name: measured full / auto speedup}``, shared between calls.
+
+    Parsed once per process and file version, as :func:`load_rules`.
+
+    Raises
+    ------
+    OptionError
+        A missing field of ``[measurement]`` or of a scene's entry, or a speedup that is not a positive number
+        (all listed, each naming its field); no such file.
+    """
+    try:
+        stat = Path(path).stat()
+    except OSError as exc:
+        raise OptionError([f"speed_file: cannot read {path} ({exc.strerror})"]) from None
+    return _parsed_speedups(Path(path), stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=8)
+def _parsed_speedups(path: Path, mtime_ns: int, size: int) -> dict[str, float]:
+    """:func:`load_speedups` of one version of the file (the stat fields are the cache key)."""
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise OptionError([f"{path.name}: not valid TOML ({exc})"]) from None
+    measurement, scenes = data.get("measurement"), data.get("scenes")
+    problems = list(_speed_file_problems(path.name, measurement, scenes))
+    if problems:
+        raise OptionError(problems)
+    return {name: float(entry["speedup"]) for name, entry in scenes.items()}
+
+
+def _speed_file_problems(name: str, measurement, scenes) -> Iterator[str]:
+    if not isinstance(measurement, dict):
+        yield f"{name}: measurement: missing table ({', '.join(MEASUREMENT_FIELDS)} of the stored ratios)"
+    else:
+        yield from (f"{name}: measurement.{key}: missing" for key in MEASUREMENT_FIELDS if key not in measurement)
+    if not isinstance(scenes, dict):
+        yield f"{name}: scenes: missing table ([scenes.<scene>] with speedup = full / auto)"
+        return
+    for scene, entry in scenes.items():
+        value = entry.get("speedup") if isinstance(entry, dict) else None
+        if value is None:
+            yield f"{name}: scenes.{scene}.speedup: missing"
+        elif isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            yield f"{name}: scenes.{scene}.speedup: must be a positive number (full / auto), got {value!r}"
+
+
+def _shown(path: Path) -> str:
+    """A file as a reason cites it: relative to the package's parent when it lies inside (twin/fidelity/...)."""
+    try:
+        return Path(path).resolve().relative_to(Path(__file__).resolve().parents[2]).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def _gate(scene: Scene, settings: Mapping[str, float], speed_file: Path | None) -> tuple[bool, str]:
+    """Whether the automatic levels pay on ``scene`` (by its stored speedup), and the words that say so."""
+    if speed_file is None:
+        return True, ""
+    least = settings["min_lane_speedup"]
+    speedup = load_speedups(speed_file).get(scene.name)
+    where = _shown(speed_file)
+    if speedup is None:
+        return True, f"no speed measurement stored for scene '{scene.name}' ({where}): the rules apply"
+    if speedup < least:
+        return False, (f"automatic levels buy {speedup:.2f}x on {scene.name} ({where}), below {least:.2f}x: "
+                       "full model")
+    return True, f"automatic levels buy {speedup:.2f}x on {scene.name} ({where}), at least {least:.2f}x"
 
 
 class SceneNeeds:
@@ -272,7 +352,8 @@ def scene_levels(scene: Scene, requested: Mapping[str, str], fidelity,
 
 
 def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping[str, str] = "auto",
-                     outputs=None, curvature: str = "thesis", rules_file: Path = RULES_FILE) -> Fidelity:
+                     outputs=None, curvature: str = "thesis", rules_file: Path = RULES_FILE,
+                     speed_file: Path | None = SPEED_FILE) -> Fidelity:
     """Resolve the requested fidelity for a scene.
 
     Parameters
@@ -286,13 +367,23 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
         ``outputs`` (every output if the scene names none).
     curvature : str
         Groove curvature formulas (:data:`twin.engine.model.CURVATURE_FORMULAS`).
+    rules_file : path
+        The rules (:func:`load_rules`); their ``min_lane_speedup`` sets the gate.
+    speed_file : path or None
+        The stored speedups (:func:`load_speedups`). A subsystem left to ``"auto"`` keeps the level its rule
+        chooses only if the scene's stored speedup (found by ``scene.name``: a scene derived from a built-in
+        one, with other conditions or another procedure, keeps its name) is at least ``min_lane_speedup``;
+        below it, its full level, the reason saying so with the number. A scene with no stored speedup (a
+        user's scene) takes the rules' levels, the reason saying that none is stored. Explicitly requested
+        levels and the levels a scene's conditions fix are never changed. ``None``: the rules alone (what
+        ``benchmarks/fidelity_speed.py`` measures).
 
     Raises
     ------
     OptionError
         Unknown subsystem, level or output; a level the scene cannot run with
         (``"absent"`` pneumatics with a force demand) or that cannot produce a
-        requested output. All problems are listed at once.
+        requested output; a bad rules or speed file. All problems are listed at once.
     """
     requested, problems = requested_levels(fidelity)
     wanted = frozenset(OUTPUT_NAMES if outputs is None and not scene.outputs else
@@ -303,6 +394,7 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
         raise OptionError(problems)
 
     settings, rules = load_rules(rules_file)
+    pays, gate_reason = _gate(scene, settings, speed_file) if "auto" in requested.values() else (True, "")
     needs = SceneNeeds(scene, params, wanted, curvature, settings)
     fixed = scene_levels(scene, requested, fidelity, problems)
     levels, reasons = {}, {}
@@ -327,6 +419,12 @@ def resolve_fidelity(scene: Scene, params: ParameterSet, fidelity: str | Mapping
             refusals.append(f"not {rule['level']}: {'; '.join(text for ok, text in checks if not ok)}")
         if refusals and levels[name] == subsystem.full:
             reasons[name] = "; ".join(refusals)
+        elif levels[name] != subsystem.full and gate_reason:  # the gate, before later rules read this decision
+            if pays:
+                reasons[name] += f"; {gate_reason}"
+            else:
+                reasons[name] = f"{gate_reason} (the rules would take {levels[name]}: {reasons[name]})"
+                levels[name] = subsystem.full
         if name == "pneumatics" and levels[name] == subsystem.full:
             reasons[name] += (" (the scene's cylinder is attached, conditions.cylinder: the force loop holds "
                               "the force demand through the piston's seal friction)")
