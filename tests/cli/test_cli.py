@@ -53,10 +53,11 @@ def test_scenes_lists_data_sets():
 
 
 def test_explain_fidelity_prints_each_choice_and_why():
-    result = run("simulate", "ds2", "--duration", "0.2", "--explain-fidelity")
+    # ds1: a scene whose automatic levels pay (twin/fidelity/speed.toml), so the rules' reasons show
+    result = run("simulate", "ds1", "--duration", "0.2", "--explain-fidelity")
     assert result.returncode == 0, result.stderr
-    assert "current_loop          ideal" in result.stdout
-    assert "peak voltage demand" in result.stdout and "integrated states: 18 of 25" in result.stdout
+    assert "current_loop          ideal" in result.stdout and "automatic levels buy" in result.stdout
+    assert "peak voltage demand" in result.stdout and "integrated states: 16 of 25" in result.stdout
 
 
 def test_fidelity_option_and_levels_listing():
