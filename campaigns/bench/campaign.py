@@ -85,19 +85,24 @@ def sweep_fidelity(spec: CampaignSpec) -> CampaignSpec:
     between levels (the quasi-static screw axial at 1000 N preload only, ``min_preload`` in
     ``twin/fidelity/rules.toml``), and that switch alone moves the feature the sweep reads (on data set 5 the true
     drag torque by about what 13 N of preload loss does): the detection curve would then mix a model change with the
-    fault. Each sweep's levels are resolved once, per subsystem the most detailed level that any member's automatic
-    choice takes (a subsystem's levels are listed most detailed first, :mod:`twin.levels`), and the members whose
-    own choice differs run at them (their ``fidelity``, recorded in ``results.nc`` with the spec). A spec without a
-    sweep, one that asks for ``"full"``, and a sweep whose members already agree are returned unchanged, so their
-    results and hash stay as they were.
+    fault. Where the members' automatic choices differ, the sweep runs the full model (per subsystem its most detailed
+    level; the pneumatics at the most detailed any member takes, since a detached cylinder is a condition, not a
+    simplification): a mixture of the members' levels is a model no speed measurement covers
+    (``twin/fidelity/speed.toml`` holds each scene's own choice), and on the preload sweep such a mixture, the dynamic
+    shaft with the ideal current loop, steps at 62.5 us like the full model and so buys nothing (docs/fidelity.md,
+    "Fidelity that pays"). The members whose own choice differs run at it (their ``fidelity``, recorded in
+    ``results.nc`` with the spec). A spec without a sweep, one that asks for ``"full"``, and a sweep whose members
+    already agree are returned unchanged, so their results and hash stay as they were.
     """
     if spec.solver.fidelity == "full" or not spec.sweeps:
         return spec
     datasets = list(spec.datasets)
     for members in _sweep_groups(spec):
         chosen = {k: _automatic_levels(spec, k) for k in members}
-        common = {name: min((chosen[k][name] for k in members), key=SUBSYSTEMS[name].level_names.index)
-                  for name in SUBSYSTEMS}
+        if all(chosen[k] == chosen[members[0]] for k in members):
+            continue
+        pneumatics = min((chosen[k]["pneumatics"] for k in members), key=SUBSYSTEMS["pneumatics"].level_names.index)
+        common = {name: SUBSYSTEMS[name].full for name in SUBSYSTEMS} | {"pneumatics": pneumatics}
         for k in members:
             if chosen[k] != common:
                 datasets[k] = datasets[k].model_copy(update={"fidelity": common})
