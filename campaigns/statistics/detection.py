@@ -205,11 +205,15 @@ def sweep_resolution(levels, estimate: float, bounds: tuple[float, float]) -> st
 def printed_estimate(estimate: float, bounds: tuple[float, float]) -> float:
     """The estimate rounded at the leading digit of its bounds' half-width: a result is given to the precision of its
     uncertainty (JCGM 100:2008, GUM, Sec. 7.2.6), e.g. 1.19 µm within 0.5-1.5 µm is 1.2 µm; 371 N within 0-600 N is
-    400 N. Bounds of zero width (the estimate is a sweep level) leave it as it is."""
-    half_width = 0.5 * (bounds[1] - bounds[0])
+    400 N. Bounds of zero width (the estimate is a sweep level) leave it as it is. A rounding that would leave the
+    bounds (4.3 µm within 2-40 µm is not 0 µm) takes the next finer digit until it is inside them."""
+    lower, upper = bounds
+    half_width = 0.5 * (upper - lower)
     if not (math.isfinite(estimate) and math.isfinite(half_width) and half_width > 0):
         return estimate
     step = 10.0 ** math.floor(math.log10(half_width))
+    while not lower <= round(estimate / step) * step <= upper and step > half_width * 1e-6:
+        step /= 10.0
     return round(estimate / step) * step
 
 

@@ -153,6 +153,12 @@ def test_sweep_resolution_and_the_printed_digits_known_answers():
     assert printed_estimate(1.834, (1.5, 2.0)) == pytest.approx(1.8)
     assert printed_estimate(1.834, (1.8, 1.85)) == pytest.approx(1.83)
     assert printed_estimate(2.0, (2.0, 2.0)) == 2.0
+    # a rounding that would leave the bounds takes a finer digit (the demo's H: 4.3 within 2-40 µm read "0 µm")
+    assert printed_estimate(4.3, (2.0, 40.0)) == pytest.approx(4.0)
+    rng = np.random.default_rng(7)
+    for lower, width in zip(rng.uniform(0, 50, 200), rng.uniform(0.01, 100, 200), strict=True):
+        estimate = rng.uniform(lower, lower + width)
+        assert lower <= printed_estimate(estimate, (lower, lower + width)) <= lower + width
 
 
 def test_bounds_contain_the_estimate_and_the_truth_on_a_fine_sweep():
