@@ -1,8 +1,9 @@
 """The elasto-plastic seal-friction level (issue 41): the bristle law of twin.physics.bristle_friction in the engine.
 
 The elasto-plastic law is the full level, so ``"full"`` and ``"auto"`` requests get it (issue 41); the regularised law
-is the cheaper ``seal_friction = "regularised"`` level. At the elasto-plastic level the seals' deflection is a state, the piston's friction is the bristle force, and a piston at rest under a
-force below breakaway is held by it (no creep); runs complete, and lanes give each run its own numbers bit for bit.
+is the cheaper ``seal_friction = "regularised"`` level. At the elasto-plastic level the seals' deflection is a state,
+the piston's friction is the bristle force, and a piston at rest under a force below breakaway is held by it (no
+creep); runs complete, and lanes give each run its own numbers bit for bit.
 """
 
 import math

@@ -122,8 +122,9 @@ def test_contact_oscillation_finds_a_burst_its_frequency_and_when():
 
 
 def test_the_default_arm_is_the_campaigns_run_bit_for_bit_and_the_half_step_halves_it():
-    """The elasto-plastic arm (the default seal level) at the campaign step is what the campaign's run function returns for the same request
-    (same parameters, noise, fidelity and step), to the last bit; the half-step arm runs at half of that step."""
+    """The elasto-plastic arm (the default seal level) at the campaign step is what the campaign's run function
+    returns for the same request (same parameters, noise, fidelity and step), to the last bit; the half-step arm runs
+    at half of that step."""
     from campaigns.bench.adapter import simulate_run
 
     arms = {a.name: a for a in fc.acceptance_arms(PARAMS)}
