@@ -265,7 +265,15 @@ def runs_to_decide(levels, probability, probability_se, n: int, requirement: flo
     if gap == 0.0 or not math.isfinite(probability_se[i]):
         return math.nan, (f"no number of runs decides it: the detection probability at the deciding level is "
                           f"{probability[i] * 100:.3g} %, on the {power * 100:g} % line")
-    needed = max(n + 1, math.ceil(n * (z * probability_se[i] / gap) ** 2))
+    needed = math.ceil(n * (z * probability_se[i] / gap) ** 2)
+    if needed <= n:  # the normal scaling says decided already; the percentile bounds, which decide, do not
+        return math.nan, (
+            f"no estimate from the normal scaling: the detection probability of the "
+            f"{labels[i] if labels is not None else f'{levels[i]:.3g}'} level, {probability[i] * 100:.3g} %, already "
+            f"lies {gap / probability_se[i]:.2f} bootstrap standard errors ({probability_se[i] * 100:.2g} points at "
+            f"{n} runs) from {power * 100:g} %, yet the percentile bounds straddle the requirement (a skewed "
+            f"replicate distribution): more runs per sweep data set, or a level search (`twin campaign bracket`), "
+            f"will tell")
     if needed > MAX_RUNS_TO_DECIDE:
         return math.inf, f"more than {MAX_RUNS_TO_DECIDE} runs per sweep data set"
     return float(needed), (

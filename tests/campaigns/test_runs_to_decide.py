@@ -25,6 +25,13 @@ def test_the_detection_runs_follow_the_normal_scaling_of_the_bootstrap_error():
     assert reason.startswith("not met would be decided")
 
 
+def test_a_level_the_normal_scaling_calls_decided_already_gets_no_number():
+    """p = 0.267 with a bootstrap error of 27 points at 60 runs: 2.5 errors from 95 %, decided by the normal scaling,
+    yet the verdict is undetermined (the percentile bounds decide): no number, the reason says why (it said "61")."""
+    runs, reason = runs_to_decide(LEVELS, [0.05, 0.267, 1.0], [0.01, 0.27, 0.0], 60, 1e-6)
+    assert math.isnan(runs) and "percentile bounds straddle the requirement" in reason
+
+
 def test_no_number_of_runs_decides_a_crossing_between_levels_around_the_requirement():
     runs, reason = runs_to_decide([0.0, 0.5e-6, 1.5e-6], [0.05, 0.5, 1.0], [0.01, 0.05, 0.0], 100, 1e-6)
     assert math.isnan(runs) and "a sweep level at the requirement is needed" in reason
