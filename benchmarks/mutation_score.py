@@ -56,7 +56,8 @@ _CONTACT_TANGENT = "tests/engine/test_imex_euler.py::test_contact_tangent_matche
 _SLOPES = "tests/engine/test_imex_euler.py::test_friction_slopes_match_finite_differences"
 TESTS = {
     "twin/physics/ball_groove_friction.py": ["tests/physics/test_ball_groove_friction.py", _SLOPES],
-    "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py", _CONTACT_TANGENT],
+    "twin/physics/ball_screw.py": ["tests/physics/test_ball_screw.py", "tests/physics/test_lead_error.py",
+                                   _CONTACT_TANGENT],
     "twin/physics/coupling.py": ["tests/physics/test_components.py"],
     "twin/physics/friction.py": ["tests/physics/test_components.py", _SLOPES],
     "twin/physics/groove.py": ["tests/physics/test_groove.py", "tests/physics/test_hertz.py"],

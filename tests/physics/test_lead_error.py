@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from numerics.elementary import sin
-from twin.physics.ball_screw import travel_deviation
+from twin.physics.ball_screw import ball_angular_pitch, ball_averaging_factor, travel_deviation
 
 ARM = 5.0e-3 / (2.0 * math.pi)  # the bench screw's p / 2 pi [m/rad]
 WAVE_NUMBER = 5.0e-3 / 0.32     # p / lambda_u: one wave over the 320 mm stroke
@@ -54,3 +54,20 @@ def test_the_per_revolution_term_repeats_every_revolution_and_stays_in_its_band(
     np.testing.assert_allclose(next_turn, one_turn, rtol=0, atol=1e-18)
     band = [_deviation(angle, revolution=a_r, revolution_phase=phi_r)[0] for angle in np.linspace(0, 2 * math.pi, 721)]
     assert max(band) - min(band) == pytest.approx(2 * a_r, rel=1e-4)  # v_2pi: the peak-to-peak variation
+
+
+def test_ball_angular_pitch_is_one_ball_diameter_along_the_helix():
+    """Closed forms: with no lead the helix is the pitch circle, so the angle is the diameter over the radius
+    (arc = r d); with a lead the turn lengthens to sqrt((2 pi r)^2 + p^2) and the angle shrinks by that ratio."""
+    assert math.isclose(ball_angular_pitch(0.003, 0.02, 0.0), 2 * 0.003 / 0.02, rel_tol=1e-15)
+    turn = math.hypot(2 * math.pi * 0.02, 0.01)
+    assert math.isclose(ball_angular_pitch(0.003, 0.02, 0.01), 2 * math.pi * 0.006 / turn, rel_tol=1e-15)
+
+
+def test_ball_averaging_factor_known_answers():
+    """One ball: 1; N balls spanning one whole period (N d = 2 pi): the sines cancel, 0; small spread: 1 - (N^2 - 1)
+    d^2 / 24 to second order (the Dirichlet kernel's expansion)."""
+    assert ball_averaging_factor(1, 0.395) == 1.0
+    assert abs(ball_averaging_factor(8, 2 * math.pi / 8)) < 1e-15
+    d = 1e-3
+    assert math.isclose(ball_averaging_factor(5, d), 1 - (25 - 1) * d**2 / 24, rel_tol=1e-9)
