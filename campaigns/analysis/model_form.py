@@ -42,7 +42,7 @@ from campaigns.analysis.settings import MODEL_FORM_STREAM, OBSERVABILITY_STREAM
 from campaigns.analysis.vocabulary import sweep_levels
 from campaigns.analysis.vocabulary import used as ok_runs
 from campaigns.runner.files import write_netcdf
-from campaigns.statistics.detection import _detection_probabilities, detection_probability, printed_estimate
+from campaigns.statistics.detection import detection_probabilities, detection_probability, printed_estimate
 from campaigns.statistics.intervals import mean_shift
 
 #: Between a baseline data set's name and its variant's label: ``ds2__noise_path_recorded``.
@@ -246,7 +246,7 @@ def detection_shift(results: xr.Dataset, spec: dict, by_baseline: dict[str, str]
     for arm in (0, 1):  # baseline, variant
         ref = arms[reference][arm]
         estimate.append(sum(w * detection_probability(ref, arms[k][arm], far) for k, w in weights.items()))
-        replicates.append(sum(w * _detection_probabilities(ref[draws[reference][arm]], arms[k][arm][draws[k][arm]],
+        replicates.append(sum(w * detection_probabilities(ref[draws[reference][arm]], arms[k][arm][draws[k][arm]],
                                                            far) for k, w in weights.items()))
     alpha = 0.5 * (1.0 - settings["confidence"])
     lower, upper = np.quantile(replicates[1] - replicates[0], [alpha, 1.0 - alpha])

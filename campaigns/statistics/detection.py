@@ -31,7 +31,7 @@ def overlap_coefficient(a, b, bins: int | None = None) -> float:
     return float(np.minimum(pa, pb).sum())
 
 
-def _detection_probabilities(reference: np.ndarray, test: np.ndarray, false_alarm_rate: float) -> np.ndarray:
+def detection_probabilities(reference: np.ndarray, test: np.ndarray, false_alarm_rate: float) -> np.ndarray:
     """:func:`detection_probability` of each row of ``test`` (shape (B, n_t)) against the same row of ``reference``
     (B, n_r)."""
     upward = np.median(test, axis=-1) >= np.median(reference, axis=-1)
@@ -51,7 +51,7 @@ def detection_probability(reference, test, false_alarm_rate: float = FALSE_ALARM
     reference, test = np.asarray(reference, dtype=float), np.asarray(test, dtype=float)
     if len(reference) == 0 or len(test) == 0:
         return math.nan
-    return float(_detection_probabilities(reference[None, :], test[None, :], false_alarm_rate)[0])
+    return float(detection_probabilities(reference[None, :], test[None, :], false_alarm_rate)[0])
 
 
 def minimum_detectable(levels, probabilities, power: float = POWER) -> tuple[float, float, float]:
@@ -137,7 +137,7 @@ def bootstrap_minimum_detectable(
     estimate, lower, upper = minimum_detectable(levels, probability, power)
     rng = np.random.default_rng(seed)
     resampled = [s[rng.integers(0, len(s), (n_boot, len(s)))] for s in samples]
-    boot = np.stack([_detection_probabilities(resampled[reference], r, false_alarm_rate) for r in resampled], axis=1)
+    boot = np.stack([detection_probabilities(resampled[reference], r, false_alarm_rate) for r in resampled], axis=1)
     brackets = np.array([minimum_detectable(levels, p, power) for p in boot])
     alpha = 0.5 * (1.0 - confidence)
     bounds = (
