@@ -24,23 +24,12 @@ import statistics
 import time
 from datetime import UTC, datetime
 
-from machine import cpu_model, header
+from machine import cpu_model, header, vector_extension
 
 import twin
 from twin.fidelity.rules import MEASUREMENT_FIELDS, SPEED_FILE, resolve_fidelity
 
 QUICK_DURATION = 0.5  # s of each scene simulated in --quick
-
-
-def vector_flags() -> str:
-    """The widest x86 vector extension the processor reports (``/proc/cpuinfo`` flags): what the compiled loops
-    may use, and why a ratio measured on one machine may differ on another."""
-    try:
-        with open("/proc/cpuinfo") as handle:
-            flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
-    except OSError:
-        flags = []
-    return "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "no AVX2"
 
 
 def automatic_levels(scene: twin.Scene, params) -> dict[str, str]:
@@ -128,7 +117,7 @@ def main() -> None:
     else:
         repeats, duration = args.repeats, None
     header("Fidelity that pays: full / auto CPU time of a lane group per built-in scene", args.quick)
-    print(f"# vector extension: {vector_flags()}; {args.lanes} lanes per group, {repeats} repeat(s), "
+    print(f"# {args.lanes} lanes per group, {repeats} repeat(s), "
           f"{f'{duration:g} s runs' if duration else 'each scene its own duration'}")
     print(f"{'scene':26s} {'full [s]':>8s} {'auto [s]':>8s} {'speedup':>8s}  (repeat range)  automatic levels")
     before = os.getloadavg()
@@ -137,7 +126,7 @@ def main() -> None:
     load = f"{' '.join(f'{v:.2f}' for v in before)} before, {' '.join(f'{v:.2f}' for v in after)} after"
     print(f"# load average (1, 5, 15 min): {load}")
     if args.write:
-        measurement = {"machine": f"{cpu_model()} ({vector_flags()}), {os.cpu_count()} cores",
+        measurement = {"machine": f"{cpu_model()} ({vector_extension()}), {os.cpu_count()} cores",
                        "date": datetime.now(UTC).date().isoformat(), "load": load, "lanes": args.lanes,
                        "repeats": repeats, "clock": "time.process_time of one twin.simulate_batch group",
                        "outputs": "each scene's own"}

@@ -26,6 +26,17 @@ def cpu_model() -> str:
     return platform.processor() or platform.machine()
 
 
+def vector_extension() -> str:
+    """The widest x86 vector extension the processor reports (``/proc/cpuinfo`` flags): what the compiled loops may
+    use (AVX2: 4 doubles per register, AVX-512: 8), and why a figure measured on one machine may differ on another."""
+    try:
+        with open("/proc/cpuinfo") as handle:
+            flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
+    except OSError:
+        flags = []
+    return "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "no AVX2"
+
+
 def header(title: str, quick: bool = False) -> None:
     """Print the benchmark's title, the machine, its load and the package versions (``#`` lines)."""
     versions = []
@@ -36,6 +47,6 @@ def header(title: str, quick: bool = False) -> None:
             versions.append(f"{name} not installed")
     load = ", ".join(f"{v:.2f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "unknown"
     print(f"# {title}{' (quick mode: small sizes, figures indicative only)' if quick else ''}")
-    print(f"# {datetime.now(UTC).isoformat(timespec='seconds')}; {cpu_model()}, {os.cpu_count()} cores, "
-          f"load average {load}; python {platform.python_version()}")
+    print(f"# {datetime.now(UTC).isoformat(timespec='seconds')}; {cpu_model()} ({vector_extension()}), "
+          f"{os.cpu_count()} cores, load average {load}; python {platform.python_version()}")
     print(f"# {'; '.join(versions)}", flush=True)
