@@ -10,7 +10,7 @@ from pathlib import Path
 
 import twin
 from campaigns.bench.adapter import BenchCatalog, simulate_run
-from campaigns.bench.fidelity_audit import audit_campaign
+from campaigns.bench.fidelity_audit import audit_campaign, audit_problems
 from campaigns.runner import execution
 from campaigns.runner.catalog import Catalog
 from campaigns.runner.files import CampaignInterrupted
@@ -31,10 +31,19 @@ def load_spec(path: str | Path, runs: int | None = None, *, timeout: float | Non
     ------
     SpecError
         If the file cannot be read or parsed, the bench cannot load the base parameters or scene, or listing every
-        validation problem.
+        validation problem (the fidelity audit's settings too: :func:`campaigns.bench.fidelity_audit.audit_problems`).
     """
     data = read_spec_data(path, runs, timeout=timeout)
-    return validate_spec(data, catalog if catalog is not None else _bench_catalog(data))
+    spec = validate_spec(data, catalog if catalog is not None else _bench_catalog(data))
+    _check_audit(spec)
+    return spec
+
+
+def _check_audit(spec: CampaignSpec) -> None:
+    """Refuse, before any run, audit settings the audit cannot judge with (one :class:`SpecError`)."""
+    problems = audit_problems(spec)
+    if problems:
+        raise SpecError(problems)
 
 
 def _bench_catalog(data: dict) -> BenchCatalog:
@@ -128,22 +137,27 @@ def run_campaign(
     if it is invalid); ``run_function`` the run model (default: the bench twin,
     :data:`campaigns.bench.adapter.simulate_run`). The other options are those of
     :func:`campaigns.runner.execution.run_campaign`; ``announce`` also hears the ``fidelity audit`` stage. The bench
-    twin runs each fault sweep at one set of fidelity levels (:func:`sweep_fidelity`).
+    twin runs each fault sweep at one set of fidelity levels (:func:`sweep_fidelity`). The runs and the audit share
+    one cluster (:class:`campaigns.runner.execution.Cluster`); audit settings it cannot judge with are refused before
+    anything runs.
     ``results.nc`` carries the audit in its ``fidelity_audit*`` attributes (its full-fidelity runs in
     ``out_dir/fidelity_audit``).
     """
     if not isinstance(spec, CampaignSpec):
         spec = load_spec(spec, catalog=catalog)
+    _check_audit(spec)
     if run_function is None:  # the bench twin's automatic fidelity: one model along each sweep
         spec = sweep_fidelity(spec)
     model = simulate_run if run_function is None else run_function
-    options = {"workers": workers, "scheduler": scheduler, "resume": resume, "progress": progress,
-               "allow_version_mix": allow_version_mix, "announce": announce}
-    results = execution.run_campaign(spec, out_dir, run_function=model, **options)
-    try:
-        with OutputLock(out_dir):  # results.nc receives the audit's attributes
-            audit_campaign(results, spec, model, **options)
-    except CampaignInterrupted as exc:  # stopped in the audit: every run of the campaign itself is kept
-        total = len(spec.datasets) * spec.runs_per_dataset
-        raise CampaignInterrupted(out_dir, total, total, exc.signal_name) from None
+    # one cluster for the runs and the audit: the audit's runs go to the workers that hold the compiled model
+    with execution.Cluster(workers, scheduler, announce) as cluster:
+        options = {"workers": workers, "scheduler": scheduler, "resume": resume, "progress": progress,
+                   "allow_version_mix": allow_version_mix, "announce": announce, "cluster": cluster}
+        results = execution.run_campaign(spec, out_dir, run_function=model, **options)
+        try:
+            with OutputLock(out_dir):  # results.nc receives the audit's attributes
+                audit_campaign(results, spec, model, **options)
+        except CampaignInterrupted as exc:  # stopped in the audit: every run of the campaign itself is kept
+            total = len(spec.datasets) * spec.runs_per_dataset
+            raise CampaignInterrupted(out_dir, total, total, exc.signal_name) from None
     return results
