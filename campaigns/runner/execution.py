@@ -327,9 +327,9 @@ def run_campaign(
             return _run(spec, out_dir, kept=kept, resume=resume, progress=progress, run_function=run_function,
                         allow_version_mix=allow_version_mix, announce=announce, stores=stores, cluster=cluster)
         except KeyboardInterrupt:
-            kept = len(stores[0].done) if stores else 0
+            done = len(stores[0].done) if stores else 0
             name = stopped.name or "Ctrl-C"
-            raise CampaignInterrupted(out_dir, kept, len(spec.datasets) * spec.runs_per_dataset, name) from None
+            raise CampaignInterrupted(out_dir, done, len(kept) * spec.runs_per_dataset, name) from None
 
 
 class _Stop:
