@@ -268,11 +268,12 @@ def overall_verdict(audit: xr.Dataset) -> str:
                  if b == IDENTICAL_BASIS]
     rerun = [str(d) for d in audit.dataset.values if str(d) not in identical]
     pairs = int(audit.attrs.get("runs", 0))
-    scope = ((f"on {', '.join(rerun)} ({pairs} paired runs each) and identical on the other {len(identical)} data "
-              "set(s), whose automatic choice is the full model (not re-run)") if rerun and identical
-             else f"on {', '.join(rerun)} ({pairs} paired runs each)" if rerun
-             else "identical on every data set: the automatic choice is the full model (no run re-run)")
-    meaning = {"met": f"auto is within the tolerances of full fidelity (mean shift, standard deviation) {scope}",
+    scope = (f"on {', '.join(rerun)} ({pairs} paired runs each)" + (
+        f" and identical on the other {len(identical)} data set(s), whose automatic choice is the full model (not "
+        "re-run)" if identical else ""))
+    meaning = {"met": f"auto is within the tolerances of full fidelity (mean shift, standard deviation) {scope}"
+                      if rerun else "the automatic choice is the full model on every data set (identical: nothing "
+                                    "re-run)",
                "not met": "auto differs from full fidelity (the fidelity rule to fix)",
                "undetermined": "the audit's runs cannot resolve the tolerances",
                "insufficient data": "too few paired runs"}[worst]
