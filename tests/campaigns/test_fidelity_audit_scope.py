@@ -165,3 +165,24 @@ def test_levels_no_speed_measurement_covers_run_the_full_model():
     assert next(d for d in moved.datasets if d.name == "ds2").fidelity is None  # already the full model by the gate
     thesis = load_spec(THESIS_SPEC)
     assert measured_fidelity(thesis) is thesis
+
+
+def test_a_campaign_on_the_full_model_re_runs_nothing(tmp_path):
+    """ds2 runs the full model under auto (the gate of twin/fidelity/speed.toml): the audit stage runs no campaign of
+    its own and records ds2 as identical, in results.nc and in fidelity_audit.nc."""
+    path = tmp_path / "full_by_gate.toml"
+    path.write_text(f'extends = "{THESIS_SPEC}"\nname = "gate"\nruns_per_dataset = 5\n[observability]\nsweep = []\n'
+                    '[fidelity_audit]\nruns = 5\n'
+                    '[[datasets]]\nname = "ds2"\nscene = "ds2"\nconditions = { backlash = 80e-6, preload = 0.0 }\n')
+    said = []
+    results = run_campaign(load_spec(path), tmp_path / "out", workers=1, progress=False,
+                           announce=lambda stage, message: said.append((stage, message)))
+    assert not (tmp_path / "out" / "fidelity_audit" / "results.nc").exists()  # no full-fidelity run
+    assert [stage for stage, _ in said].count("runs") == 1
+    assert ("fidelity audit", "gate: 1 data set(s) run the full model already (identical, not re-run)") in said
+    audit_file = tmp_path / "out" / "fidelity_audit" / "fidelity_audit.nc"
+    with xr.open_dataset(results) as ds, xr.open_dataset(audit_file) as a:
+        assert ds.attrs["fidelity_audit_ds2"] == IDENTICAL
+        assert ds.attrs["fidelity_audit"] == a.attrs["verdict"] == (
+            "met: the automatic choice is the full model on every data set (identical: nothing re-run)")
+        assert a.basis.sel(dataset="ds2").item() == IDENTICAL_BASIS
