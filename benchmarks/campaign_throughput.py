@@ -168,7 +168,7 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "
     campaigns.analyze(results)
     end = time.perf_counter()
     marks.append(("end", end))
-    # the audit is a campaign of its own: its stages (compile check, cluster start, runs) are announced again
+    # the stages the audit announces after its own (its runs, on the same cluster) are counted under "fidelity audit: "
     stages = {"start-up before the first stage": marks[0][1] - start}
     prefix = ""
     for k, (stage, at) in enumerate(marks[:-1]):
