@@ -139,3 +139,12 @@ def estimate_with_interval(estimate: float, low: float, high: float, unit: str, 
             return _significant(value * factor, 3)
     sign = "+" if round(estimate * factor, 12) > 0 else ""
     return f"{sign}{text(estimate)}{shown} ({confidence * 100:g} % interval {text(low)} … {text(high)}{shown})"
+
+
+def feature_units(units: list[str], holder: str = "the feature_units coordinate") -> dict[str, str]:
+    """The ``units`` attribute of a variable along the feature axis: the features' common unit, or (features in
+    several units; CF gives one unit per variable) a comment that points at ``holder``, the variable of the file
+    that gives each feature's unit."""
+    if len(set(units)) == 1:
+        return {"units": units[0]}
+    return {"comment": f"in the units of each feature, given by {holder} (" + ", ".join(sorted(set(units))) + ")"}

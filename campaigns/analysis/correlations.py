@@ -12,9 +12,10 @@ import numpy as np
 import xarray as xr
 
 from campaigns.analysis.settings import SENSITIVITY_STREAM, AnalysisSettings, on_threads
-from campaigns.analysis.vocabulary import feature_units, features_of, parameters_of, used
+from campaigns.analysis.vocabulary import features_of, parameters_of, used
 from campaigns.statistics import sensitivity
 from campaigns.statistics.correlation import RankDesign, bootstrap_correlations, prcc, rank_design
+from campaigns.units import feature_units
 
 
 def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:

@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from campaigns.analysis.settings import AnalysisSettings
-from campaigns.analysis.vocabulary import feature_units, features_of, used
+from campaigns.analysis.vocabulary import features_of, used
 from campaigns.statistics.intervals import (
     MEAN_INTERVAL_METHOD,
     QUANTILE_INTERVAL_METHOD,
@@ -20,6 +20,7 @@ from campaigns.statistics.intervals import (
     std_interval,
 )
 from campaigns.statistics.order_statistics import quantile_interval_min_runs
+from campaigns.units import feature_units
 
 #: Probabilities of the quantiles stored per data set (``feature_quantile``): the median and the two tails that the
 #: detection rule reads (a 5 % false-alarm threshold on either side of a reference).

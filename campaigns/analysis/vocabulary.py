@@ -57,15 +57,6 @@ def runs_text(n: int) -> str:
     return f"{n} ok run{'s' if n != 1 else ''}"
 
 
-def feature_units(units: list[str]) -> dict[str, str]:
-    """The ``units`` attribute of a variable along the feature axis: the features' common unit, or (features in
-    several units; CF gives one unit per variable) a comment that points at the ``feature_units`` coordinate."""
-    if len(set(units)) == 1:
-        return {"units": units[0]}
-    return {"comment": "in the units of each feature, given by the feature_units coordinate (" + ", ".join(
-        sorted(set(units))) + ")"}
-
-
 def features_of(results: xr.Dataset) -> list[str]:
     """The feature variables of ``results.nc``, in their stored order."""
     return [v for v in results.data_vars if results[v].attrs.get("role") == "feature"]

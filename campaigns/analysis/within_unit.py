@@ -105,7 +105,6 @@ from campaigns.analysis.vocabulary import (
     BACKLASH_REQUIREMENT,
     REQUIREMENT_SOURCE,
     SWEEP_QUANTITIES,
-    feature_units,
     features_of,
     is_within_unit,
     requirement_of,
@@ -123,6 +122,7 @@ from campaigns.statistics.detection import (
 )
 from campaigns.statistics.order_statistics import quantile_bound_rank
 from campaigns.statistics.within_unit_floors import DESIGN_REVIEW_QUANTILE, MIN_REPEATS, UNIT_QUANTILES, unit_floor
+from campaigns.units import feature_units
 
 #: Significance level of the checks of the shared test-to-test distribution (Bonferroni over the levels).
 CHECK_SIGNIFICANCE = 0.05

@@ -58,6 +58,7 @@ from campaigns.statistics.accuracy_rule import (
     tolerance_for,
 )
 from campaigns.statistics.paired_comparison import VERDICTS, compare_features, worst_verdict
+from campaigns.units import feature_units
 from twin.scenes import list_scenes, load_scene
 
 #: Fewest paired runs for an audit verdict: the fewest at which the sd ratio's jackknife interval was simulated.
@@ -188,11 +189,13 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str],
     audit = xr.concat(per_feature, dim="feature").transpose("dataset", "feature")
     judged = judge_accuracy(paired, full, features, min_pairs=AUDIT_MIN_PAIRS)  # each feature's unit's tolerance
     interval = "95 % Student-t interval of the paired mean shift auto - full"
+    # one unit per variable (CF): the features' common unit, or a pointer at feature_unit where they differ
+    in_unit = feature_units([str(u) for u in judged["feature_unit"].values], "the feature_unit variable")
     for name, source, attrs in (
         ("verdict", "verdict", {"long_name": "audit verdict: " + " / ".join(VERDICTS)}),
         ("statement", "statement", {"long_name": "the verdict with the numbers it rests on (printed verbatim)"}),
-        ("shift_lower", "mean_shift_lower", {"units": "feature_unit", "long_name": f"{interval}, lower"}),
-        ("shift_upper", "mean_shift_upper", {"units": "feature_unit", "long_name": f"{interval}, upper"}),
+        ("shift_lower", "mean_shift_lower", {**in_unit, "long_name": f"{interval}, lower"}),
+        ("shift_upper", "mean_shift_upper", {**in_unit, "long_name": f"{interval}, upper"}),
         ("sd_ratio", "sd_ratio", {"units": "1", "long_name": "standard deviation ratio auto / full"}),
         ("sd_ratio_lower", "sd_ratio_lower", {"units": "1", "long_name": "95 % jackknife interval of sd_ratio, lower"}),
         ("sd_ratio_upper", "sd_ratio_upper", {"units": "1", "long_name": "95 % jackknife interval of sd_ratio, upper"}),
@@ -203,7 +206,7 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str],
     cells = [(d, f) for d in audit.dataset.values for f in features]
     floor = np.array([floors.get((str(d), f), 0.0) for d, f in cells]).reshape(audit.sizes["dataset"], len(features))
     audit["numerical_floor"] = (("dataset", "feature"), floor,
-                                {"units": "feature_unit", "long_name": "numerical sensitivity floor of the scene (0: "
+                                {**in_unit, "long_name": "numerical sensitivity floor of the scene (0: "
                                  "not measured): how far single paired runs may differ; not part of the verdict"})
     both = (paired.status == "ok") & (full.status == "ok")
     audit["speedup"] = full.wall_time.where(both).sum("run") / paired.wall_time.where(both).sum("run")
@@ -211,7 +214,7 @@ def compare_fidelity(auto: xr.Dataset, full: xr.Dataset, features: list[str],
     # campaigns.statistics.paired_comparison's figures, described for CF
     for name, (unit, long_name) in _COMPARISON_META.items():
         if name in audit:
-            audit[name].attrs = {"units": unit, "long_name": long_name}
+            audit[name].attrs = {**(in_unit if unit == "feature_unit" else {"units": unit}), "long_name": long_name}
     audit["basis"] = ("dataset", np.full(audit.sizes["dataset"], f"{runs} paired runs", dtype=object),
                       {"long_name": "what the verdict rests on: paired runs auto against full, or identity"})
     audit.attrs.update(runs=runs, sd_ratio_tolerance=SD_RATIO_TOLERANCE, min_paired_runs=AUDIT_MIN_PAIRS)
@@ -231,7 +234,8 @@ def with_identical(audit: xr.Dataset | None, names: list[str], features: list[st
              "statement": (dims, np.empty((0, len(features)), dtype=object)),
              "n": (dims, np.zeros((0, len(features)), dtype=np.int32)), "speedup": ("dataset", np.zeros(0)),
              "feature_unit": ("feature", np.array([units[f] for f in features], dtype=object)),
-             "mean_shift_tolerance": ("feature", np.array([tolerance_for(units[f]).value for f in features])),
+             "mean_shift_tolerance": ("feature", np.array([tolerance_for(units[f]).value for f in features]),
+                                      feature_units([units[f] for f in features], "the feature_unit variable")),
              "basis": ("dataset", np.empty(0, dtype=object))},
             coords={"dataset": np.array([], dtype=object), "feature": np.array(features, dtype=object)},
             attrs={"runs": 0, "sd_ratio_tolerance": SD_RATIO_TOLERANCE, "min_paired_runs": AUDIT_MIN_PAIRS})

@@ -33,6 +33,7 @@ from scipy.stats import norm, t
 
 from campaigns.statistics.defaults import CONFIDENCE
 from campaigns.statistics.paired_comparison import VERDICTS, Verdict, worst_verdict
+from campaigns.units import feature_units
 
 #: m: half a tenth of the 1 um backlash the bench must detect (Table 9.3): a shift of the mean at most this large
 #: moves no detection threshold by more than 5 % of the requirement (issue 32, decision 1).
@@ -362,23 +363,25 @@ def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
         return np.array([value(cells[d, f]) for d in names for f in features], dtype=dtype).reshape(shape)
 
     interval = f"{confidence * 100:g} % interval"
+    # CF gives one unit per variable: the features' common unit, or a pointer at feature_unit where they differ
+    in_feature_unit = feature_units([units[f] for f in features], "the feature_unit variable")
     judged = xr.Dataset(
         {
             "n": (dims, grid(lambda c: c.mean.n, np.int32), {"units": "1", "long_name": "paired runs ok in both"}),
             "mean_shift": (dims, grid(lambda c: c.mean.estimate),
-                           {"units": "feature_unit", "long_name": "mean paired shift, candidate - reference"}),
+                           {**in_feature_unit, "long_name": "mean paired shift, candidate - reference"}),
             "mean_shift_lower": (dims, grid(lambda c: c.mean.lower),
-                                 {"units": "feature_unit",
+                                 {**in_feature_unit,
                                   "long_name": f"mean paired shift, {interval} (Student t), lower"}),
             "mean_shift_upper": (dims, grid(lambda c: c.mean.upper),
-                                 {"units": "feature_unit",
+                                 {**in_feature_unit,
                                   "long_name": f"mean paired shift, {interval} (Student t), upper"}),
             "mean_shift_verdict": (dims, grid(lambda c: c.mean.verdict, object),
                                    {"long_name": "mean shift within ±mean_shift_tolerance: " + " / ".join(VERDICTS)}),
             "feature_unit": ("feature", np.array([units[f] for f in features], dtype=object),
                              {"long_name": "SI unit of the feature, of its mean shift and its tolerance"}),
             "mean_shift_tolerance": ("feature", np.array([tolerances[f] for f in features]),
-                                     {"units": "feature_unit", "long_name": "mean-shift tolerance of the feature "
+                                     {**in_feature_unit, "long_name": "mean-shift tolerance of the feature "
                                       "(campaigns.statistics.accuracy_rule.MEAN_SHIFT_TOLERANCES by its unit)"}),
             "sd_ratio": (dims, grid(lambda c: c.sd.estimate),
                          {"units": "1", "long_name": "standard deviation ratio, candidate / reference"}),
