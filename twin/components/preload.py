@@ -14,7 +14,7 @@ What it holds, and who reads it:
 * its energy terms (:func:`energy`, :mod:`twin.engine.energy`); it has no states (:data:`ABSOLUTE_TOLERANCES` empty)
   and no fidelity levels (:data:`LEVELS`).
 
-Its constants and signal are declared in its entry of :data:`twin.layout.COMPONENTS`.
+Its constants, signal and work row are declared in its leaf module, :mod:`twin.vocabulary.preload`.
 """
 
 from __future__ import annotations

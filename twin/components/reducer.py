@@ -16,7 +16,7 @@ What it holds, and who reads it:
   states (:data:`ABSOLUTE_TOLERANCES`, :mod:`twin.engine.reference`);
 * its fidelity levels: none (:data:`LEVELS`; the chain is always modelled, :mod:`twin.levels`).
 
-Its states, constants and signals are declared in its entry of :data:`twin.layout.COMPONENTS`.
+Its states, constants, signals and work row are declared in its leaf module, :mod:`twin.vocabulary.reducer`.
 """
 
 from __future__ import annotations

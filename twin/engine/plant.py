@@ -3,9 +3,9 @@
 A lane is one Monte Carlo sample; a group of lanes shares the scene and the model configuration (the fidelity
 levels) and advances in lock-step (:mod:`twin.engine.loop`). Every array is ``[row, lane]``: the state ``x``
 (layout :class:`twin.layout.S`), the constants ``c`` (:class:`twin.layout.K`), the held inputs ``u``
-(:class:`twin.layout.U`), the derivatives ``dxdt`` and the work rows ``w`` (:class:`W`: the forces the rest of
-the engine reads). The right-hand side is a sequence of *stages*, each one loop over the lanes whose body calls a
-scalar physics law of :mod:`twin.physics` (branch-free, inlined), so LLVM vectorises it; a lane's numbers depend
+(:class:`twin.layout.U`), the derivatives ``dxdt`` and the work rows ``w`` (:class:`twin.layout.W`: the forces the
+rest of the engine reads). The right-hand side is a sequence of *stages*, each one loop over the lanes whose body
+calls a scalar physics law of :mod:`twin.physics` (branch-free, inlined), so LLVM vectorises it; a lane's numbers depend
 only on its own row entries, never on its lane mates or on the lane count (tests/engine/test_lanes.py).
 A stage takes the work rows through the ``w`` argument and never aliases it with another array argument (the
 ``noalias`` promise of :data:`numerics.jit.KERNEL`).
@@ -15,7 +15,6 @@ The digital controllers are outside: the speed loop's current demand and the val
 """
 
 import math
-from enum import IntEnum
 
 import numba
 import numpy as np
@@ -40,7 +39,7 @@ from twin.engine.codes import (
     SEAL_FRICTION_ELASTO_PLASTIC,
     THERMAL_DYNAMIC,
 )
-from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
+from twin.layout import N_WORK, NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U, W
 from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
@@ -48,30 +47,6 @@ from twin.physics.bristle_friction import bristle_force, elastoplastic_deflectio
 from twin.physics.friction import stribeck_friction, stribeck_level
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.scenes.profiles import profile_value
-
-
-class W(IntEnum):
-    """Work rows of a lane group (``w[row, lane]``): what one right-hand-side evaluation leaves for the rest of the
-    engine (recording, instruments, the guard). Per-nut rows are the first nut's plus the nut index."""
-
-    TORQUE = 0              # T_tm through couplings and torque meter [N m]
-    NUT_FORCE = 1           # 2 rows: axial force of the screw on nut i [N] (Eqs. 9.4-9.6)
-    NUT_NORMAL = 3          # 2 rows: normal load per sphere of nut i [N]
-    NUT_DX = 5              # 2 rows: relative position dx_i (Eq. 9.5) [m]
-    NUT_DV = 7              # 2 rows: its rate [m/s]
-    NUT_FRICTION = 9        # 2 rows: helix friction force of nut i along v_t [N] (reduced Ch. 5)
-    PRELOAD = 11            # preload magnitude [N]
-    EXTERNAL = 12           # external force on the master nut [N]
-    AXIAL_STIFFNESS = 13    # screw axial stiffness seen by the nuts [N/m]
-    AXIAL_GRADIENT = 14     # the axial spring energy's push on the sled [N]
-    NUT_KINEMATIC = 15      # 2 rows: dx_i without the screw's axial displacement [m] (quasi-static balance)
-    NUT_RATE = 17           # 2 rows: its rate [m/s]
-    BALANCE_DONE = 19       # 1.0 once the lane's quasi-static balance has converged in this evaluation
-    BALANCE_FAILED = 20     # 1.0 if a balance of this run ever ran out of iterations (the guard reads it)
-    NUT_LEAD_SLOPE = 21     # 2 rows: the lead error's rate e'(theta_s - theta_ni) at nut i [m/rad]
-
-
-N_WORK = W.NUT_LEAD_SLOPE + 2  # the per-nut members name their first row only
 
 #: Newton iterations the quasi-static screw-axial balance may take in one evaluation; warm-started from the last
 #: solution it needs 1-3 (measured: docs/accuracy.md); a lane that runs out is flagged (``W.BALANCE_FAILED``).
