@@ -15,12 +15,13 @@ The digital controllers are outside: the speed loop's current demand and the val
 """
 
 import math
+from functools import reduce
 
 import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from twin.components import preload, reducer
+from twin.components import STAGES, preload
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -91,6 +92,55 @@ def has_lead_error(c, lanes):
 # one lane after the other (:func:`rhs`, :func:`internal_forces` and :func:`measurands` for groups of at most
 # ``FUSED_LANES`` lanes: one lane's state stays in registers, and the stage calls and loop set-ups of the split form
 # are gone). A lane's operations and their order are the same in both, so are its bits (tests/engine/test_lanes.py).
+
+
+# The components' stages (twin.components.STAGES, one list) composed the same two ways: a chain of closures, one per
+# stage, each calling its stage and then the rest of the chain. numba reads a closure's free variables as compile-time
+# constants, so every call is a direct call and SCALAR inlines it: the chain compiles to the stages' bodies one after
+# the other, as if written out by hand, and adding a component to the table changes neither composition.
+
+
+@numba.njit(**SCALAR)
+def _no_forces(x, c, w, lanes, levels):
+    pass
+
+
+@numba.njit(**SCALAR)
+def _no_derivatives(x, c, u, w, dxdt, lanes, levels):
+    pass
+
+
+def _forces_then(rest, stage):
+    """The chain ``stage`` (``(active, forces_at, derivatives_at)``) then ``rest``, forces phase; ``lanes``: a
+    range of lanes (split: one loop per stage over the group; fused: ``range(lane, lane + 1)``)."""
+    active, forces_at, _ = stage
+
+    @numba.njit(**SCALAR)
+    def forces(x, c, w, lanes, levels):
+        rest(x, c, w, lanes, levels)
+        if active(levels):
+            for lane in lanes:
+                forces_at(x, c, w, lane)
+    return forces
+
+
+def _derivatives_then(rest, stage):
+    """:func:`_forces_then` for the derivatives phase."""
+    active, _, derivatives_at = stage
+
+    @numba.njit(**SCALAR)
+    def derivatives(x, c, u, w, dxdt, lanes, levels):
+        rest(x, c, u, w, dxdt, lanes, levels)
+        if active(levels):
+            for lane in lanes:
+                derivatives_at(x, c, u, w, dxdt, lane, levels)
+    return derivatives
+
+
+#: The components' forces phase: their work rows (``component_forces(x, c, w, lanes, levels)``, lanes a range).
+component_forces = reduce(_forces_then, STAGES, _no_forces)
+#: The components' derivatives phase (``component_derivatives(x, c, u, w, dxdt, lanes, levels)``).
+component_derivatives = reduce(_derivatives_then, STAGES, _no_derivatives)
 
 
 @numba.njit(**SCALAR)
@@ -271,13 +321,6 @@ def _contact_at(c, w, lane, nut, contact_model):
 
 
 @numba.njit(**SCALAR)
-def _couplings_at(x, c, w, lane):
-    """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
-    w[W.TORQUE, lane] = reducer.transmitted_torque_at(x, c, lane)
-    w[W.PRELOAD, lane] = preload.force_at(x, c, lane)
-
-
-@numba.njit(**SCALAR)
 def _force_demand(t, pneumatics, force_table):
     """The scene's force demand at ``t`` where the ideal load source applies it, else 0 (shared by a group)."""
     return profile_value(force_table, t) if pneumatics == PNEUMATICS_IDEAL else 0.0
@@ -335,7 +378,7 @@ def _internal_forces_at(x, c, w, lane, levels, demand, errors):
     _axial_gradient_at(x, c, w, lane)
     for nut in range(2):
         _contact_at(c, w, lane, nut, contact_model)
-    _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lane, lane + 1), levels)
     _external_force_at(x, c, w, lane, levels[PNEUMATICS], demand)
     chapter5 = levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5
     for nut in range(2):
@@ -373,8 +416,7 @@ def internal_forces(t, x, c, w, lanes, levels, force_table):
     for nut in range(2):
         for lane in range(lanes):
             _contact_at(c, w, lane, nut, contact_model)
-    for lane in range(lanes):
-        _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lanes), levels)
     pneumatics = levels[PNEUMATICS]
     for lane in range(lanes):
         _external_force_at(x, c, w, lane, pneumatics, demand)
@@ -396,11 +438,10 @@ def measurands(t, x, c, w, lanes, levels, force_table):
     pneumatics = levels[PNEUMATICS]
     if lanes <= FUSED_LANES:
         for lane in range(lanes):
-            _couplings_at(x, c, w, lane)
+            component_forces(x, c, w, range(lane, lane + 1), levels)
             _external_force_at(x, c, w, lane, pneumatics, demand)
         return
-    for lane in range(lanes):
-        _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lanes), levels)
     for lane in range(lanes):
         _external_force_at(x, c, w, lane, pneumatics, demand)
 
@@ -452,9 +493,8 @@ def _lead_error_torque(w, lane):
 
 @numba.njit(**SCALAR)
 def _rotation_at(x, c, w, dxdt, lane):
-    """Motor-reducer (Eq. 9.3, :func:`twin.components.reducer.reducer_rhs_at`) and screw rotation (Eq. 9.7)."""
+    """Screw rotation (Eq. 9.7) against the transmitted torque (:func:`twin.components.reducer.forces_at`)."""
     torque = w[W.TORQUE, lane]
-    reducer.reducer_rhs_at(x, c, torque, dxdt, lane)
     # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
     w_s = x[S.SCREW_SPEED, lane]
     friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
@@ -569,7 +609,9 @@ def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal):
 
 @numba.njit(**SCALAR)
 def _derivatives_at(x, c, u, w, dxdt, lane, levels):
-    """The derivatives of one lane from its work rows (:func:`_internal_forces_at`), fused."""
+    """The derivatives of one lane from its work rows (:func:`_internal_forces_at`), fused: the components'
+    stages, then the engine's own."""
+    component_derivatives(x, c, u, w, dxdt, range(lane, lane + 1), levels)
     _drive_current_at(x, c, u, dxdt, lane, levels[CURRENT_LOOP])
     if levels[MOTOR_THERMAL] == THERMAL_DYNAMIC:
         _winding_thermal_at(x, c, dxdt, lane)
@@ -621,6 +663,7 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
             rhs_at(t, x, c, u, levels, force_table, dxdt, w, lane, errors)
         return
     internal_forces(t, x, c, w, lanes, levels, force_table)
+    component_derivatives(x, c, u, w, dxdt, range(lanes), levels)
     current_loop = levels[CURRENT_LOOP]
     if current_loop == CURRENT_LOOP_FULL:
         for lane in range(lanes):
