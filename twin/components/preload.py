@@ -107,7 +107,3 @@ def forces_at(x, c, w, lane):
     (:func:`nut_share_at`)."""
     w[W.PRELOAD, lane] = force_at(x, c, lane)
 
-
-@numba.njit(**SCALAR)
-def derivatives_at(x, c, u, w, dxdt, lane, levels):
-    """It has no states."""

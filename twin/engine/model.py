@@ -348,14 +348,6 @@ def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.
     c[K.STROKE] = q["pneumatics.stroke"]
     c[K.PISTON_MASS] = q["pneumatics.piston_mass"]
     c[K.PISTON_DAMPING] = q["pneumatics.piston_damping"]
-    c[K.CYLINDER_FRICTION_STATIC] = q["pneumatics.friction_static"]
-    c[K.CYLINDER_FRICTION_DYNAMIC] = q["pneumatics.friction_dynamic"]
-    c[K.CYLINDER_FRICTION_RATE] = q["pneumatics.friction_stribeck_coefficient"]
-    c[K.CYLINDER_FRICTION_VISCOUS] = q["pneumatics.friction_viscous"]
-    c[K.CYLINDER_V_THRESHOLD] = q["pneumatics.friction_velocity_threshold"]
-    # elasto-plastic seal level: elastic up to a fraction of the smallest steady deflection F_d / sigma_0
-    c[K.SEAL_ELASTIC_DEFLECTION] = (q["pneumatics.friction_elastic_fraction"] * c[K.CYLINDER_FRICTION_DYNAMIC]
-                                    / c[K.SEAL_STIFFNESS])
     c[K.DAMPER_STIFFNESS] = q["pneumatics.damper_stiffness"]
     c[K.DAMPER_TRAVEL] = q["pneumatics.damper_travel"]
     c[K.DAMPER_DAMPING] = q["pneumatics.damper_damping"]

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from twin.components import STAGES, preload
+from twin.components import DERIVATIVE_STAGES, FORCE_STAGES, preload, seal
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -36,16 +36,13 @@ from twin.engine.codes import (
     PNEUMATICS_IDEAL,
     SCREW_AXIAL,
     SCREW_AXIAL_DYNAMIC,
-    SEAL_FRICTION,
-    SEAL_FRICTION_ELASTO_PLASTIC,
     THERMAL_DYNAMIC,
 )
 from twin.layout import N_WORK, NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U, W
 from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
-from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
-from twin.physics.friction import stribeck_friction, stribeck_level
+from twin.physics.friction import stribeck_friction
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.scenes.profiles import profile_value
 
@@ -94,10 +91,11 @@ def has_lead_error(c, lanes):
 # are gone). A lane's operations and their order are the same in both, so are its bits (tests/engine/test_lanes.py).
 
 
-# The components' stages (twin.components.STAGES, one list) composed the same two ways: a chain of closures, one per
-# stage, each calling its stage and then the rest of the chain. numba reads a closure's free variables as compile-time
-# constants, so every call is a direct call and SCALAR inlines it: the chain compiles to the stages' bodies one after
-# the other, as if written out by hand, and adding a component to the table changes neither composition.
+# The components' stages (twin.components.FORCE_STAGES and DERIVATIVE_STAGES, one list each), composed the same two
+# ways: a chain of closures, one per stage, each calling the rest of the chain and then its stage. numba reads a
+# closure's free variables as compile-time constants, so every call is a direct call and SCALAR inlines it: the chain
+# compiles to the stages' bodies one after the other, as if written out by hand, and adding a component to the table
+# changes neither composition.
 
 
 @numba.njit(**SCALAR)
@@ -111,9 +109,9 @@ def _no_derivatives(x, c, u, w, dxdt, lanes, levels):
 
 
 def _forces_then(rest, stage):
-    """The chain ``stage`` (``(active, forces_at, derivatives_at)``) then ``rest``, forces phase; ``lanes``: a
-    range of lanes (split: one loop per stage over the group; fused: ``range(lane, lane + 1)``)."""
-    active, forces_at, _ = stage
+    """The chain ``rest``, then ``stage`` (``(active, forces_at)``), of the forces phase; ``lanes``: a range of lanes
+    (split: one loop per stage over the group; fused: ``range(lane, lane + 1)``)."""
+    active, forces_at = stage
 
     @numba.njit(**SCALAR)
     def forces(x, c, w, lanes, levels):
@@ -126,7 +124,7 @@ def _forces_then(rest, stage):
 
 def _derivatives_then(rest, stage):
     """:func:`_forces_then` for the derivatives phase."""
-    active, _, derivatives_at = stage
+    active, derivatives_at = stage
 
     @numba.njit(**SCALAR)
     def derivatives(x, c, u, w, dxdt, lanes, levels):
@@ -138,9 +136,9 @@ def _derivatives_then(rest, stage):
 
 
 #: The components' forces phase: their work rows (``component_forces(x, c, w, lanes, levels)``, lanes a range).
-component_forces = reduce(_forces_then, STAGES, _no_forces)
+component_forces = reduce(_forces_then, FORCE_STAGES, _no_forces)
 #: The components' derivatives phase (``component_derivatives(x, c, u, w, dxdt, lanes, levels)``).
-component_derivatives = reduce(_derivatives_then, STAGES, _no_derivatives)
+component_derivatives = reduce(_derivatives_then, DERIVATIVE_STAGES, _no_derivatives)
 
 
 @numba.njit(**SCALAR)
@@ -550,24 +548,11 @@ def _nut_at(x, c, w, dxdt, lane, nut, rotation):
 
 
 @numba.njit(**SCALAR)
-def seal_bristle(x, c, lane):
-    """The elasto-plastic seal level's friction force [N] and the seals' deflection rate [m/s]
-    (:mod:`twin.physics.bristle_friction`, sliding level Eq. 7.63 without its regularisation)."""
-    v = x[S.PISTON_SPEED, lane]
-    z = x[S.SEAL_DEFLECTION, lane]
-    level = stribeck_level(v, c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
-                           c[K.CYLINDER_FRICTION_RATE, lane])
-    rate = elastoplastic_deflection_rate(v, z, level, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_ELASTIC_DEFLECTION, lane])
-    force = bristle_force(v, z, rate, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_DAMPING, lane],
-                          c[K.SEAL_DAMPING_SPEED, lane], c[K.CYLINDER_FRICTION_VISCOUS, lane])
-    return force, rate
-
-
-@numba.njit(**SCALAR)
-def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
+def _pneumatics_at(x, c, u, w, dxdt, lane, seal_level):
     """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11) of one lane: the one home of the
     load system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design).
-    ``seal`` is the seal-friction level's code: the regularised Eq. 7.63 or the elasto-plastic bristle law."""
+    ``seal_level`` is the seal-friction level's code, for the seals' law
+    (:func:`twin.components.seal.friction_at`)."""
     dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
         x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
         c[K.VALVE_MIN, lane], c[K.VALVE_MAX, lane], c[K.VALVE_FREQUENCY, lane], c[K.VALVE_DAMPING, lane])
@@ -587,12 +572,7 @@ def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
     dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
         p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
     dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
-    if seal == SEAL_FRICTION_ELASTO_PLASTIC:
-        friction, dxdt[S.SEAL_DEFLECTION, lane] = seal_bristle(x, c, lane)
-    else:
-        friction = stribeck_friction(x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane],
-                                     c[K.CYLINDER_FRICTION_DYNAMIC, lane], c[K.CYLINDER_FRICTION_RATE, lane],
-                                     c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane])
+    friction = seal.friction_at(x, c, dxdt, lane, seal_level)
     dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration_under_friction(
         p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
         c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
@@ -601,10 +581,10 @@ def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
 
 
 @numba.njit(**KERNEL)
-def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal):
+def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal_level):
     """:func:`_pneumatics_at` in every lane."""
     for lane in range(lanes):
-        _pneumatics_at(x, c, u, w, dxdt, lane, seal)
+        _pneumatics_at(x, c, u, w, dxdt, lane, seal_level)
 
 
 @numba.njit(**SCALAR)
@@ -621,7 +601,7 @@ def _derivatives_at(x, c, u, w, dxdt, lane, levels):
     for nut in range(2):
         _nut_at(x, c, w, dxdt, lane, nut, levels[NUT_ROTATION])
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
-        _pneumatics_at(x, c, u, w, dxdt, lane, levels[SEAL_FRICTION])
+        _pneumatics_at(x, c, u, w, dxdt, lane, levels[seal.SEAL_FRICTION])
 
 
 @numba.njit(**KERNEL)
@@ -684,7 +664,7 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
         for lane in range(lanes):
             _nut_at(x, c, w, dxdt, lane, nut, rotation)
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
-        pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[SEAL_FRICTION])
+        pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[seal.SEAL_FRICTION])
 
 
 EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)
