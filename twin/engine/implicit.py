@@ -10,7 +10,7 @@ import numba
 import numpy as np
 
 from numerics.jit import SCALAR
-from twin.components import preload, reducer, seal
+from twin.components import guides, preload, reducer, seal
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -21,7 +21,7 @@ from twin.engine.codes import (
     PNEUMATICS_FULL,
 )
 from twin.engine.plant import W, _stiffness
-from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
+from twin.layout import NUT_STATE_STRIDE, K, S, U
 from twin.physics.ball_groove_friction import nut_friction_slope, tangential_speed
 from twin.physics.ball_screw import nut_axial_tangent
 from twin.physics.friction import stribeck_slope
@@ -162,9 +162,7 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
         c[K.SCREW_FRICTION_VISCOUS, lane], c[K.ANGULAR_V_THRESHOLD, lane]))
     for nut in range(2):
         dof = DOF_NUT1 if nut == 0 else DOF_NUT2
-        matrix[dof, dof] += h * c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_slope(
-            x[S.NUT1_SPEED + NUT_STATE_STRIDE * nut, lane], c[K.GUIDE_FRICTION_STATIC, lane],
-            c[K.GUIDE_FRICTION_DYNAMIC, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+        matrix[dof, dof] += guides.friction_slope_at(x, c, lane, nut, h)
 
 
 @numba.njit(**SCALAR)

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from twin.components import DERIVATIVE_STAGES, FORCE_STAGES, preload, seal
+from twin.components import DERIVATIVE_STAGES, FORCE_STAGES, guides, preload, seal
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -525,15 +525,14 @@ def _screw_axial_at(x, c, w, dxdt, lane):
 
 @numba.njit(**SCALAR)
 def _nut_at(x, c, w, dxdt, lane, nut, rotation):
-    """Nut ``nut`` (Eq. 9.8): the master carries the external force, the preload acts between them; its roll on the
-    linear guides against the contact torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
+    """Nut ``nut`` (Eq. 9.8): the master carries the external force, the preload acts between them, the guides'
+    friction on each (:func:`twin.components.guides.friction_at`); its roll on the linear guides against the contact
+    torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
     position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
     master = 1.0 if nut == 0 else 0.0
     _, nut_torque, _, nut_axial = friction_generalised_forces(
         w[W.NUT_FRICTION + nut, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-    guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
-        x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
-        c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+    guide = guides.friction_at(x, c, lane, nut)
     preload_share = preload.nut_share_at(c, w[W.PRELOAD, lane], lane, master)
     master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
     dxdt[position, lane] = x[position + 1, lane]
