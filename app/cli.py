@@ -606,14 +606,8 @@ def _run_counts(text: str) -> list[int]:
                                          "e.g. 80,160,320") from None
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
-    parser.add_argument("--version", action="version", version=f"%(prog)s {twin.__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
-
-    p = sub.add_parser("scenes", help="list the built-in scenes (test procedures)")
-    p.set_defaults(func=cmd_scenes)
-
+def _add_simulate_parser(sub) -> None:
+    """``twin simulate``."""
     p = sub.add_parser("simulate", help="run one scene and write its signals and/or a plot")
     p.add_argument("scene", help="built-in scene name (see `twin scenes`) or a scene TOML file")
     p.add_argument("--params", default="bench", help="parameter set name or directory/file (default: bench)")
@@ -640,6 +634,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                         "(never a campaign's own files)")
     p.set_defaults(func=cmd_simulate)
 
+
+def _add_study_parsers(sub) -> None:
+    """``twin accuracy`` and ``twin chapter5``: the solver and validation studies."""
     p = sub.add_parser("accuracy", help="speed-versus-accuracy study: work-precision chart, stability map, baselines")
     p.add_argument("--scene", default="nominal", help="scene of the study (default: nominal)")
     p.add_argument("--duration", type=float, default=1.5, help="simulated time of each run [s] (default 1.5)")
@@ -658,6 +655,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-dynamic", action="store_true", help="skip the simulated hysteresis of Figs. 5.11-5.12")
     p.add_argument("--force", action="store_true", help="replace the figures of an earlier run in --out")
     p.set_defaults(func=cmd_chapter5)
+
+
+def _add_campaign_parsers(sub) -> None:
+    """``twin campaign run | analyze | compare | replay | bracket``."""
     campaign = sub.add_parser("campaign", help="Monte Carlo campaigns: run a spec, analyse its results")
     campaign_sub = campaign.add_subparsers(dest="campaign_command", required=True)
     p = campaign_sub.add_parser("run", help="run a campaign spec (TOML) on a local dask cluster or a scheduler")
@@ -711,6 +712,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output directory (default: out/<spec name>)")
     p.set_defaults(func=cmd_campaign_bracket)
 
+
+def _add_fidelity_parsers(sub) -> None:
+    """``twin fidelity levels | audit``."""
     fidelity = sub.add_parser("fidelity", help="fidelity levels and the audit of the automatic choice")
     fidelity_sub = fidelity.add_subparsers(dest="fidelity_command", required=True)
     p = fidelity_sub.add_parser("levels", help="list every subsystem's fidelity levels")
@@ -724,6 +728,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="output directory (default: out/fidelity_audit_<scene>)")
     p.set_defaults(func=cmd_fidelity_audit)
 
+
+def _add_results_parsers(sub) -> None:
+    """``twin report`` and ``twin export``: what is made from stored results."""
     p = sub.add_parser("report", help="HTML and PDF report of a campaign's stored results (no simulation)")
     p.add_argument("results", type=Path, help="results.nc of a campaign")
     p.add_argument("--analysis", type=Path, help="analysis.nc (default: beside the results, else computed in memory)")
@@ -744,6 +751,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace files of an earlier export in --out")
     p.set_defaults(func=cmd_export)
 
+
+def _add_measure_parsers(sub) -> None:
+    """``twin measure import | diagnose``."""
     measure = sub.add_parser("measure", help="measured tests: import a bench file, diagnose it against a campaign")
     measure_sub = measure.add_subparsers(dest="measure_command", required=True)
     p = measure_sub.add_parser("import", help="map a measured file's channels onto the twin's signals and compute "
@@ -761,6 +771,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--campaign", type=Path, required=True, help="results.nc of the campaign")
     p.set_defaults(func=cmd_measure_diagnose)
 
+
+def _add_procedure_parsers(sub) -> None:
+    """``twin procedure search``."""
     procedure = sub.add_parser("procedure", help="test procedures: search the knobs for the one that detects a fault "
                                                  "within one unit soonest")
     procedure_sub = procedure.add_subparsers(dest="procedure_command", required=True)
@@ -777,7 +790,16 @@ def build_parser() -> argparse.ArgumentParser:
                                                          "kept; the search's own files rewritten)")
     p.set_defaults(func=cmd_procedure_search)
 
-    add_serve_parser(sub)
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="twin", description="BenchTwin: ball-screw test-bench digital twin")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {twin.__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("scenes", help="list the built-in scenes (test procedures)")
+    p.set_defaults(func=cmd_scenes)
+    for add in (_add_simulate_parser, _add_study_parsers, _add_campaign_parsers, _add_fidelity_parsers,
+                _add_results_parsers, _add_measure_parsers, _add_procedure_parsers, add_serve_parser):
+        add(sub)
     return parser
 
 

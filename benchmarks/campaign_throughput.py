@@ -17,9 +17,10 @@ study (the runs, margins and assembly stages scaled to 7000 runs, the other stag
 re-runs the same 10 runs per data set whatever N). The runs stage includes each worker's sandbox start-up (a few
 seconds), so a small N overestimates the full study.
 
-``--stages RESULTS`` times the stages after the runs that read only ``results.nc`` (the analysis) on that file,
-with this tree's code and with the code of ``--before`` (a git revision, default :data:`BEFORE`, exported with
-``git archive``), each in a fresh process, and says whether both wrote the same ``analysis.nc``. ``--resample N``
+``--stages RESULTS`` times the stages after the runs that read only ``results.nc`` (:data:`FIXED_STAGES`: the analysis,
+then the report from it) on that file, with this tree's code and with the code of ``--before`` (a git revision,
+default :data:`BEFORE`, exported with ``git archive``), each in a fresh process, and says whether both wrote the same
+``analysis.nc``. ``--resample N``
 first grows the file to N runs per data set without running the bench (:func:`resampled_results`), so a small
 real campaign (e.g. ``--thesis 3``'s) gives a results file of the 7 x 1000 study's shape. ``--thesis N`` does the
 same on the results it produced.
@@ -64,8 +65,9 @@ from campaigns.runner.synthetic import SYNTHETIC_CATALOG, SyntheticModel
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 ROOT = Path(__file__).resolve().parents[1]
-#: The code the fixed stages are compared with: main before the stage-cost work (issue 42, item 7).
-BEFORE = "dbe49a67e27e30af4c66c2896f841f666cdd28cc"
+#: The code the fixed stages are compared with: main before session 13's stage-cost work (issue 42, item 7; session
+#: 12's started from dbe49a67e27e, docs/performance.md).
+BEFORE = "d386b80532f9b8715f37a4b12b12c07676a6ce6a"
 
 SYNTHETIC_SPEC = """
 name = "throughput"
@@ -142,6 +144,8 @@ def measure(args, workers: int, tmp: Path) -> dict:
     }
 
 
+#: The fixed stages :func:`fixed_stages` times, in the order a campaign runs them after its runs.
+FIXED_STAGES = ("analysis", "report")
 THESIS_TARGET = 25.0  # runs/s end to end on 2 workers (issue 32)
 #: Solver settings of the configurations timed: the default (the lane engine at its own choice of level and step)
 #: and the previous default (RK4 at 62.5 us with the screw's axial mass), on the same engine.
@@ -149,7 +153,7 @@ CONFIGURATIONS = {"default": {}, "previous": {"dt": 6.25e-5, "fidelity": {"screw
 
 
 def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "default",
-                      before: str | None = None) -> None:
+                      before: str | None = None, stages=FIXED_STAGES) -> None:
     """Run the thesis spec with ``runs`` runs per data set in one of :data:`CONFIGURATIONS`, end to end, and print
     the stages and the rates; with ``before``, the fixed stages on its results before and after
     (:func:`fixed_stages`)."""
@@ -164,7 +168,7 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "
     campaigns.analyze(results)
     end = time.perf_counter()
     marks.append(("end", end))
-    # the audit is a campaign of its own: its stages (compile check, cluster start, runs) are announced again
+    # the stages the audit announces after its own (its runs, on the same cluster) are counted under "fidelity audit: "
     stages = {"start-up before the first stage": marks[0][1] - start}
     prefix = ""
     for k, (stage, at) in enumerate(marks[:-1]):
@@ -195,7 +199,7 @@ def thesis_end_to_end(runs: int, workers: int, tmp: Path, configuration: str = "
     print(f"estimate for 7 x 1000: {estimate / 60:.1f} min ({full / estimate:.2f} runs/s; the runs, margins and "
           "assembly stages scaled, the other stages as measured)")
     if before:
-        fixed_stages(results, before, tmp)
+        fixed_stages(results, before, tmp, stages)
 
 
 def resampled_results(path: Path, runs: int, out: Path) -> Path:
@@ -235,21 +239,30 @@ def resampled_results(path: Path, runs: int, out: Path) -> Path:
     return out
 
 
-#: What a fresh process runs to time the analysis of ``results.nc`` into ``analysis.nc`` (argv 1 and 2).
-_TIME_ANALYSIS = """
+#: What a fresh process runs to time one fixed stage (argv 1: the stage, 2: results.nc, 3: analysis.nc, 4: the
+#: report's folder): the analysis writes ``analysis.nc``, the report reads it (HTML and PDF at a fixed timestamp).
+#: Prints the wall and CPU seconds (every thread's).
+_TIME_STAGE = """
 import sys, time
 start, cpu = time.perf_counter(), time.process_time()
-from campaigns.analysis.campaign_analysis import analyze
-analyze(sys.argv[1], sys.argv[2])
+stage, results, analysis, report = sys.argv[1:5]
+if stage == "analysis":
+    from campaigns.analysis.campaign_analysis import analyze
+    analyze(results, analysis)
+else:
+    from datetime import UTC, datetime
+    import reports
+    reports.build_report(results, analysis, report, generated_at=datetime(2026, 1, 1, tzinfo=UTC))
 print(time.perf_counter() - start, time.process_time() - cpu)
 """
 
 
-def _timed_analysis(code: Path, results: Path, out: Path) -> tuple[float, float]:
-    """Wall and CPU seconds of the analysis of ``results`` by the code under ``code``, in a fresh process (its
-    imports and compiled-code loads included, as a campaign's analysis stage has them)."""
-    done = subprocess.run([sys.executable, "-c", _TIME_ANALYSIS, str(results), str(out)], check=True,
-                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(code)}, cwd=code)
+def _timed_stage(stage: str, code: Path, results: Path, label: str, tmp: Path) -> tuple[float, float]:
+    """Wall and CPU seconds of ``stage`` on ``results`` by the code under ``code``, in a fresh process (its imports
+    and compiled-code loads included, as a campaign's stage has them); the files go to ``tmp`` under ``label``."""
+    done = subprocess.run([sys.executable, "-c", _TIME_STAGE, stage, str(results), str(tmp / f"analysis-{label}.nc"),
+                           str(tmp / f"report-{label}")], check=True, capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(code)}, cwd=code)
     wall, cpu = (float(v) for v in done.stdout.split()[-2:])
     return wall, cpu
 
@@ -266,24 +279,29 @@ def _same_analysis(a: Path, b: Path) -> bool:
             {k: v for k, v in y.attrs.items() if k != "history"}
 
 
-def fixed_stages(results: Path, before: str, tmp: Path) -> None:
-    """Print the analysis stage's time on ``results`` with this tree's code and with the code at ``before``, their
-    ratio, and whether both wrote the same ``analysis.nc`` (the refactors promise the same bits)."""
+def fixed_stages(results: Path, before: str, tmp: Path, stages=FIXED_STAGES) -> None:
+    """Print each fixed stage's time on ``results`` with this tree's code and with the code at ``before``, their
+    ratio, and whether both wrote the same ``analysis.nc`` (the refactors promise the same bits). Each tree's report
+    reads its own analysis (whose history stamp, and so the report's list of input files, differ). The stages run one
+    after the other, before and after alternately, each in a fresh process."""
+    # the report reads the analysis each tree wrote: timing the report times the analysis too
+    stages = [stage for stage in FIXED_STAGES if stage in stages or (stage == "analysis" and "report" in stages)]
     old = tmp / "before"
     old.mkdir()
     archive = subprocess.run(["git", "-C", str(ROOT), "archive", before], check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(old)], input=archive, check=True)
     with xr.open_dataset(results) as ds:
         shape = f"{ds.sizes['dataset']} x {ds.sizes['run']}"
-    rows = {}
-    for label, code in (("before", old), ("after", ROOT)):
-        rows[label] = _timed_analysis(code, results, tmp / f"analysis-{label}.nc")
-    same = _same_analysis(tmp / "analysis-before.nc", tmp / "analysis-after.nc")
-    (wall_b, cpu_b), (wall_a, cpu_a) = rows["before"], rows["after"]
-    print(f"fixed stages on {results.name} ({shape} runs); before: {before[:10]}, after: this tree")
+    rows = {stage: {label: _timed_stage(stage, code, results, label, tmp)
+                    for label, code in (("before", old), ("after", ROOT))} for stage in stages}
+    print(f"fixed stages on {results.name} ({shape} runs); before: {before[:10]}, after: this tree; "
+          "CPU: every thread's")
     print(f"  {'stage':12s} {'before':>20s} {'after':>20s} {'ratio':>7s}")
-    print(f"  {'analysis':12s} {wall_b:7.1f} s ({cpu_b:5.1f} s CPU) {wall_a:7.1f} s ({cpu_a:5.1f} s CPU) "
-          f"{wall_b / wall_a:6.2f}x")
+    for stage, row in rows.items():
+        (wall_b, cpu_b), (wall_a, cpu_a) = row["before"], row["after"]
+        print(f"  {stage:12s} {wall_b:7.1f} s ({cpu_b:5.1f} s CPU) {wall_a:7.1f} s ({cpu_a:5.1f} s CPU) "
+              f"{wall_b / wall_a:6.2f}x")
+    same = _same_analysis(tmp / "analysis-before.nc", tmp / "analysis-after.nc")
     print(f"  analysis.nc before and after: {'identical' if same else 'DIFFERENT (a refactor changed numbers)'}")
 
 
@@ -302,6 +320,9 @@ def main() -> None:
                         help="time the fixed stages on this results.nc before and after (see --before)")
     parser.add_argument("--resample", type=int, metavar="N",
                         help="with --stages: grow the file to N runs per data set first (no bench runs)")
+    parser.add_argument("--stage", nargs="+", choices=FIXED_STAGES, default=list(FIXED_STAGES),
+                        help="with --stages or --thesis: the fixed stages to time (default: all; the report needs the "
+                             "analysis, which is then timed too)")
     parser.add_argument("--before", default=BEFORE, help=f"git revision of the code compared (default {BEFORE[:10]})")
     args = parser.parse_args()
     header("campaign throughput", args.quick)
@@ -310,12 +331,13 @@ def main() -> None:
             results = args.stages
             if args.resample:
                 results = resampled_results(results, args.resample, Path(tmp) / "resampled.nc")
-            fixed_stages(results, args.before, Path(tmp))
+            fixed_stages(results, args.before, Path(tmp), args.stage)
         return
     if args.thesis:
         for configuration in args.configuration:
             with tempfile.TemporaryDirectory() as tmp:
-                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration, args.before)
+                thesis_end_to_end(args.thesis, max(args.workers), Path(tmp), configuration, args.before,
+                                  args.stage)
         return
     if args.quick:
         args.synthetic, args.runs = True, 10

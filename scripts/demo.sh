@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install BenchTwin into .venv and run the main job: the demo Monte Carlo campaign (the Sec. 9.4 study,
 # data sets 1-7, every Table 9.5 uncertainty, 59 runs per data set) on a local 2-worker dask cluster,
-# the fidelity audit (the first 10 runs of each data set again at full fidelity), the analysis
+# the fidelity audit on the same cluster (the runs of each data set the automatic choice simplifies, again at full
+# fidelity; the others run the full model already and are not re-run), the analysis
 # (correlations, separation, observability) and the HTML/PDF design-review report.
 # Each stage is announced with its expected duration; extra arguments go to `twin campaign run`
 # (e.g. `--runs 8` for a quicker look).

@@ -127,9 +127,9 @@ def observability(analysis: xr.Dataset) -> None:
         if "sweep_backlash" in analysis:
             levels = [f"{um(float(b), 1)} µm" for b in analysis.sweep_backlash.values]
         else:  # another swept quantity, e.g. the preload loss of preload_loss.toml
+            # the swept quantity is the one sweep_ variable indexed by the sweep point alone
             swept = next(v for v in analysis.data_vars
-                         if str(v).startswith("sweep_") and "sweep_point" in analysis[v].dims
-                         and str(v) != "sweep_detection_probability")
+                         if str(v).startswith("sweep_") and analysis[v].dims == ("sweep_point",))
             levels = [f"{float(b):g} {analysis.attrs.get('requirement_units', '')}".strip()
                       for b in analysis[swept].values]
         print("| feature | " + " | ".join(f"{p} ({level})" for p, level in zip(points, levels, strict=False)) + " |")

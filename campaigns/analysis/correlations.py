@@ -11,7 +11,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from campaigns.analysis.settings import SENSITIVITY_STREAM, AnalysisSettings
+from campaigns.analysis.settings import SENSITIVITY_STREAM, AnalysisSettings, on_threads
 from campaigns.analysis.vocabulary import feature_units, features_of, parameters_of, used
 from campaigns.statistics import sensitivity
 from campaigns.statistics.correlation import RankDesign, bootstrap_correlations, prcc, rank_design
@@ -21,7 +21,8 @@ def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
     """``pearson``, ``spearman`` (with ``_ci``), ``prcc``, ``first_order_index`` (with its flag and interval) and
     ``effect_size`` (with its interval) along (dataset, feature, parameter). The correlation bootstrap of data set
     ``d`` and feature ``f`` draws from ``SeedSequence(seed, spawn_key=(d, f))``, the index's from
-    ``(SENSITIVITY_STREAM, d, f)``."""
+    ``(SENSITIVITY_STREAM, d, f)``; each data set and feature is computed alone, on the cores' threads
+    (:func:`campaigns.analysis.settings.on_threads`)."""
     parameters, features = parameters_of(results), features_of(results)
     names = [str(n) for n in results["dataset"].values]
     confidence, n_boot, seed = settings.confidence, settings.n_boot, settings.seed
@@ -31,6 +32,7 @@ def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
     ci = {k: np.full(shape + (2,), math.nan) for k in ("pearson", "spearman", "first_order_index", "effect_size")}
     out["first_order_index"], effect_size = np.full(shape, math.nan), np.full(shape, math.nan)
     first_order_flag = np.zeros(shape, dtype=np.int8)
+    tasks = []  # (data set, feature, sampled values, feature values, PRCC factorisation) with enough used runs
     for d, name in enumerate(names):
         row = results.sel(dataset=name)
         sampled = np.stack([row[p].values for p in parameters]) if parameters else np.empty((0, row.sizes["run"]))
@@ -42,23 +44,30 @@ def correlations(results: xr.Dataset, settings: AnalysisSettings) -> xr.Dataset:
             if len(y) < settings.min_ok_runs:
                 continue
             X = np.ascontiguousarray(sampled[:, mask])  # row-major as stacked: numpy sums a row pairwise only so
-            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(d, f)))
-            idx = rng.integers(0, len(y), (n_boot, len(y)))
-            for method in ("pearson", "spearman"):
-                estimate, lower, upper = bootstrap_correlations(X, y, idx, method, confidence)
-                out[method][d, f] = estimate
-                ci[method][d, f, :, 0], ci[method][d, f, :, 1] = lower, upper
             design = designs.get(mask.tobytes())
-            if design is None:
+            if design is None:  # here, not on the threads: it pins BLAS to one thread, a setting of the process
                 design = designs[mask.tobytes()] = rank_design(X.T)
-            out["prcc"][d, f] = prcc(X.T, y, design)
-            found = sensitivity.first_order(
-                X.T, y, n_boot=sensitivity_boot, confidence=confidence,
-                seed=np.random.SeedSequence(seed, spawn_key=(SENSITIVITY_STREAM, d, f)),
-            )
-            first_order_flag[d, f] = sensitivity.unresolved(found["index"], found["ci"], len(y))
-            out["first_order_index"][d, f], effect_size[d, f] = found["index"], found["effect_size"]
-            ci["first_order_index"][d, f], ci["effect_size"][d, f] = found["ci"], found["effect_size_ci"]
+            tasks.append((d, f, X, y, design))
+
+    def one(task) -> None:
+        """Every statistic of one data set and feature, into its cells of the arrays above."""
+        d, f, X, y, design = task
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(d, f)))
+        idx = rng.integers(0, len(y), (n_boot, len(y)))
+        for method in ("pearson", "spearman"):
+            estimate, lower, upper = bootstrap_correlations(X, y, idx, method, confidence)
+            out[method][d, f] = estimate
+            ci[method][d, f, :, 0], ci[method][d, f, :, 1] = lower, upper
+        out["prcc"][d, f] = prcc(X.T, y, design)
+        found = sensitivity.first_order(
+            X.T, y, n_boot=sensitivity_boot, confidence=confidence,
+            seed=np.random.SeedSequence(seed, spawn_key=(SENSITIVITY_STREAM, d, f)),
+        )
+        first_order_flag[d, f] = sensitivity.unresolved(found["index"], found["ci"], len(y))
+        out["first_order_index"][d, f], effect_size[d, f] = found["index"], found["effect_size"]
+        ci["first_order_index"][d, f], ci["effect_size"][d, f] = found["ci"], found["effect_size_ci"]
+
+    on_threads(one, tasks)
     corr_dims = ("dataset", "feature", "parameter")
     in_feature_units = feature_units([str(results[f].attrs.get("units", "1")) for f in features])
     data_vars = {

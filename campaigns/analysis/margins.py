@@ -33,7 +33,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from campaigns.analysis.settings import AnalysisSettings
+from campaigns.analysis.settings import AnalysisSettings, on_threads
 from campaigns.analysis.vocabulary import features_of
 from campaigns.runner.control_limits import ControlLimits
 from campaigns.statistics.correlation import bootstrap_correlation
@@ -190,6 +190,7 @@ def control_robustness(results: xr.Dataset, settings: AnalysisSettings) -> xr.Da
     spearman_ci = np.full((n_d, n_m, n_f, 2), math.nan)
     n_corr = np.zeros((n_d, n_m, n_f), dtype=np.int32)
     ok = (results["status"] == "ok").values
+    correlated = []  # (data set, margin, feature, margin values, feature values) of each Spearman bootstrap
     for m, name in enumerate(margins):
         values = margin_values(results, name)
         metric = str(results[name].attrs["metric"])
@@ -209,9 +210,15 @@ def control_robustness(results: xr.Dataset, settings: AnalysisSettings) -> xr.Da
                 x, y = values[d][used], results[feature].values[d][used]
                 if n_corr[d, m, f] < min_ok_runs or np.ptp(x) == 0.0 or np.ptp(y) == 0.0:
                     continue  # too few runs, or a constant margin (e.g. an infinite gain margin): no correlation
-                spearman[d, m, f], *spearman_ci[d, m, f] = bootstrap_correlation(
-                    x, y, "spearman", n_boot=n_boot, confidence=confidence,
-                    seed=np.random.SeedSequence(seed, spawn_key=(_MARGIN_STREAM, d, m, f)))
+                correlated.append((d, m, f, x, y))
+
+    def correlate(task) -> None:
+        d, m, f, x, y = task
+        spearman[d, m, f], *spearman_ci[d, m, f] = bootstrap_correlation(
+            x, y, "spearman", n_boot=n_boot, confidence=confidence,
+            seed=np.random.SeedSequence(seed, spawn_key=(_MARGIN_STREAM, d, m, f)))
+
+    on_threads(correlate, correlated)  # each bootstrap alone, from its own stream
 
     # runs beyond a limit, and the verdict per loop and limit over the campaign
     beyond_count = np.zeros((n_d, len(runs)), dtype=np.int32)

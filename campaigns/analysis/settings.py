@@ -3,9 +3,11 @@ and the spawn-key tags that give each analysis its own random stream from the on
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-from campaigns.statistics.defaults import CONFIDENCE, FALSE_ALARM_RATE, POWER
+from campaigns.statistics.defaults import CONFIDENCE, FALSE_ALARM_RATE, POWER, threads
 from campaigns.statistics.order_statistics import detection_run_floor
 
 #: Ok runs a data set needs before any statistic of it is computed (``data_sufficient``). A floor against printing
@@ -55,3 +57,19 @@ class AnalysisSettings:
         if floor is None:
             floor = detection_run_floor(self.false_alarm_rate, self.power, self.confidence)
         return max(floor, self.min_ok_runs)
+
+
+def on_threads(work: Callable, tasks: Iterable) -> None:
+    """``work(task)`` for every task, on as many threads as the process has cores
+    (:func:`campaigns.statistics.defaults.threads`), the first error raised. For tasks that write disjoint cells of
+    arrays and compute each cell alone: the bootstrap loops release the GIL, and a cell's numbers do not depend on
+    the thread that computes it or on the order the tasks finish in."""
+    tasks = list(tasks)
+    count = max(1, min(threads(), len(tasks)))
+    if count == 1:
+        for task in tasks:
+            work(task)
+        return
+    with ThreadPoolExecutor(count) as pool:
+        for done in [pool.submit(work, task) for task in tasks]:
+            done.result()

@@ -360,8 +360,10 @@ class BenchModel:
     #: Runs a group takes at once (the results do not depend on it: :func:`simulate_group`): the twin's default group
     #: (docs/performance.md, "The stages after the runs" and "Lanes per group").
     lanes: int = DEFAULT_LANES
-    #: Wall time of one 10 s data-set run at auto fidelity [s] (measured: docs/performance.md, "Campaign runs").
-    typical_run_seconds: float = 1.2
+    #: Wall time a worker spends per 10 s data-set run of a campaign [s]: in 16-lane groups, with the per-run work
+    #: around them (the budget's estimate; measured on the demo: docs/performance.md, "The figures behind the campaign
+    #: code's constants"). One run alone takes several times as long: it is no campaign's cost.
+    typical_run_seconds: float = 0.2
     #: The step that time holds for: the twin's default.
     typical_step: float = DEFAULT_DT
     #: Samples of a trace before decimation: 10 s at the 1 ms output spacing, both ends included.

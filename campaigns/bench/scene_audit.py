@@ -11,6 +11,7 @@ from pathlib import Path
 import xarray as xr
 
 from campaigns.bench.campaign import load_spec, run_campaign
+from campaigns.bench.fidelity_audit import AUDIT_MIN_PAIRS
 from campaigns.runner.spec import Dataset, FidelityAudit, Observability, Traces
 from twin.errors import InputError
 from twin.scenes import load_scene
@@ -26,7 +27,8 @@ def audit_scene(scene: str, out_dir: str | Path, runs: int = 50, spec_path: str 
     The uncertainty table, seed, features and solver come from ``spec_path`` (default: the
     thesis study, ``campaigns/specs/thesis_backlash.toml``); the scene is the only data set.
     """
-    problems = [] if isinstance(runs, int) and runs >= 2 else [f"runs: {runs!r} must be an integer >= 2"]
+    problems = [] if isinstance(runs, int) and runs >= AUDIT_MIN_PAIRS else [
+        f"runs: {runs!r} must be an integer >= {AUDIT_MIN_PAIRS} (the fewest paired runs an audit verdict needs)"]
     try:
         load_scene(scene)
     except InputError as exc:

@@ -1,12 +1,14 @@
 """What a campaign will cost before it starts: runs, wall time, disk; the free-space check.
 
-The estimate is printed by ``twin campaign run`` before anything runs, and the disk part is
+The estimate is printed by ``twin campaign run`` before anything runs and again, for the runs still to do, as the
+runs start (:mod:`campaigns.runner.execution`: one estimate, from this module), and the disk part is
 checked against the free space of the output directory's file system
 (:func:`shutil.disk_usage`): a campaign that cannot fit is refused before the cluster starts.
 
-The run model (:class:`campaigns.runner.runs.RunModel`) says what a run costs: ``typical_run_seconds`` (wall time
-of one run on one core at ``typical_step``, so a spec's ``solver.dt`` scales the run time in proportion; None: the
-wall time is not estimated) and ``trace_samples`` (samples of a kept time series before decimation). A run
+The run model (:class:`campaigns.runner.runs.RunModel`) says what a run costs: ``typical_run_seconds`` (the wall time
+a worker spends per run of a campaign, at ``typical_step``: in the model's lane groups, with the per-run work around
+them, so a spec's ``solver.dt`` scales the run time in proportion; None: the wall time is not estimated) and
+``trace_samples`` (samples of a kept time series before decimation). A run
 never costs more than its budget (``execution.timeout`` and the kill grace): the sandbox ends it there.
 
 The disk estimate covers what a campaign writes, at its peak: the chunk files, ``results.nc`` twice (a
@@ -85,11 +87,14 @@ class Estimate:
     workers: int = 1
     run_seconds: float | None = None
 
+    def duration(self) -> str:
+        """The wall time in words, e.g. ``about 70 min on 2 worker(s)``."""
+        return (f"about {_duration(self.wall_seconds)} on {self.workers} worker(s)" if self.wall_seconds is not None
+                else "wall time unknown")
+
     def describe(self) -> str:
         """One line for the user, e.g. ``7000 run(s), about 70 min on 2 worker(s), about 13 MB on disk``."""
-        wall = (f"about {_duration(self.wall_seconds)} on {self.workers} worker(s)" if self.wall_seconds is not None
-                else "wall time unknown")
-        return f"{self.runs} run(s), {wall}, about {_size(self.disk_bytes)} on disk"
+        return f"{self.runs} run(s), {self.duration()}, about {_size(self.disk_bytes)} on disk"
 
 
 def run_seconds(spec: CampaignSpec, run_function: RunModel) -> float | None:

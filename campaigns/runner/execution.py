@@ -32,6 +32,8 @@ after that is recorded with status ``"lost"``.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import json
 import logging
 import math
 import os
@@ -41,7 +43,7 @@ import sys
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from pathlib import Path
 
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
@@ -186,6 +188,58 @@ def _client(workers: int, scheduler: str | None):
         yield client
 
 
+class Cluster:
+    """The dask client of one or more campaigns: started when a campaign first needs it, closed when the ``with``
+    block ends (the client first, then a local cluster; a stop by Ctrl-C or SIGTERM silences that close:
+    :class:`_QuietStop`).
+
+    :func:`run_campaign` opens its own unless it is given one; the bench's campaign passes one to its runs and to its
+    fidelity audit (:func:`campaigns.bench.campaign.run_campaign`), so that the audit's runs go to the workers that
+    already hold the compiled model instead of starting and compiling again.
+    """
+
+    def __init__(self, workers: int, scheduler: str | None = None,
+                 announce: Callable[[str, str], None] | None = None):
+        self.workers, self.scheduler = workers, scheduler
+        self.announce = announce or (lambda stage, message: None)
+        self._stack = contextlib.ExitStack()
+        self._client: Client | None = None
+        self._name = ""
+
+    @property
+    def started(self) -> bool:
+        """Whether the client is up (its workers then hold the model a campaign compiled before they started)."""
+        return self._client is not None
+
+    @property
+    def slots(self) -> int:
+        """Worker threads a campaign's estimate assumes: the local workers, one for a scheduler's unknown cluster."""
+        return 1 if self.scheduler else self.workers
+
+    def client(self, name: str) -> Client:
+        """The client, started on the first call (announced as ``cluster start`` for campaign ``name``)."""
+        if self._client is None:
+            self._name = name
+            quiet = _QuietStop()
+            self._stack.callback(quiet.restore)  # last: once the client and the cluster are closed
+            self.announce("cluster start", f"{name}: starting "
+                          f"{'the client' if self.scheduler else f'{self.workers} worker processes'} (seconds: "
+                          "docs/performance.md)")
+            with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
+                self._client = self._stack.enter_context(_client(self.workers, self.scheduler))
+            self._stack.push(quiet.on_exit)  # first: a stop silences the close that follows
+        return self._client
+
+    def __enter__(self) -> Cluster:
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        if self._client is not None and self.scheduler is None and exc[0] is None:
+            self.announce("cluster stop", f"{self._name}: stopping the {self.workers} worker processes")
+        self._client = None
+        return self._stack.__exit__(*exc)
+
+
 class QuietWorkerClose(WorkerPlugin):
     """A local cluster's worker process logs nothing once it starts closing (the campaign is done or stopped): what
     a worker closing under in-flight runs logs (its comm to the scheduler closed, its tasks cancelled) is no run's
@@ -209,6 +263,8 @@ def run_campaign(
     progress: bool = True,
     allow_version_mix: bool = False,
     announce: Callable[[str, str], None] | None = None,
+    cluster: Cluster | None = None,
+    datasets: Collection[str] | None = None,
 ) -> Path:
     """Run (or resume) a campaign of ``run_function`` and write ``results.nc``; the bench twin's entry, with its
     run model by default and the fidelity audit after the runs, is :func:`campaigns.bench.campaign.run_campaign`
@@ -237,6 +293,14 @@ def run_campaign(
     announce : callable, optional
         ``announce(stage, message)`` is called as each stage starts (compile, cluster start, runs,
         margins, assembly, cluster stop); default silent.
+    cluster : Cluster, optional
+        The client to run on (started if it is not yet, left open for its owner); default: one of this campaign's
+        own, of ``workers`` processes or of ``scheduler``, closed at the end. With a client already started the
+        compile stage is skipped: its workers hold the compiled model.
+    datasets : collection of str, optional
+        Run only these data sets of the spec; ``results.nc`` then holds them alone, each with the random streams of
+        its place in ``spec`` (run i of a data set has the same parameters and noise as in a campaign of the whole
+        spec: the fidelity audit re-runs the data sets it needs). Default: every data set.
 
     Returns
     -------
@@ -253,17 +317,19 @@ def run_campaign(
     announce = announce or (lambda stage, message: None)
     if not (isinstance(workers, int) and 1 <= workers <= BOUNDS["workers"][1]):
         raise CampaignError(f"workers: {workers!r} is not a whole number in [1, {BOUNDS['workers'][1]}]")
+    kept = _kept_datasets(spec, datasets)
     check_disk(out_dir, estimate(spec, run_function, workers=workers))
     stores: list[ChunkStore] = []
-    with _stop_signals() as stopped:
+    with _stop_signals() as stopped, contextlib.ExitStack() as own:
+        if cluster is None:
+            cluster = own.enter_context(Cluster(workers, scheduler, announce))
         try:
-            return _run(spec, out_dir, workers=workers, scheduler=scheduler, resume=resume, progress=progress,
-                        run_function=run_function, allow_version_mix=allow_version_mix,
-                        announce=announce, stores=stores)
+            return _run(spec, out_dir, kept=kept, resume=resume, progress=progress, run_function=run_function,
+                        allow_version_mix=allow_version_mix, announce=announce, stores=stores, cluster=cluster)
         except KeyboardInterrupt:
-            kept = len(stores[0].done) if stores else 0
+            done = len(stores[0].done) if stores else 0
             name = stopped.name or "Ctrl-C"
-            raise CampaignInterrupted(out_dir, kept, len(spec.datasets) * spec.runs_per_dataset, name) from None
+            raise CampaignInterrupted(out_dir, done, len(kept) * spec.runs_per_dataset, name) from None
 
 
 class _Stop:
@@ -304,81 +370,97 @@ def _stop_signals():
             signal.signal(sig, handler)
 
 
-def _compile_and_time(run_function: RunModel, request: RunRequest) -> float | None:
-    """Compile the run function's model once before the workers start, then time one run, both in a sandbox.
+def _compile_and_run(run_function: RunModel, request: RunRequest) -> bool:
+    """Compile the run function's model once before the workers start, then run one request, both in a sandbox.
 
     The sandbox's start-up (imports, the run function's warm-up: numba compiles and writes its on-disk cache,
     which the workers then load) has the sandbox's own limit (:data:`campaigns.runner.sandbox.STARTUP_TIMEOUT`); the
-    timed run has the campaign's budget (``execution.timeout`` and its grace), as every run: a spec whose runs
-    cannot finish in time stops here after that budget, not after however long the run would take.
+    run has the campaign's budget (``execution.timeout`` and its grace), as every run: a spec whose runs cannot
+    finish in time shows it here after that budget, not after however long the run would take. The run's time is
+    not the campaign's estimate: the workers run lane groups (:func:`campaigns.runner.budget.estimate`).
 
-    Returns the run's wall time [s], or None when it did not end ok within its budget.
+    Returns whether the run ended ok within its budget.
     """
     sandbox = Sandbox()
     try:
         record = sandbox.run(run_function, request)
     finally:
         sandbox.close()
-    return record["wall_time"] if record["status"] == "ok" else None
+    return record["status"] == "ok"
 
 
-def _run(spec, out_dir, *, workers, scheduler, resume, progress, run_function, allow_version_mix, announce,
-         stores: list) -> Path:
+def _kept_datasets(spec: CampaignSpec, datasets: Collection[str] | None) -> list[int]:
+    """The indices of the data sets a campaign runs (:func:`run_campaign`'s ``datasets``), in spec order."""
+    if datasets is None:
+        return list(range(len(spec.datasets)))
+    names = [d.name for d in spec.datasets]
+    unknown = sorted(set(datasets) - set(names))
+    if unknown or not datasets:
+        raise CampaignError(f"datasets: {', '.join(unknown) or 'none given'}: name one or more of the spec's data "
+                            f"sets ({', '.join(names)})")
+    return [k for k, name in enumerate(names) if name in set(datasets)]
+
+
+def _stored_spec(spec: CampaignSpec, kept: list[int]) -> CampaignSpec:
+    """The spec the chunk store and ``results.nc`` hold: ``spec`` itself, or its ``kept`` data sets alone (their
+    ``seeds_from`` dropped: each run's streams are those of its place in ``spec``, recorded per data set in
+    ``results.nc``'s ``dataset_seed_indices``)."""
+    if kept == list(range(len(spec.datasets))):
+        return spec
+    return spec.model_copy(update={"datasets": [spec.datasets[k].model_copy(update={"seeds_from": None})
+                                                for k in kept]})
+
+
+def _run(spec, out_dir, *, kept: list[int], resume, progress, run_function, allow_version_mix, announce,
+         stores: list, cluster: Cluster) -> Path:
     """:func:`run_campaign` once its arguments are checked (``stores`` receives the chunk store, for the count of
     an interruption)."""
+    stored = _stored_spec(spec, kept)
     with OutputLock(out_dir):  # held until results.nc is written
-        store = ChunkStore(out_dir, spec, resume=resume, provenance=provenance(run_function),
+        store = ChunkStore(out_dir, stored, resume=resume, provenance=provenance(run_function),
                            allow_version_mix=allow_version_mix)
         stores.append(store)
-        samples = sample(spec)
+        samples = sample(spec)  # every data set's: a kept one draws the streams of its place in the spec
+
+        def request_of(d: int, i: int) -> RunRequest:  # d: the data set's index in the stored spec
+            return dataclasses.replace(build_request(spec, samples, kept[d], i), dataset_index=d)
+
         pending = deque(
-            (d, i) for d in range(len(spec.datasets)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
+            (d, i) for d in range(len(kept)) for i in range(spec.runs_per_dataset) if (d, i) not in store.done
         )
         executed = len(pending)
         start = time.perf_counter()
-        per_run = None
-        # once here, before the workers start, so they load the compiled code instead of compiling it
-        if pending and run_function.compiles:
+        # once here, before the workers start, so they load the compiled code instead of compiling it; workers
+        # already started hold it
+        if pending and run_function.compiles and not cluster.started:
             announce("compile",
                      f"{spec.name}: compiling the model (docs/performance.md: minutes on a fresh install, seconds "
-                     f"once cached), then timing one run (within its {spec.execution.timeout:g} s budget)")
-            per_run = _compile_and_time(run_function, build_request(spec, samples, *pending[0]))
-            if per_run is None:
-                announce("compile", f"{spec.name}: the timed run did not end ok within its budget; duration unknown")
-        # One cluster for the runs and the margins: started when first needed, closed at the end.
-        with contextlib.ExitStack() as cluster:
-            client = None
-            quiet = _QuietStop()
-            cluster.callback(quiet.restore)  # last: once the client and the cluster are closed
-            if pending:
-                slots = 1 if scheduler else workers
-                announce("cluster start",
-                         f"{spec.name}: starting {'the client' if scheduler else f'{workers} worker processes'} "
-                         "(seconds: docs/performance.md)")
-                with children_ignore_stop_signals():  # the workers (and their sandboxes) leave Ctrl-C to the driver
-                    client = cluster.enter_context(_client(workers, scheduler))
-                cluster.push(quiet.on_exit)  # first: a stop silences the close that follows
-                expected = (f"about {len(pending) * per_run / slots / 60:.1f} min on an idle machine" if per_run
-                            else "see the bar")
-                announce("runs", f"{spec.name}: {len(pending)} runs ({expected})")
-                with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
-                    _execute(client, spec, samples, pending, run_function, store, bar)
-            attrs = {"run_function": run_function_name(run_function), **run_function.results_attributes(spec)}
-            announce("margins", f"{spec.name}: the model's per-run variables (the bench: loop margins) of "
-                     f"{len(spec.datasets) * spec.runs_per_dataset} runs" + (" on the cluster" if client else ""))
-            margins = run_function.margin_variables(
-                spec, lambda d, i: build_request(spec, samples, d, i),
-                (lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None)
-            announce("assembly", f"{spec.name}: writing results.nc")
-            results = store.assemble(samples,
-                                     {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
-                                      "workers": scheduler or workers}, attrs, margins)
-            if client is not None and scheduler is None:
-                announce("cluster stop", f"{spec.name}: stopping the {workers} worker processes")
-    return results
+                     f"once cached), then one run within its {spec.execution.timeout:g} s budget")
+            if not _compile_and_run(run_function, request_of(*pending[0])):
+                announce("compile", f"{spec.name}: the run did not end ok within its budget")
+        client = None
+        if pending:
+            client = cluster.client(spec.name)
+            cost = estimate(stored, run_function, workers=cluster.slots, runs=len(pending))
+            announce("runs", f"{spec.name}: {cost.runs} runs ({cost.duration()})")
+            with tqdm(total=len(pending), disable=not progress, unit="run", desc=spec.name) as bar:
+                _execute(client, stored, request_of, pending, run_function, store, bar)
+        elif cluster.started:
+            client = cluster.client(spec.name)
+        attrs = {"run_function": run_function_name(run_function), **run_function.results_attributes(stored)}
+        if stored is not spec:
+            attrs["dataset_seed_indices"] = json.dumps({spec.datasets[k].name: spec.seed_index(k) for k in kept})
+        announce("margins", f"{spec.name}: the model's per-run variables (the bench: loop margins) of "
+                 f"{len(kept) * spec.runs_per_dataset} runs" + (" on the cluster" if client else ""))
+        on_cluster = (lambda f, chunks: client.gather(client.map(f, chunks, pure=False))) if client else None
+        margins = run_function.margin_variables(stored, request_of, on_cluster)
+        announce("assembly", f"{spec.name}: writing results.nc")
+        return store.assemble(samples[kept],
+                              {"executed_runs": executed, "execution_wall_time": time.perf_counter() - start,
+                               "workers": cluster.scheduler or cluster.workers}, attrs, margins)
 
 
-def _execute(client: Client, spec, samples, pending: deque, run_function, store: ChunkStore, bar) -> None:
+def _execute(client: Client, spec, request_of, pending: deque, run_function, store: ChunkStore, bar) -> None:
     slots = max(1, sum(client.nthreads().values()))
     run_times: list[float] = []
     in_flight: dict = {}
@@ -399,7 +481,7 @@ def _execute(client: Client, spec, samples, pending: deque, run_function, store:
         d = pending[0][0]
         chunk = []
         while pending and len(chunk) < size and pending[0][0] == d:
-            chunk.append(build_request(spec, samples, *pending.popleft()))
+            chunk.append(request_of(*pending.popleft()))
         return chunk
 
     def refill() -> None:

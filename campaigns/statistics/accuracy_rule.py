@@ -4,8 +4,9 @@ A configuration (a step, a method, a fidelity level) is **accepted** against the
 set and every feature, over the same sampled runs (paired: run i has the same parameters and the same noise under
 both, so their difference is the configuration's effect alone):
 
-* the 95 % Student-t interval of the mean paired shift (candidate - reference) lies within
-  ±:data:`MEAN_SHIFT_TOLERANCE`;
+* the 95 % Student-t interval of the mean paired shift (candidate - reference) lies within the tolerance of the
+  feature's unit (:data:`MEAN_SHIFT_TOLERANCES`: ±:data:`MEAN_SHIFT_TOLERANCE` for a length,
+  ±:data:`TORQUE_SHIFT_TOLERANCE` for a torque);
 * the 95 % interval of the standard-deviation ratio (candidate / reference) lies within 1 ± :data:`SD_RATIO_TOLERANCE`;
 * every verdict of ``analysis.nc`` (the requirement verdicts, the control-limit verdicts) is unchanged, and so is the
   top-:data:`TOP_RANKED` sensitivity ranking of every data set and feature;
@@ -54,8 +55,56 @@ TOP_RANKED = 3
 REFERENCE_SOLVER = {"integrator": "rk4", "dt": 15.625e-6, "fidelity": "full"}
 
 
-def _um(value: float) -> str:
-    return f"{value * 1e6:+.4f} µm"
+#: N m: half a tenth of the change of the true drag torque (Eq. 7.85) that the 200 N preload loss the demo's preload
+#: sweep must detect causes (its requirement, campaigns/specs/demo.toml), from 1000 N to 800 N under data set 5
+#: conditions (the change: docs/fidelity.md, "The tolerance of a torque"). As for a length, a shift of the mean at most
+#: this large moves no detection threshold by more than 5 % of the requirement (10 N of preload loss).
+TORQUE_SHIFT_TOLERANCE = 1.43e-3
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """The mean-shift tolerance of features in one SI unit, and how statements print them (``shown``, ``scale``:
+    one display unit for every figure of that unit, four decimals)."""
+
+    value: float
+    shown: str
+    scale: float
+    source: str
+
+    def text(self, value: float, signed: bool = True) -> str:
+        """``value`` [SI] in the display unit, e.g. ``+0.0100 µm``."""
+        return f"{value * self.scale:{'+' if signed else ''}.4f} {self.shown}"
+
+
+#: The one table of mean-shift tolerances, by the feature's SI unit (its ``units`` attribute in ``results.nc``): the
+#: feature's unit decides its tolerance and the unit its statements print.
+MEAN_SHIFT_TOLERANCES = {
+    "m": Tolerance(MEAN_SHIFT_TOLERANCE, "µm", 1e6, "5 % of the 1 µm backlash requirement (Table 9.3)"),
+    "N m": Tolerance(TORQUE_SHIFT_TOLERANCE, "mN·m", 1e3,
+                     "5 % of the drag-torque change of the 200 N preload-loss requirement (docs/fidelity.md)"),
+}
+
+
+def tolerance_for(unit: str) -> Tolerance:
+    """The :data:`MEAN_SHIFT_TOLERANCES` entry of an SI unit.
+
+    Raises
+    ------
+    ValueError
+        For a unit the table has no tolerance for, naming the units it has.
+    """
+    if unit not in MEAN_SHIFT_TOLERANCES:
+        raise ValueError(f"no mean-shift tolerance for features in {unit!r}; the accuracy rule has tolerances for "
+                         f"{', '.join(repr(u) for u in MEAN_SHIFT_TOLERANCES)} "
+                         "(campaigns.statistics.accuracy_rule.MEAN_SHIFT_TOLERANCES)")
+    return MEAN_SHIFT_TOLERANCES[unit]
+
+
+def _scaled(tolerance: float, unit: str) -> Tolerance:
+    """The display of ``unit`` with another tolerance value (a caller's own, e.g. a study's)."""
+    shown = tolerance_for(unit)
+    return Tolerance(tolerance, shown.shown, shown.scale, shown.source)
 
 
 def pairs_for_tolerance(sd_of_differences: float, tolerance: float = MEAN_SHIFT_TOLERANCE,
@@ -67,21 +116,24 @@ def pairs_for_tolerance(sd_of_differences: float, tolerance: float = MEAN_SHIFT_
 
 
 def mean_shift_verdict(differences, *, tolerance: float = MEAN_SHIFT_TOLERANCE, min_pairs: int = MIN_PAIRED_RUNS,
-                       confidence: float = CONFIDENCE) -> Verdict:
-    """Is the mean of paired differences (candidate - reference, [m]) within ±``tolerance``?
+                       confidence: float = CONFIDENCE, unit: str = "m") -> Verdict:
+    """Is the mean of paired differences (candidate - reference, in SI ``unit``) within ±``tolerance``?
+
+    The statement prints the figures in the display unit of ``unit`` (:data:`MEAN_SHIFT_TOLERANCES`).
 
     Student-t interval ``mean ± t(n-1) s / sqrt(n)``: ``met`` when it lies within ±tolerance (equivalence shown),
     ``not met`` when it lies wholly beyond +tolerance or below -tolerance, ``undetermined`` otherwise (then the
     statement says from how many paired runs a zero shift with this spread would be met), ``insufficient data``
     below ``min_pairs`` finite pairs (at least 2). Non-finite differences are left out.
     """
+    shown = _scaled(tolerance, unit)
     d = np.asarray(differences, dtype=float)
     d = d[np.isfinite(d)]
     n, needed = int(d.size), max(min_pairs, 2)
     if n < needed:
         return Verdict("insufficient data", math.nan, math.nan, math.nan, n,
                        f"insufficient data: {n} paired run{'s' if n != 1 else ''}, at least {needed} needed "
-                       f"(tolerance ±{tolerance * 1e6:.4f} µm)")
+                       f"(tolerance ±{shown.text(tolerance, False)})")
     mean, sd = float(d.mean()), float(d.std(ddof=1))
     half = float(t.ppf(0.5 + confidence / 2, n - 1) * sd / math.sqrt(n))
     lower, upper = mean - half, mean + half
@@ -94,8 +146,8 @@ def mean_shift_verdict(differences, *, tolerance: float = MEAN_SHIFT_TOLERANCE, 
     more = (f"; at this spread a zero shift is resolved from {pairs_for_tolerance(sd, tolerance, confidence)} "
             "paired runs" if verdict == "undetermined" else "")
     return Verdict(verdict, mean, lower, upper, n,
-                   f"{verdict}: mean shift {_um(mean)} ({confidence * 100:g} % t interval {_um(lower)} to "
-                   f"{_um(upper)}, n = {n}; tolerance ±{tolerance * 1e6:.4f} µm{more})")
+                   f"{verdict}: mean shift {shown.text(mean)} ({confidence * 100:g} % t interval {shown.text(lower)} "
+                   f"to {shown.text(upper)}, n = {n}; tolerance ±{shown.text(tolerance, False)}{more})")
 
 
 def _leave_one_out_sum_of_squares(x: np.ndarray) -> np.ndarray:
@@ -106,7 +158,7 @@ def _leave_one_out_sum_of_squares(x: np.ndarray) -> np.ndarray:
 
 
 def sd_ratio_verdict(candidate, reference, *, tolerance: float = SD_RATIO_TOLERANCE,
-                     min_pairs: int = MIN_PAIRED_RUNS, confidence: float = CONFIDENCE) -> Verdict:
+                     min_pairs: int = MIN_PAIRED_RUNS, confidence: float = CONFIDENCE, unit: str = "m") -> Verdict:
     """Is the standard deviation of the candidate's runs within ``1 ± tolerance`` of the reference's (paired runs)?
 
     The interval is the jackknife interval of the log variance ratio (Miller 1968, "Jackknifing variances", Ann. Math.
@@ -119,6 +171,7 @@ def sd_ratio_verdict(candidate, reference, *, tolerance: float = SD_RATIO_TOLERA
     data`` below ``min_pairs`` (at least 3) finite pairs or when one run carries all the spread (no jackknife). A
     feature without spread in both samples is ``met`` (unchanged), without spread in one only ``not met``.
     """
+    sd = tolerance_for(unit)  # the standard deviations printed in the feature's display unit
     c, r = np.asarray(candidate, dtype=float), np.asarray(reference, dtype=float)
     both = np.isfinite(c) & np.isfinite(r)
     c, r = c[both], r[both]
@@ -132,8 +185,8 @@ def sd_ratio_verdict(candidate, reference, *, tolerance: float = SD_RATIO_TOLERA
     if sd_c == 0 or sd_r == 0:  # a feature the sampled values do not move (in either: its spread is unchanged)
         verdict, ratio = ("met", 1.0) if sd_c == sd_r else ("not met", math.inf if sd_r == 0 else 0.0)
         return Verdict(verdict, ratio, ratio, ratio, n,
-                       f"{verdict}: sd {sd_c * 1e6:.4f} against {sd_r * 1e6:.4f} µm (n = {n}; tolerance {bounds} "
-                       "of the reference's)")
+                       f"{verdict}: sd {sd.text(sd_c, False)} against {sd.text(sd_r, False)} (n = {n}; tolerance "
+                       f"{bounds} of the reference's)")
     ss_c, ss_r = _leave_one_out_sum_of_squares(c), _leave_one_out_sum_of_squares(r)
     if not (np.all(ss_c > 0) and np.all(ss_r > 0)):
         return Verdict("insufficient data", math.nan, math.nan, math.nan, n,
@@ -151,8 +204,8 @@ def sd_ratio_verdict(candidate, reference, *, tolerance: float = SD_RATIO_TOLERA
     else:
         verdict = "undetermined"
     return Verdict(verdict, ratio, lower, upper, n,
-                   f"{verdict}: sd ratio {ratio:.4f} (sd {sd_c * 1e6:.4f} against {sd_r * 1e6:.4f} "
-                   f"µm; {confidence * 100:g} % jackknife interval {lower:.4f} to {upper:.4f}, n = {n}; "
+                   f"{verdict}: sd ratio {ratio:.4f} (sd {sd.text(sd_c, False)} against {sd.text(sd_r, False)}; "
+                   f"{confidence * 100:g} % jackknife interval {lower:.4f} to {upper:.4f}, n = {n}; "
                    f"tolerance {bounds})")
 
 
@@ -178,14 +231,18 @@ def _body(verdict: Verdict) -> str:
     return verdict.statement.removeprefix(f"{verdict.verdict}: ")
 
 
-def paired_verdict(candidate, reference, *, mean_tolerance: float = MEAN_SHIFT_TOLERANCE,
+def paired_verdict(candidate, reference, *, mean_tolerance: float | None = None,
                    sd_tolerance: float = SD_RATIO_TOLERANCE, min_pairs: int = MIN_PAIRED_RUNS,
-                   confidence: float = CONFIDENCE) -> PairedVerdict:
-    """The rule on one data set and feature: the mean shift and the sd ratio over the pairs finite in both [m]."""
+                   confidence: float = CONFIDENCE, unit: str = "m") -> PairedVerdict:
+    """The rule on one data set and feature: the mean shift and the sd ratio over the pairs finite in both (SI
+    ``unit``; ``mean_tolerance`` None: the unit's, :data:`MEAN_SHIFT_TOLERANCES`)."""
+    mean_tolerance = tolerance_for(unit).value if mean_tolerance is None else mean_tolerance
     c, r = np.asarray(candidate, dtype=float), np.asarray(reference, dtype=float)
     both = np.isfinite(c) & np.isfinite(r)
-    mean = mean_shift_verdict(c[both] - r[both], tolerance=mean_tolerance, min_pairs=min_pairs, confidence=confidence)
-    sd = sd_ratio_verdict(c[both], r[both], tolerance=sd_tolerance, min_pairs=min_pairs, confidence=confidence)
+    mean = mean_shift_verdict(c[both] - r[both], tolerance=mean_tolerance, min_pairs=min_pairs, confidence=confidence,
+                              unit=unit)
+    sd = sd_ratio_verdict(c[both], r[both], tolerance=sd_tolerance, min_pairs=min_pairs, confidence=confidence,
+                          unit=unit)
     return PairedVerdict(worst_verdict([mean.verdict, sd.verdict]), mean, sd)
 
 
@@ -263,7 +320,7 @@ def _analysis_checks(judged: xr.Dataset, candidate: xr.Dataset, reference: xr.Da
 
 def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
                    candidate_analysis: xr.Dataset | None = None, reference_analysis: xr.Dataset | None = None,
-                   min_pairs: int = MIN_PAIRED_RUNS, mean_tolerance: float = MEAN_SHIFT_TOLERANCE,
+                   min_pairs: int = MIN_PAIRED_RUNS, mean_tolerance: float | None = None,
                    sd_tolerance: float = SD_RATIO_TOLERANCE, confidence: float = CONFIDENCE) -> xr.Dataset:
     """The rule, applied once: a candidate campaign against the reference campaign over the same sampled runs.
 
@@ -278,6 +335,9 @@ def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
         (the fidelity audit, whose few runs have no analysis, judges the mean shift and the sd ratio only).
     min_pairs : int
         Fewest paired runs (ok in both) per data set for any verdict.
+    mean_tolerance : float, optional
+        The mean-shift tolerance of every feature (in its SI unit); default: each feature's by its unit, the
+        reference's ``units`` attribute (:data:`MEAN_SHIFT_TOLERANCES`; a unit it lacks is a ``ValueError``).
 
     Returns
     -------
@@ -290,8 +350,11 @@ def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
     """
     features = [str(f) for f in features]
     names = [str(d) for d in reference.dataset.values]
-    cells = {(d, f): paired_verdict(*paired_values(candidate, reference, d, f), mean_tolerance=mean_tolerance,
-                                    sd_tolerance=sd_tolerance, min_pairs=min_pairs, confidence=confidence)
+    units = {f: str(reference[f].attrs.get("units", "m")) for f in features}
+    tolerances = {f: tolerance_for(units[f]).value if mean_tolerance is None else mean_tolerance for f in features}
+    cells = {(d, f): paired_verdict(*paired_values(candidate, reference, d, f), mean_tolerance=tolerances[f],
+                                    sd_tolerance=sd_tolerance, min_pairs=min_pairs, confidence=confidence,
+                                    unit=units[f])
              for d in names for f in features}
     dims, shape = ("dataset", "feature"), (len(names), len(features))
 
@@ -303,13 +366,20 @@ def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
         {
             "n": (dims, grid(lambda c: c.mean.n, np.int32), {"units": "1", "long_name": "paired runs ok in both"}),
             "mean_shift": (dims, grid(lambda c: c.mean.estimate),
-                           {"units": "m", "long_name": "mean paired shift, candidate - reference"}),
+                           {"units": "feature_unit", "long_name": "mean paired shift, candidate - reference"}),
             "mean_shift_lower": (dims, grid(lambda c: c.mean.lower),
-                                 {"units": "m", "long_name": f"mean paired shift, {interval} (Student t), lower"}),
+                                 {"units": "feature_unit",
+                                  "long_name": f"mean paired shift, {interval} (Student t), lower"}),
             "mean_shift_upper": (dims, grid(lambda c: c.mean.upper),
-                                 {"units": "m", "long_name": f"mean paired shift, {interval} (Student t), upper"}),
+                                 {"units": "feature_unit",
+                                  "long_name": f"mean paired shift, {interval} (Student t), upper"}),
             "mean_shift_verdict": (dims, grid(lambda c: c.mean.verdict, object),
-                                   {"long_name": f"mean shift within ±{mean_tolerance:g} m: " + " / ".join(VERDICTS)}),
+                                   {"long_name": "mean shift within ±mean_shift_tolerance: " + " / ".join(VERDICTS)}),
+            "feature_unit": ("feature", np.array([units[f] for f in features], dtype=object),
+                             {"long_name": "SI unit of the feature, of its mean shift and its tolerance"}),
+            "mean_shift_tolerance": ("feature", np.array([tolerances[f] for f in features]),
+                                     {"units": "feature_unit", "long_name": "mean-shift tolerance of the feature "
+                                      "(campaigns.statistics.accuracy_rule.MEAN_SHIFT_TOLERANCES by its unit)"}),
             "sd_ratio": (dims, grid(lambda c: c.sd.estimate),
                          {"units": "1", "long_name": "standard deviation ratio, candidate / reference"}),
             "sd_ratio_lower": (dims, grid(lambda c: c.sd.lower),
@@ -341,8 +411,7 @@ def judge_accuracy(candidate: xr.Dataset, reference: xr.Dataset, features, *,
     else:
         summary = ", ".join(named)
     judged.attrs.update(
-        verdict=worst, statement=f"{worst}: {summary}",
-        mean_shift_tolerance=mean_tolerance, sd_ratio_tolerance=sd_tolerance, min_paired_runs=min_pairs,
+        verdict=worst, statement=f"{worst}: {summary}", sd_ratio_tolerance=sd_tolerance, min_paired_runs=min_pairs,
         confidence=confidence, top_ranked=TOP_RANKED,
     )
     return judged

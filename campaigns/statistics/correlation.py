@@ -16,6 +16,9 @@ from numerics.jit import KERNEL
 
 #: Residual sum of squares of ranks, relative to n^3, below which a PRCC regression counts as exact (round-off only).
 _EXPLAINED = 1e-18
+#: Runs up to which a resample's rank sums are exact in 64-bit integers and doubles (:func:`_centred_ranks`: four
+#: times the sum of squares is at most 4 n**3 < 2**53).
+_EXACT_RANKS = 100_000
 #: numpy's pairwise-summation block (``PW_BLOCKSIZE``): below it a sum is eight interleaved partial sums.
 _PAIRWISE_BLOCK = 128
 
@@ -51,21 +54,6 @@ def bootstrap_correlation(x, y, method: str = "spearman", *, n_boot: int = 1000,
     idx = np.random.default_rng(seed).integers(0, len(x), (n_boot, len(x)))
     estimate, lower, upper = bootstrap_correlations(x[None, :], y, idx, method, confidence)
     return float(estimate[0]), float(lower[0]), float(upper[0])
-
-
-def resampled_ranks(v: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """``scipy.stats.rankdata(v[idx], axis=-1)`` (average ranks) without sorting every resample.
-
-    A resample's rank of a value is the number of resampled values below it plus half of
-    (its own count + 1): cumulative bootstrap counts over the values sorted once.
-    """
-    values, group = np.unique(v, return_inverse=True)
-    out = np.empty(idx.shape)
-    counts, rank = np.empty(len(values)), np.empty(len(values))
-    for b in range(idx.shape[0]):
-        _ranks_of_resample(group, idx[b], counts, rank)
-        out[b] = rank[group[idx[b]]]
-    return out
 
 
 def _pairwise_plan(n: int) -> np.ndarray:
@@ -135,106 +123,167 @@ def _pairwise_sum(a, plan, partial):
 
 
 @numba.njit(**KERNEL)
-def _ranks_of_resample(group, resample, counts, rank):
-    """Each distinct value's count in one resample (indices ``resample`` into values numbered by ``group``) and its
-    average rank there: whole and half numbers, exact in any order of summation."""
-    counts[:] = 0.0
+def _resample_counts(resample, multiplicity):
+    """How often each run appears in one resample (indices ``resample``)."""
+    multiplicity[:] = 0
     for i in range(len(resample)):
-        counts[group[resample[i]]] += 1.0
-    below = 0.0
-    for k in range(len(counts)):
-        below += counts[k]
-        rank[k] = below - 0.5 * (counts[k] - 1.0)
+        multiplicity[resample[i]] += 1
 
 
 @numba.njit(**KERNEL)
-def _standardized_resample(values, group, resample, spearman, weights, weighted, counts, rank, row, work, plan,
-                           partial):
-    """One resample of ``values`` (or, ``spearman``, of their ranks) into ``row``, centred and scaled to unit norm
-    (NaN without variance) as numpy computes ``c = v - mean(v); c / sqrt(sum(c * c))`` (:func:`_pairwise_sum`;
-    ``work``: one row of scratch), times ``weights`` where ``weighted`` (the other resample of a correlation).
+def _centred_ranks(order, starts, n_values, multiplicity, counts, twice):
+    """Each distinct value's count in a resample (``multiplicity`` per run; ``order``: the runs sorted by value,
+    ``starts``: where each distinct value begins in it) and twice its average rank less the mean rank
+    ``(n + 1) / 2``, into ``counts`` and ``twice``; returns ``sum(counts * twice**2)``, four times the ranks' sum of
+    squares about their mean.
 
-    Ranks take a shorter way to the same bits: a resample's ranks are whole or half numbers summing to
-    ``n (n + 1) / 2``, so its mean, centred ranks and sum of squares are exact in any order of summation and come
-    from the counts of each distinct value (``rank`` then holds each value's standardized rank).
+    A resample's average rank of a value is the number of resampled values below it plus half of (its own count
+    + 1); ranks are whole or half numbers summing to ``n (n + 1) / 2``, so their mean is ``(n + 1) / 2`` and twice a
+    centred rank is an integer. In integers these sums are exact, as the same sums of whole, half and quarter
+    numbers are in floating point in any order (below 2**53: n**3 for n runs): numpy's bits, without a chain of
+    dependent floating additions per value.
     """
+    n = len(multiplicity)
+    if n_values == n:  # no ties: one run per value
+        for k in range(n):
+            counts[k] = multiplicity[order[k]]
+    else:
+        for k in range(n_values):
+            c = 0
+            for s in range(starts[k], starts[k + 1]):
+                c += multiplicity[order[s]]
+            counts[k] = c
+    below = 0
+    for k in range(n_values):
+        twice[k] = 2 * below + counts[k] - n
+        below += counts[k]
+    squares = 0
+    for k in range(n_values):
+        squares += counts[k] * twice[k] * twice[k]
+    return squares
+
+
+@numba.njit(**KERNEL)
+def _standardized_ranks(order, starts, n_values, multiplicity, counts, twice, scaled, by_run):
+    """Each run's rank in one resample, centred and scaled to unit norm, into ``by_run`` (NaN without variance): the
+    ranks' ``c = r - mean(r); c / sqrt(sum(c * c))`` as numpy computes it, from :func:`_centred_ranks` (``counts``,
+    ``twice``, ``scaled``: scratch per distinct value)."""
+    norm = np.sqrt(_centred_ranks(order, starts, n_values, multiplicity, counts, twice) * 0.25)
+    for k in range(n_values):
+        scaled[k] = (0.5 * twice[k]) / norm
+    if n_values == len(multiplicity):
+        for k in range(n_values):
+            by_run[order[k]] = scaled[k]
+    else:
+        for k in range(n_values):
+            for s in range(starts[k], starts[k + 1]):
+                by_run[order[s]] = scaled[k]
+
+
+@numba.njit(**KERNEL)
+def _centred_resample(values, resample, row, work, plan, partial):
+    """One resample of ``values`` into ``row``, less its mean, as numpy computes ``c = v - mean(v)``; returns
+    ``sqrt(sum(c * c))`` (:func:`_pairwise_sum`; ``work``: one row of scratch)."""
     n = len(resample)
-    if spearman:
-        _ranks_of_resample(group, resample, counts, rank)
-        total = 0.0
-        for k in range(len(counts)):
-            total += counts[k] * rank[k]
-        mean = total / n
-        squares = 0.0
-        for k in range(len(counts)):
-            rank[k] = rank[k] - mean
-            squares += counts[k] * (rank[k] * rank[k])
-        norm = np.sqrt(squares)
-        for k in range(len(counts)):
-            rank[k] = rank[k] / norm
-        for i in range(n):
-            row[i] = rank[group[resample[i]]] * weights[i] if weighted else rank[group[resample[i]]]
-        return
     for i in range(n):
         row[i] = values[resample[i]]
     mean = _pairwise_sum(row, plan, partial) / n
     for i in range(n):
         row[i] = row[i] - mean
-        work[i] = row[i] * row[i]
-    norm = np.sqrt(_pairwise_sum(work, plan, partial))
     for i in range(n):
-        row[i] = (row[i] / norm) * weights[i] if weighted else row[i] / norm
+        work[i] = row[i] * row[i]
+    return np.sqrt(_pairwise_sum(work, plan, partial))
 
 
-@numba.njit(**KERNEL)
-def _bootstrap_rows(values, group, n_values, idx, spearman, plan, standardized):
-    """Every resample (row of ``idx``) standardized (:func:`_standardized_resample`) into ``standardized``."""
-    counts, rank, work, unweighted = np.empty(n_values), np.empty(n_values), np.empty(idx.shape[1]), np.empty(0)
-    partial = np.empty(plan.shape[0])
-    for b in range(idx.shape[0]):
-        _standardized_resample(values, group, idx[b], spearman, unweighted, False, counts, rank, standardized[b], work,
-                               plan, partial)
-
-
-@numba.njit(**KERNEL)
-def _bootstrap_dots(values, group, n_values, idx, spearman, plan, yb, out):
-    """``out[b]``: the correlation of resample ``b`` of ``values`` with the standardized resample ``yb[b]``, as numpy
-    sums ``sum(standardized(x[b]) * yb[b])``; one row at a time, in cache."""
+@numba.njit(nogil=True, **KERNEL)
+def _bootstrap_rows(idx, standardized, values, order, starts, n_values, spearman, plan):
+    """Every resample (row of ``idx``) of ``values`` (or, ``spearman``, of their ranks: ``order``, ``starts``,
+    ``n_values`` from :func:`_numbered`) centred and scaled to unit norm into ``standardized``."""
     n = idx.shape[1]
-    counts, rank, row, work = np.empty(n_values), np.empty(n_values), np.empty(n), np.empty(n)
+    multiplicity, counts, twice = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    scaled, by_run, work = np.empty(n), np.empty(n), np.empty(n)
     partial = np.empty(plan.shape[0])
     for b in range(idx.shape[0]):
-        _standardized_resample(values, group, idx[b], spearman, yb[b], True, counts, rank, row, work, plan, partial)
-        out[b] = _pairwise_sum(row, plan, partial)
+        row = standardized[b]
+        if spearman:
+            _resample_counts(idx[b], multiplicity)
+            _standardized_ranks(order, starts, n_values, multiplicity, counts, twice, scaled, by_run)
+            for i in range(n):
+                row[i] = by_run[idx[b, i]]
+        else:
+            norm = _centred_resample(values, idx[b], row, work, plan, partial)
+            for i in range(n):
+                row[i] = row[i] / norm
+
+
+@numba.njit(nogil=True, **KERNEL)
+def _bootstrap_dots(idx, yb, out, X, orders, starts, n_values, spearman, plan):
+    """``out[b, j]``: the correlation of resample ``b`` of row ``j`` of ``X`` with the standardized resample
+    ``yb[b]``, as numpy sums ``sum(standardized(x[b]) * yb[b])``; resample by resample, so that a resample's indices
+    and ``yb[b]`` stay in cache for every row."""
+    p, n = X.shape
+    multiplicity, counts, twice = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    scaled, by_run, row, work = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    partial = np.empty(plan.shape[0])
+    for b in range(idx.shape[0]):
+        resample, weights = idx[b], yb[b]
+        if spearman:
+            _resample_counts(resample, multiplicity)
+        for j in range(p):
+            if spearman:
+                _standardized_ranks(orders[j], starts[j], n_values[j], multiplicity, counts, twice, scaled, by_run)
+                for i in range(n):
+                    work[i] = by_run[resample[i]] * weights[i]
+            else:
+                norm = _centred_resample(X[j], resample, row, work, plan, partial)
+                for i in range(n):
+                    work[i] = (row[i] / norm) * weights[i]
+            out[b, j] = _pairwise_sum(work, plan, partial)
+
+
+def _numbered(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The runs of ``v`` sorted by value, the position in that order where each distinct value begins (then
+    ``len(v)``), and the number of distinct values: what :func:`_centred_ranks` counts a resample by."""
+    order = np.argsort(v, kind="stable")
+    ordered = v[order]
+    first = np.flatnonzero(np.concatenate([[True], ordered[1:] != ordered[:-1]]))
+    return order.astype(np.int64), np.append(first, len(v)).astype(np.int64), len(first)
 
 
 def bootstrap_correlations(X: np.ndarray, y: np.ndarray, idx: np.ndarray, method: str, confidence: float):
     """Estimates and percentile CIs for each row of ``X`` (shape (p, n)) against ``y``, shared resamples ``idx``.
 
     Each resample's correlation is the dot product of the two resampled rows centred and scaled to unit norm
-    (Spearman: of their ranks, :func:`resampled_ranks`), in compiled loops that sum as numpy sums
-    (:func:`_pairwise_sum`): numpy's numbers without an (n_boot, n) temporary per step.
+    (Spearman: of their ranks, :func:`_centred_ranks`), in compiled loops that sum as numpy sums
+    (:func:`_pairwise_sum`): numpy's numbers without an (n_boot, n) temporary per step. The loops release the GIL,
+    so that callers may run several bootstraps on threads.
     """
     spearman = method == "spearman"
     estimate = _pearson(stats.rankdata(X, axis=-1), stats.rankdata(y)[None, :]) if spearman else _pearson(X, y[None, :])
     idx = np.ascontiguousarray(idx, dtype=np.int64)
-
-    def numbered(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-        v = np.ascontiguousarray(v, dtype=float)
-        if not spearman:
-            return v, np.zeros(1, dtype=np.int64), 1
-        values, group = np.unique(v, return_inverse=True)
-        return v, group.astype(np.int64), len(values)
-
-    yb = np.empty(idx.shape)
-    plan = _pairwise_plan(idx.shape[1])
-    _bootstrap_rows(*numbered(y), idx, spearman, plan, yb)  # once, shared by every parameter
+    X, y = np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float)
+    p, n = X.shape
+    if spearman and n > _EXACT_RANKS:
+        raise ValueError(f"bootstrap_correlations: {n} runs; Spearman takes at most {_EXACT_RANKS} (its rank sums "
+                         "stay exact)")
+    ranked = n if spearman else 0
+    orders, starts = np.zeros((p, ranked), np.int64), np.zeros((p, ranked + 1), np.int64)
+    n_values = np.zeros(p, np.int64)
+    if spearman:
+        for j, x in enumerate(X):
+            orders[j], first, n_values[j] = _numbered(x)
+            starts[j, :len(first)] = first
+        y_numbered = _numbered(y)
+    else:
+        y_numbered = (orders[:0].ravel(), starts[:0].ravel(), 0)
+    plan = _pairwise_plan(n)
+    yb, boot = np.empty(idx.shape), np.empty((idx.shape[0], p))
+    _bootstrap_rows(idx, yb, y, *y_numbered, spearman, plan)
+    _bootstrap_dots(idx, yb, boot, X, orders, starts, n_values, spearman, plan)
     alpha = 0.5 * (1.0 - confidence)
-    lower, upper = np.full(len(X), math.nan), np.full(len(X), math.nan)
-    boot = np.empty(idx.shape[0])
-    for j, x in enumerate(X):
-        _bootstrap_dots(*numbered(x), idx, spearman, plan, yb, boot)
-        finite = np.clip(boot, -1.0, 1.0)
+    lower, upper = np.full(p, math.nan), np.full(p, math.nan)
+    for j in range(p):
+        finite = np.clip(boot[:, j], -1.0, 1.0)
         finite = finite[np.isfinite(finite)]  # resamples without variance have no correlation
         if len(finite):
             lower[j], upper[j] = np.quantile(finite, [alpha, 1.0 - alpha])

@@ -15,15 +15,18 @@ from reports.phrases import statement_tone
 DEFAULT_INTEGRATOR = "rk4"
 
 #: One feature's part of a ``fidelity_audit_<data set>`` attribute (campaigns.bench.fidelity_audit.summary_attrs; the
-#: features are separated by " | "): its verdict statement, shown verbatim, then the descriptive figures.
+#: features are separated by " | "): its verdict statement, shown verbatim, then the descriptive figures, each with
+#: the display unit of the feature's unit (µm for a length, mN·m for a torque).
 _AUDIT_LINE = re.compile(r"^(?P<feature>\w+): (?P<statement>(met|not met|undetermined|insufficient data): .+); "
-                         r"max paired (?P<paired>[-+0-9.e]+|nan) µm, MC error (?P<error>[-+0-9.e]+|nan) µm, "
+                         r"max paired (?P<paired>(?:[-+0-9.e]+|nan) \S+), MC error (?P<error>(?:[-+0-9.e]+|nan) \S+), "
                          r"KS p (?P<p>[-+0-9.e]+|nan)$")
+#: The start of the statement of a data set the audit did not re-run (campaigns.bench.fidelity_audit.IDENTICAL).
+_IDENTICAL = "met: identical:"
 
 
-def _microns(text: str) -> str:
-    """An audit figure as stored (µm, four decimals), in one unit down the column."""
-    return f"{text} µm" if text not in ("nan", "") else "–"
+def _figure(text: str) -> str:
+    """An audit figure as stored (four decimals and its unit); a missing one as an en dash."""
+    return "–" if text.startswith("nan") or not text else text
 
 
 def build(b: Builder):
@@ -39,13 +42,18 @@ def build(b: Builder):
         "level the scene and its outputs allow (twin/fidelity/rules.toml), where that level measurably pays: a scene "
         "whose stored speedup of the automatic levels is below the rules' min_lane_speedup runs the full model "
         "(twin/fidelity/speed.toml), and a fault sweep runs one set of levels, its most detailed member's. A data "
-        "set on the full model meets its audit trivially (the same model twice). The audit re-runs the first "
-        + (f"{runs} " if runs else "")
-        + "runs of every data set at full fidelity with the same parameters and noise and judges each feature by "
-        "the paired part of the accuracy rule (docs/accuracy.md): met when the 95 % Student-t interval of the mean "
-        "shift (automatic minus full) lies within ±0.05 µm and the 95 % interval of the ratio of standard deviations "
-        "within 1 ± 10 %, not met when either interval lies wholly outside, undetermined otherwise, insufficient "
-        "data below 5 paired runs. At a campaign's few audit runs this is a screen; the rule accepts a default from "
+        "set whose every run took the full model's levels is not re-run: its audit pairs would be identical bit for "
+        "bit, and it is marked \"met: identical: the automatic choice is the full model\". The audit re-runs the "
+        "first " + (f"{runs} " if runs and runs != "0" else "")
+        + "runs of each data set the automatic choice simplifies at full fidelity with the same parameters and noise "
+        "(the audit's budget, fidelity_audit.runs per data set of the campaign, shared among those data sets) and "
+        "judges each feature by the paired part of the accuracy rule (docs/accuracy.md): met when the 95 % "
+        "Student-t interval of the mean shift (automatic minus full) lies within the tolerance of the feature's unit "
+        "(±0.05 µm for a length, 5 % of the 1 µm backlash requirement; ±1.43 mN·m for a torque, 5 % of the "
+        "drag-torque change of the 200 N preload-loss requirement) and the 95 % interval of the ratio of standard "
+        "deviations within 1 ± 10 %, not met when either interval lies wholly outside, undetermined otherwise, "
+        "insufficient data below 5 paired runs. At a campaign's audit runs this is a screen; the rule accepts a "
+        "default from "
         "200 paired runs per data set. The scene's numerical floor (the spread of tight runs that differ only in "
         "their step or by picometres of backlash) is shown beside each verdict as context."
     )
@@ -60,16 +68,19 @@ def build(b: Builder):
         text = attrs.pop(f"fidelity_audit_{d}", None)
         if text is None:
             continue
+        if text.startswith(_IDENTICAL):  # not re-run: one row for every feature
+            rows.append((d, "every feature", text, "–", "–", "–", "–"))
+            continue
         speedup = re.search(r"speedup x([-+0-9.e]+|nan)", text)
         lines = [_AUDIT_LINE.match(part) for part in re.sub(r"^speedup x\S+; ", "", text).split(" | ")]
-        if not all(lines):  # a format this report does not know (an older audit): shown as stored, in µm
+        if not all(lines):  # a format this report does not know (an older audit): shown as stored
             rows.append((d, "–", text.replace(" um", " µm"), "", "", "", ""))
             continue
         for k, m in enumerate(lines):
             shown_speedup = f"{float(speedup.group(1)):.2f}" if speedup and k == 0 else ""
             if speedup and k == 0:
                 speedups.append(float(speedup.group(1)))
-            rows.append((d, m["feature"], m["statement"], _microns(m["paired"]), _microns(m["error"]), m["p"],
+            rows.append((d, m["feature"], m["statement"], _figure(m["paired"]), _figure(m["error"]), m["p"],
                          shown_speedup))
     if rows:
         yield b.table(
@@ -80,6 +91,7 @@ def build(b: Builder):
             ("Data set", "Feature", "Verdict", "Largest paired difference", "Monte Carlo error", "KS p", "Speedup"),
             rows,
         )
+    if speedups:  # no re-run data set: no speedup measured, nothing to say about it
         slower = [x for x in speedups if x < 1]
         yield Paragraph(
             "Speedup above 1: the automatic choice ran faster than full fidelity. "

@@ -227,10 +227,20 @@ def test_analysis_reports_exclusions_by_status():
 
 
 def test_resampled_ranks_are_scipys_average_ranks():
-    """The bootstrap ranks each resample from cumulative counts; ties (repeated runs, discrete values) included."""
-    from campaigns.statistics.correlation import resampled_ranks
+    """The bootstrap ranks each resample from its counts of each distinct value (twice the centred rank, in
+    integers); ties (repeated runs, discrete values) included."""
+    from campaigns.statistics import correlation
 
     rng = np.random.default_rng(5)
     for v in (rng.normal(size=200), rng.integers(0, 4, 200).astype(float), np.full(200, 2.0)):
-        idx = rng.integers(0, 200, (30, 200))
-        np.testing.assert_array_equal(resampled_ranks(v, idx), stats.rankdata(v[idx], axis=-1))
+        order, starts, n_values = correlation._numbered(v)
+        multiplicity, counts, twice = (np.empty(200, dtype=np.int64) for _ in range(3))
+        for resample in rng.integers(0, 200, (30, 200)):
+            correlation._resample_counts(resample, multiplicity)
+            squares = correlation._centred_ranks(order, starts, n_values, multiplicity, counts, twice)
+            value_of_run = np.empty(200, dtype=np.int64)
+            for k in range(n_values):
+                value_of_run[order[starts[k]:starts[k + 1]]] = k
+            ranks = 0.5 * twice[value_of_run[resample]] + 100.5
+            np.testing.assert_array_equal(ranks, stats.rankdata(v[resample]))
+            assert squares == 4 * ((ranks - ranks.mean()) ** 2).sum()

@@ -11,6 +11,8 @@ import xarray as xr
 
 import campaigns
 import twin
+from campaigns.bench.adapter import simulate_run
+from campaigns.runner.budget import estimate
 
 SPECS = Path(campaigns.__file__).parent / "specs"
 
@@ -73,14 +75,23 @@ def test_campaign_records_fidelity_and_its_audit(tmp_path):
     path = tmp_path / "audited.toml"
     path.write_text(
         f'extends = "{SPECS / "thesis_backlash.toml"}"\n'
-        'name = "audited"\nruns_per_dataset = 2\n[observability]\nsweep = []\n'
-        '[fidelity_audit]\nruns = 2\n'
+        'name = "audited"\nruns_per_dataset = 5\n[observability]\nsweep = []\n'
+        '[fidelity_audit]\nruns = 5\n'
         '[[datasets]]\nname = "ds5"\nscene = "ds5"\nconditions = { backlash = 0.0, preload = 1000.0 }\n'
     )
-    results = campaigns.run_campaign(campaigns.load_spec(path), tmp_path / "out", workers=1, progress=False)
+    said = []
+    spec = campaigns.load_spec(path)
+    results = campaigns.run_campaign(spec, tmp_path / "out", workers=1, progress=False,
+                                     announce=lambda stage, message: said.append((stage, message)))
+    stages = [stage for stage, _ in said]
+    # one cluster and one compile for the runs and the audit: the audit's runs go to the warm workers
+    assert stages.count("cluster start") == 1 and stages.count("compile") == 1 and stages.count("runs") == 2
+    # the runs line is the budget's estimate (one estimate, one home)
+    assert ("runs", f"audited: 5 runs ({estimate(spec, simulate_run, workers=1).duration()})") in said
     with xr.open_dataset(tmp_path / "out" / "fidelity_audit" / "fidelity_audit.nc") as audit:
         audit = audit.load()
-    assert audit.attrs["runs"] == 2
+    assert audit.attrs["runs"] == 5  # AUDIT_MIN_PAIRS: the fewest an audit verdict needs
+    assert audit.basis.sel(dataset="ds5").item() == "5 paired runs"
     # judging the shift is the audit's verdict; here only a gross error fails
     assert float(np.abs(audit.mean_shift).max()) < 0.5e-6
     # ds5 conditions as its scene's: the measured floor applies
@@ -88,7 +99,7 @@ def test_campaign_records_fidelity_and_its_audit(tmp_path):
     with xr.open_dataset(results) as ds:
         assert ds.attrs["fidelity_requested"] == '"auto"'
         assert "current_loop=ideal" in ds.attrs["fidelity_ds5"] and "encoders=full" in ds.attrs["fidelity_ds5"]
-        assert ds.attrs["fidelity_audit_runs"] == "2"
+        assert ds.attrs["fidelity_audit_runs"] == "5"
         assert ds.attrs["fidelity_audit_ds5"].startswith("speedup x")
         for feature in audit.feature.values:  # each feature's verdict statement, verbatim
             statement = audit.statement.sel(dataset="ds5", feature=feature).item()

@@ -2,17 +2,21 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
+import pytest
 import xarray as xr
-from campaign_helpers import data_variables, load, write_spec
+from campaign_helpers import SYNTHETIC_SPEC, data_variables, load, write_spec
 
 import campaigns
+from campaigns.runner import execution
 from campaigns.runner.execution import (
     BALANCE_CHUNKS,
     OVERHEAD_TARGET,
     TASK_OVERHEAD,
+    Cluster,
     build_request,
     chunk_size,
     run_chunk,
@@ -20,7 +24,8 @@ from campaigns.runner.execution import (
 from campaigns.runner.runs import execute, kill_grace
 from campaigns.runner.sampling import sample
 from campaigns.runner.sandbox import Sandbox
-from campaigns.runner.synthetic import SyntheticModel
+from campaigns.runner.storage import CampaignError
+from campaigns.runner.synthetic import SyntheticModel, synthetic_run
 
 FAULTS = {("ds2", 3): "raise", ("ds4", 1): "nan", ("ds6", 2): "hang", ("ds5", 0): "diverge"}
 
@@ -99,3 +104,28 @@ def test_chunk_size_rule():
     assert TASK_OVERHEAD / (c * fast) <= OVERHEAD_TARGET  # overhead bound met
     assert chunk_size(fast, 80, 2) == math.ceil(80 / (BALANCE_CHUNKS * 2))  # load balance wins at the tail
     assert chunk_size(1e-9, 10**12, 1) * 1e-9 <= 60.0
+
+
+def test_a_subset_of_data_sets_runs_with_the_streams_of_its_place_in_the_spec(tmp_path, reference_results):
+    """``datasets``: only those run, each with the parameters and noise it has in the whole campaign (the fidelity
+    audit re-runs the data sets it needs this way), on a cluster the caller owns and keeps open."""
+    spec = load(SYNTHETIC_SPEC)
+    names = [d.name for d in spec.datasets]
+    kept = names[1:3]
+    announced = []
+    with Cluster(1, announce=lambda stage, message: announced.append(stage)) as cluster:
+        path = execution.run_campaign(spec, tmp_path / "subset", run_function=synthetic_run, cluster=cluster,
+                                      datasets=kept, progress=False)
+        assert cluster.started  # left open for its owner
+        again = execution.run_campaign(spec, tmp_path / "again", run_function=synthetic_run, cluster=cluster,
+                                       datasets=kept[:1], progress=False)
+    assert announced.count("cluster start") == 1 and announced.count("cluster stop") == 1
+    with xr.open_dataset(path) as subset, xr.open_dataset(reference_results) as whole, xr.open_dataset(again) as one:
+        assert list(subset.dataset.values) == kept
+        for feature in spec.features:
+            np.testing.assert_array_equal(subset[feature].values, whole[feature].sel(dataset=kept).values)
+            np.testing.assert_array_equal(one[feature].values, whole[feature].sel(dataset=kept[:1]).values)
+        assert json.loads(subset.attrs["dataset_seed_indices"]) == {n: names.index(n) for n in kept}
+    with pytest.raises(CampaignError, match="datasets: nope: name one or more of the spec's data sets"):
+        execution.run_campaign(spec, tmp_path / "bad", run_function=synthetic_run, datasets=["nope"])
+

@@ -9,7 +9,6 @@ import xarray as xr
 from campaigns.bench.campaign import load_spec
 from campaigns.bench.fidelity_audit import (
     AUDIT_MIN_PAIRS,
-    MEAN_SHIFT_TOLERANCE,
     compare_fidelity,
     full_fidelity_variant,
     has_automatic_choice,
@@ -17,7 +16,7 @@ from campaigns.bench.fidelity_audit import (
     summary_attrs,
 )
 from campaigns.bench.scene_audit import THESIS_SPEC
-from campaigns.statistics.accuracy_rule import paired_verdict
+from campaigns.statistics.accuracy_rule import MEAN_SHIFT_TOLERANCE, paired_verdict
 
 UM = 1e-6
 RUNS = 12
@@ -55,7 +54,8 @@ def _pair():
 def test_each_synthetic_case_gets_its_verdict_and_the_attributes_print_it_verbatim():
     auto, full, _ = _pair()
     audit = compare_fidelity(auto, full, ["backlash_feature"], FLOORS)
-    assert MEAN_SHIFT_TOLERANCE == 0.05 * UM and audit.attrs["mean_shift_tolerance"] == MEAN_SHIFT_TOLERANCE
+    assert MEAN_SHIFT_TOLERANCE == 0.05 * UM
+    assert float(audit.mean_shift_tolerance.sel(feature="backlash_feature")) == MEAN_SHIFT_TOLERANCE
     for name, (_, _, _, failed, verdict) in CASES.items():
         row = audit.sel(dataset=name, feature="backlash_feature")
         a = auto.backlash_feature.sel(dataset=name).values[failed:]

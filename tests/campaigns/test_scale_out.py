@@ -1,6 +1,7 @@
 """Scale-out: a real ``dask scheduler`` and two ``dask worker`` processes on the loopback interface.
 
-The thesis campaign (two runs per data set, so every data set and the fidelity audit take part) is run
+The thesis campaign (two runs per data set, so every data set takes part, and the fidelity audit of the data sets
+its automatic choice simplifies) is run
 through ``twin campaign run --scheduler`` against that cluster and through the library on a local
 cluster; the stored results must be identical, whatever executed them (README: "Pointing a campaign
 at your own cluster"). Both campaigns take about a minute of CPU on a loaded 2-core machine.

@@ -73,5 +73,5 @@ def test_bad_fidelity_is_a_clear_error():
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "fidelity.gearbox" in result.stderr
     audit = run("fidelity", "audit", "no_such_scene", "--runs", "1")
-    assert (audit.returncode == 2 and "runs: 1 must be an integer >= 2" in audit.stderr
-            and "no_such_scene" in audit.stderr)
+    assert (audit.returncode == 2 and "no_such_scene" in audit.stderr
+            and "runs: 1 must be an integer >= 5 (the fewest paired runs an audit verdict needs)" in audit.stderr)
