@@ -14,7 +14,7 @@ What it holds, and who reads it:
 * its energy terms (:func:`energy`, :mod:`twin.engine.energy`); it has no states (:data:`ABSOLUTE_TOLERANCES` empty)
   and no fidelity levels (:data:`LEVELS`).
 
-Its constants and signal are declared in its entry of :data:`twin.layout.COMPONENTS`.
+Its constants, signal and work row are declared in its leaf module, :mod:`twin.vocabulary.preload`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import numpy as np
 
 from numerics.jit import SCALAR
 from twin.components.conditions import Conditions
-from twin.layout import K, S
+from twin.layout import K, S, W
 from twin.physics.preload import preload_force, series_stiffness
 
 NAME = "preload"
@@ -93,3 +93,17 @@ def energy(x: np.ndarray, c: np.ndarray) -> tuple[float, float]:
     elastic)`` [J]."""
     compression = c[K.PRELOAD_COMPRESSION] - c[K.PRELOAD_ORIENTATION] * (x[S.NUT2_POSITION] - x[S.NUT1_POSITION])
     return 0.0, 0.5 * c[K.PRELOAD_STIFFNESS] * max(compression, 0.0) ** 2
+
+
+@numba.njit(**SCALAR)
+def active(levels):
+    """The set is always modelled (unmounted, its stiffness is zero)."""
+    return True
+
+
+@numba.njit(**SCALAR)
+def forces_at(x, c, w, lane):
+    """Its work row: the preload magnitude (:func:`force_at`) into ``W.PRELOAD``; the nuts take their shares
+    (:func:`nut_share_at`)."""
+    w[W.PRELOAD, lane] = force_at(x, c, lane)
+

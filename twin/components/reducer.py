@@ -16,7 +16,7 @@ What it holds, and who reads it:
   states (:data:`ABSOLUTE_TOLERANCES`, :mod:`twin.engine.reference`);
 * its fidelity levels: none (:data:`LEVELS`; the chain is always modelled, :mod:`twin.levels`).
 
-Its states, constants and signals are declared in its entry of :data:`twin.layout.COMPONENTS`.
+Its states, constants, signals and work row are declared in its leaf module, :mod:`twin.vocabulary.reducer`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 
 from numerics.jit import SCALAR
 from twin.components.conditions import Conditions
-from twin.layout import K, S
+from twin.layout import K, S, W
 from twin.physics.coupling import elasto_backlash, elasto_backlash_energy
 from twin.physics.drivetrain import torsional_stiffness
 from twin.physics.friction import stribeck_friction, stribeck_slope
@@ -128,3 +128,21 @@ def energy(x: np.ndarray, c: np.ndarray) -> tuple[float, float]:
     elastic = elasto_backlash_energy(x[S.REDUCER_ANGLE] - x[S.SCREW_ANGLE], c[K.TORSION_STIFFNESS],
                                      c[K.REDUCER_BACKLASH])
     return kinetic, elastic
+
+
+@numba.njit(**SCALAR)
+def active(levels):
+    """The chain is always modelled (no fidelity levels)."""
+    return True
+
+
+@numba.njit(**SCALAR)
+def forces_at(x, c, w, lane):
+    """Its work row: the transmitted torque ``T_tm`` (:func:`transmitted_torque_at`) into ``W.TORQUE``."""
+    w[W.TORQUE, lane] = transmitted_torque_at(x, c, lane)
+
+
+@numba.njit(**SCALAR)
+def derivatives_at(x, c, u, w, dxdt, lane, levels):
+    """Its states' derivatives: Eq. 9.3 against the transmitted torque of the forces phase (:func:`reducer_rhs_at`)."""
+    reducer_rhs_at(x, c, w[W.TORQUE, lane], dxdt, lane)

@@ -14,8 +14,7 @@ PNEUMATICS = subsystem_index("pneumatics")
 PNEUMATICS_FULL = level_code("pneumatics", "full")
 PNEUMATICS_IDEAL = level_code("pneumatics", "ideal")
 
-SEAL_FRICTION = subsystem_index("seal_friction")
-SEAL_FRICTION_ELASTO_PLASTIC = level_code("seal_friction", "elasto_plastic")
+# the seal friction's codes: twin.components.seal
 
 CURRENT_LOOP = subsystem_index("current_loop")
 CURRENT_LOOP_FULL = level_code("current_loop", "full")

@@ -42,10 +42,7 @@ def mechanical_energy(x: np.ndarray, model) -> float:
         + c[K.NUT2_MASS] * x[S.NUT2_SPEED] ** 2
         + c[K.J_NUT] * (x[S.NUT1_ANGULAR_SPEED] ** 2 + x[S.NUT2_ANGULAR_SPEED] ** 2)
     )
-    elastic = (
-        0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
-        + 0.5 * c[K.GUIDE_ROLL_STIFFNESS] * (x[S.NUT1_ANGLE] ** 2 + x[S.NUT2_ANGLE] ** 2)
-    )
+    elastic = 0.5 * w[W.AXIAL_STIFFNESS, 0] * lane_x[S.SCREW_AXIAL, 0] ** 2
     contact_model = int(model.levels[CONTACT])
     for nut in (0, 1):
         elastic += contact_energy(c, contact_model, w[W.NUT_DX + nut, 0])

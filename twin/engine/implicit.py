@@ -9,9 +9,8 @@ screw-axial level): it integrates that mode implicitly (docs/accuracy.md).
 import numba
 import numpy as np
 
-from numerics.elementary import exp
 from numerics.jit import SCALAR
-from twin.components import preload, reducer
+from twin.components import guides, preload, reducer, seal
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -20,11 +19,9 @@ from twin.engine.codes import (
     NUT_ROTATION_ON,
     PNEUMATICS,
     PNEUMATICS_FULL,
-    SEAL_FRICTION,
-    SEAL_FRICTION_ELASTO_PLASTIC,
 )
 from twin.engine.plant import W, _stiffness
-from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
+from twin.layout import NUT_STATE_STRIDE, K, S, U
 from twin.physics.ball_groove_friction import nut_friction_slope, tangential_speed
 from twin.physics.ball_screw import nut_axial_tangent
 from twin.physics.friction import stribeck_slope
@@ -155,16 +152,9 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
         _add_element(matrix, b, velocity, h, c[K.LOAD_CELL_STIFFNESS, lane], c[K.LOAD_CELL_DAMPING, lane],
                      DOF_PISTON, 1.0, DOF_NUT1, -1.0, DOF_PISTON, 0.0, DOF_PISTON, 0.0)
-        if levels[SEAL_FRICTION] == SEAL_FRICTION_ELASTO_PLASTIC:
-            # the bristle law's slope in presliding (dz/dt = v): sigma_1 exp(-(v/v_d)^2) + sigma_2; the seals'
-            # deflection itself stays explicit (its 1.2e3 rad/s mode is far below the step's limit)
-            u_d = x[S.PISTON_SPEED, lane] / c[K.SEAL_DAMPING_SPEED, lane]
-            matrix[DOF_PISTON, DOF_PISTON] += h * (c[K.PISTON_DAMPING, lane] + c[K.CYLINDER_FRICTION_VISCOUS, lane]
-                                                   + c[K.SEAL_DAMPING, lane] * exp(-u_d * u_d))
-        else:
-            matrix[DOF_PISTON, DOF_PISTON] += h * (c[K.PISTON_DAMPING, lane] + stribeck_slope(
-                x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
-                c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane]))
+        # the piston's damping and the seals' friction slope (twin.components.seal)
+        matrix[DOF_PISTON, DOF_PISTON] += h * seal.tangent_at(x, c, lane, levels[seal.SEAL_FRICTION],
+                                                              c[K.PISTON_DAMPING, lane])
     # viscous and regularised Coulomb slopes of the supports' friction
     matrix[DOF_REDUCER, DOF_REDUCER] += h * reducer.friction_slope_at(x, c, lane)
     matrix[DOF_SCREW, DOF_SCREW] += h * (c[K.SCREW_DAMPING, lane] + stribeck_slope(
@@ -172,9 +162,7 @@ def stiff_velocity_system(x, c, w, lane, levels, f, h, matrix, b, velocity):
         c[K.SCREW_FRICTION_VISCOUS, lane], c[K.ANGULAR_V_THRESHOLD, lane]))
     for nut in range(2):
         dof = DOF_NUT1 if nut == 0 else DOF_NUT2
-        matrix[dof, dof] += h * c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_slope(
-            x[S.NUT1_SPEED + NUT_STATE_STRIDE * nut, lane], c[K.GUIDE_FRICTION_STATIC, lane],
-            c[K.GUIDE_FRICTION_DYNAMIC, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+        matrix[dof, dof] += guides.friction_slope_at(x, c, lane, nut, h)
 
 
 @numba.njit(**SCALAR)

@@ -34,7 +34,6 @@ from twin.physics.ball_screw import (
     travel_deviation,
 )
 from twin.physics.drivetrain import screw_inertia, screw_mass
-from twin.physics.friction import level_problems
 from twin.physics.guides import abbe_reading_gain
 from twin.physics.motor import equivalent_inductance, equivalent_resistance, equivalent_voltage_limit
 from twin.scenes import Scene
@@ -121,7 +120,7 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
     c[K.VOLTAGE_LIMIT] = equivalent_voltage_limit(p["drive.dc_bus_voltage"], p["drive.phase_voltage_amplitude_limit"])
     c[K.CURRENT_LOOP_TAU] = 1.0 / (2.0 * math.pi * p["controller.current_loop_bandwidth"])
     c[K.AMBIENT] = room_temperature
-    # the components of twin.components (the reducer and its torsional chain, Eq. 9.3, Sec. 9.3)
+    # the components of twin.components (the reducer, the guides, the preload set, the seals)
     for component in COMPONENTS:
         component.derive_constants(c, p, scene)
     c[K.J_SCREW_SIDE] = screw_inertia(p) + p["drivetrain.torque_meter_inertia"] + 2.0 * p["drivetrain.coupling_inertia"]
@@ -137,13 +136,6 @@ def build_model(scene: Scene, params: ParameterSet, fidelity: Levels, *, curvatu
         c[K.LINEAR_CONTACT_STIFFNESS] = secant_contact_stiffness(c, stiffness_poly, fidelity.peak_contact_load)
     c[K.BACKLASH] = scene.condition("backlash")
     ball_groove_friction_constants(c, p, fidelity)
-    # nuts, guides (Eq. 9.8, Eq. 7.63): the slave nut carries a share of the guide friction law
-    guide_problems = level_problems("sled.guide_friction_static", p["sled.guide_friction_static"],
-                                    "sled.guide_friction_dynamic", p["sled.guide_friction_dynamic"])
-    if guide_problems:
-        raise ParameterError(guide_problems)
-    c[K.NUT1_GUIDE_FRICTION_SHARE] = 1.0
-    c[K.NUT2_GUIDE_FRICTION_SHARE] = p["sled.slave_friction_fraction"]
     preload = scene.condition("preload")  # the preload set's constants: twin.components.preload
     c[K.LINEAR_V_THRESHOLD] = LINEAR_VELOCITY_THRESHOLD
     c[K.ANGULAR_V_THRESHOLD] = ANGULAR_VELOCITY_THRESHOLD
@@ -348,14 +340,6 @@ def pneumatic_constants(c: np.ndarray, p: dict[str, float], scene: Scene) -> np.
     c[K.STROKE] = q["pneumatics.stroke"]
     c[K.PISTON_MASS] = q["pneumatics.piston_mass"]
     c[K.PISTON_DAMPING] = q["pneumatics.piston_damping"]
-    c[K.CYLINDER_FRICTION_STATIC] = q["pneumatics.friction_static"]
-    c[K.CYLINDER_FRICTION_DYNAMIC] = q["pneumatics.friction_dynamic"]
-    c[K.CYLINDER_FRICTION_RATE] = q["pneumatics.friction_stribeck_coefficient"]
-    c[K.CYLINDER_FRICTION_VISCOUS] = q["pneumatics.friction_viscous"]
-    c[K.CYLINDER_V_THRESHOLD] = q["pneumatics.friction_velocity_threshold"]
-    # elasto-plastic seal level: elastic up to a fraction of the smallest steady deflection F_d / sigma_0
-    c[K.SEAL_ELASTIC_DEFLECTION] = (q["pneumatics.friction_elastic_fraction"] * c[K.CYLINDER_FRICTION_DYNAMIC]
-                                    / c[K.SEAL_STIFFNESS])
     c[K.DAMPER_STIFFNESS] = q["pneumatics.damper_stiffness"]
     c[K.DAMPER_TRAVEL] = q["pneumatics.damper_travel"]
     c[K.DAMPER_DAMPING] = q["pneumatics.damper_damping"]

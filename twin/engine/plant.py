@@ -3,9 +3,9 @@
 A lane is one Monte Carlo sample; a group of lanes shares the scene and the model configuration (the fidelity
 levels) and advances in lock-step (:mod:`twin.engine.loop`). Every array is ``[row, lane]``: the state ``x``
 (layout :class:`twin.layout.S`), the constants ``c`` (:class:`twin.layout.K`), the held inputs ``u``
-(:class:`twin.layout.U`), the derivatives ``dxdt`` and the work rows ``w`` (:class:`W`: the forces the rest of
-the engine reads). The right-hand side is a sequence of *stages*, each one loop over the lanes whose body calls a
-scalar physics law of :mod:`twin.physics` (branch-free, inlined), so LLVM vectorises it; a lane's numbers depend
+(:class:`twin.layout.U`), the derivatives ``dxdt`` and the work rows ``w`` (:class:`twin.layout.W`: the forces the
+rest of the engine reads). The right-hand side is a sequence of *stages*, each one loop over the lanes whose body
+calls a scalar physics law of :mod:`twin.physics` (branch-free, inlined), so LLVM vectorises it; a lane's numbers depend
 only on its own row entries, never on its lane mates or on the lane count (tests/engine/test_lanes.py).
 A stage takes the work rows through the ``w`` argument and never aliases it with another array argument (the
 ``noalias`` promise of :data:`numerics.jit.KERNEL`).
@@ -15,13 +15,13 @@ The digital controllers are outside: the speed loop's current demand and the val
 """
 
 import math
-from enum import IntEnum
+from functools import reduce
 
 import numba
 import numpy as np
 
 from numerics.jit import KERNEL, SCALAR
-from twin.components import preload, reducer
+from twin.components import DERIVATIVE_STAGES, FORCE_STAGES, guides, preload, seal
 from twin.engine.codes import (
     BALL_GROOVE_FRICTION,
     BALL_GROOVE_FRICTION_CHAPTER5,
@@ -36,42 +36,15 @@ from twin.engine.codes import (
     PNEUMATICS_IDEAL,
     SCREW_AXIAL,
     SCREW_AXIAL_DYNAMIC,
-    SEAL_FRICTION,
-    SEAL_FRICTION_ELASTO_PLASTIC,
     THERMAL_DYNAMIC,
 )
-from twin.layout import NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U
+from twin.layout import N_WORK, NUT_CONSTANT_STRIDE, NUT_STATE_STRIDE, K, S, U, W
 from twin.physics import pneumatics as pn
 from twin.physics.ball_groove_friction import friction_generalised_forces, nut_friction_force, tangential_speed
 from twin.physics.ball_screw import nut_axial_force, nut_elastic_force, travel_deviation
-from twin.physics.bristle_friction import bristle_force, elastoplastic_deflection_rate
-from twin.physics.friction import stribeck_friction, stribeck_level
+from twin.physics.friction import stribeck_friction
 from twin.physics.motor import current_derivative, winding_resistance, winding_temperature_derivative
 from twin.scenes.profiles import profile_value
-
-
-class W(IntEnum):
-    """Work rows of a lane group (``w[row, lane]``): what one right-hand-side evaluation leaves for the rest of the
-    engine (recording, instruments, the guard). Per-nut rows are the first nut's plus the nut index."""
-
-    TORQUE = 0              # T_tm through couplings and torque meter [N m]
-    NUT_FORCE = 1           # 2 rows: axial force of the screw on nut i [N] (Eqs. 9.4-9.6)
-    NUT_NORMAL = 3          # 2 rows: normal load per sphere of nut i [N]
-    NUT_DX = 5              # 2 rows: relative position dx_i (Eq. 9.5) [m]
-    NUT_DV = 7              # 2 rows: its rate [m/s]
-    NUT_FRICTION = 9        # 2 rows: helix friction force of nut i along v_t [N] (reduced Ch. 5)
-    PRELOAD = 11            # preload magnitude [N]
-    EXTERNAL = 12           # external force on the master nut [N]
-    AXIAL_STIFFNESS = 13    # screw axial stiffness seen by the nuts [N/m]
-    AXIAL_GRADIENT = 14     # the axial spring energy's push on the sled [N]
-    NUT_KINEMATIC = 15      # 2 rows: dx_i without the screw's axial displacement [m] (quasi-static balance)
-    NUT_RATE = 17           # 2 rows: its rate [m/s]
-    BALANCE_DONE = 19       # 1.0 once the lane's quasi-static balance has converged in this evaluation
-    BALANCE_FAILED = 20     # 1.0 if a balance of this run ever ran out of iterations (the guard reads it)
-    NUT_LEAD_SLOPE = 21     # 2 rows: the lead error's rate e'(theta_s - theta_ni) at nut i [m/rad]
-
-
-N_WORK = W.NUT_LEAD_SLOPE + 2  # the per-nut members name their first row only
 
 #: Newton iterations the quasi-static screw-axial balance may take in one evaluation; warm-started from the last
 #: solution it needs 1-3 (measured: docs/accuracy.md); a lane that runs out is flagged (``W.BALANCE_FAILED``).
@@ -116,6 +89,56 @@ def has_lead_error(c, lanes):
 # one lane after the other (:func:`rhs`, :func:`internal_forces` and :func:`measurands` for groups of at most
 # ``FUSED_LANES`` lanes: one lane's state stays in registers, and the stage calls and loop set-ups of the split form
 # are gone). A lane's operations and their order are the same in both, so are its bits (tests/engine/test_lanes.py).
+
+
+# The components' stages (twin.components.FORCE_STAGES and DERIVATIVE_STAGES, one list each), composed the same two
+# ways: a chain of closures, one per stage, each calling the rest of the chain and then its stage. numba reads a
+# closure's free variables as compile-time constants, so every call is a direct call and SCALAR inlines it: the chain
+# compiles to the stages' bodies one after the other, as if written out by hand, and adding a component to the table
+# changes neither composition.
+
+
+@numba.njit(**SCALAR)
+def _no_forces(x, c, w, lanes, levels):
+    pass
+
+
+@numba.njit(**SCALAR)
+def _no_derivatives(x, c, u, w, dxdt, lanes, levels):
+    pass
+
+
+def _forces_then(rest, stage):
+    """The chain ``rest``, then ``stage`` (``(active, forces_at)``), of the forces phase; ``lanes``: a range of lanes
+    (split: one loop per stage over the group; fused: ``range(lane, lane + 1)``)."""
+    active, forces_at = stage
+
+    @numba.njit(**SCALAR)
+    def forces(x, c, w, lanes, levels):
+        rest(x, c, w, lanes, levels)
+        if active(levels):
+            for lane in lanes:
+                forces_at(x, c, w, lane)
+    return forces
+
+
+def _derivatives_then(rest, stage):
+    """:func:`_forces_then` for the derivatives phase."""
+    active, derivatives_at = stage
+
+    @numba.njit(**SCALAR)
+    def derivatives(x, c, u, w, dxdt, lanes, levels):
+        rest(x, c, u, w, dxdt, lanes, levels)
+        if active(levels):
+            for lane in lanes:
+                derivatives_at(x, c, u, w, dxdt, lane, levels)
+    return derivatives
+
+
+#: The components' forces phase: their work rows (``component_forces(x, c, w, lanes, levels)``, lanes a range).
+component_forces = reduce(_forces_then, FORCE_STAGES, _no_forces)
+#: The components' derivatives phase (``component_derivatives(x, c, u, w, dxdt, lanes, levels)``).
+component_derivatives = reduce(_derivatives_then, DERIVATIVE_STAGES, _no_derivatives)
 
 
 @numba.njit(**SCALAR)
@@ -296,13 +319,6 @@ def _contact_at(c, w, lane, nut, contact_model):
 
 
 @numba.njit(**SCALAR)
-def _couplings_at(x, c, w, lane):
-    """Torque through the torsional elasto-backlash (Sec. 9.3) and the preload between the nuts (Secs. 9.2-9.3)."""
-    w[W.TORQUE, lane] = reducer.transmitted_torque_at(x, c, lane)
-    w[W.PRELOAD, lane] = preload.force_at(x, c, lane)
-
-
-@numba.njit(**SCALAR)
 def _force_demand(t, pneumatics, force_table):
     """The scene's force demand at ``t`` where the ideal load source applies it, else 0 (shared by a group)."""
     return profile_value(force_table, t) if pneumatics == PNEUMATICS_IDEAL else 0.0
@@ -360,7 +376,7 @@ def _internal_forces_at(x, c, w, lane, levels, demand, errors):
     _axial_gradient_at(x, c, w, lane)
     for nut in range(2):
         _contact_at(c, w, lane, nut, contact_model)
-    _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lane, lane + 1), levels)
     _external_force_at(x, c, w, lane, levels[PNEUMATICS], demand)
     chapter5 = levels[BALL_GROOVE_FRICTION] == BALL_GROOVE_FRICTION_CHAPTER5
     for nut in range(2):
@@ -398,8 +414,7 @@ def internal_forces(t, x, c, w, lanes, levels, force_table):
     for nut in range(2):
         for lane in range(lanes):
             _contact_at(c, w, lane, nut, contact_model)
-    for lane in range(lanes):
-        _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lanes), levels)
     pneumatics = levels[PNEUMATICS]
     for lane in range(lanes):
         _external_force_at(x, c, w, lane, pneumatics, demand)
@@ -421,11 +436,10 @@ def measurands(t, x, c, w, lanes, levels, force_table):
     pneumatics = levels[PNEUMATICS]
     if lanes <= FUSED_LANES:
         for lane in range(lanes):
-            _couplings_at(x, c, w, lane)
+            component_forces(x, c, w, range(lane, lane + 1), levels)
             _external_force_at(x, c, w, lane, pneumatics, demand)
         return
-    for lane in range(lanes):
-        _couplings_at(x, c, w, lane)
+    component_forces(x, c, w, range(lanes), levels)
     for lane in range(lanes):
         _external_force_at(x, c, w, lane, pneumatics, demand)
 
@@ -477,9 +491,8 @@ def _lead_error_torque(w, lane):
 
 @numba.njit(**SCALAR)
 def _rotation_at(x, c, w, dxdt, lane):
-    """Motor-reducer (Eq. 9.3, :func:`twin.components.reducer.reducer_rhs_at`) and screw rotation (Eq. 9.7)."""
+    """Screw rotation (Eq. 9.7) against the transmitted torque (:func:`twin.components.reducer.forces_at`)."""
     torque = w[W.TORQUE, lane]
-    reducer.reducer_rhs_at(x, c, torque, dxdt, lane)
     # the nuts' reaction on the screw is -(p/2pi) times the sum of their axial forces, plus the helix friction
     w_s = x[S.SCREW_SPEED, lane]
     friction_s = stribeck_friction(w_s, c[K.SCREW_FRICTION_STATIC, lane], c[K.SCREW_FRICTION_DYNAMIC, lane],
@@ -512,15 +525,14 @@ def _screw_axial_at(x, c, w, dxdt, lane):
 
 @numba.njit(**SCALAR)
 def _nut_at(x, c, w, dxdt, lane, nut, rotation):
-    """Nut ``nut`` (Eq. 9.8): the master carries the external force, the preload acts between them; its roll on the
-    linear guides against the contact torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
+    """Nut ``nut`` (Eq. 9.8): the master carries the external force, the preload acts between them, the guides'
+    friction on each (:func:`twin.components.guides.friction_at`); its roll on the linear guides against the contact
+    torque ``(p/2pi) f_i`` (Sec. 9.3) where the fidelity keeps it."""
     position = S.NUT1_POSITION + NUT_STATE_STRIDE * nut
     master = 1.0 if nut == 0 else 0.0
     _, nut_torque, _, nut_axial = friction_generalised_forces(
         w[W.NUT_FRICTION + nut, lane], c[K.PITCH_RADIUS, lane], c[K.COS_HELIX, lane], c[K.SIN_HELIX, lane])
-    guide = c[K.NUT1_GUIDE_FRICTION_SHARE + NUT_CONSTANT_STRIDE * nut, lane] * stribeck_friction(
-        x[position + 1, lane], c[K.GUIDE_FRICTION_STATIC, lane], c[K.GUIDE_FRICTION_DYNAMIC, lane],
-        c[K.GUIDE_FRICTION_RATE, lane], c[K.GUIDE_FRICTION_VISCOUS, lane], c[K.LINEAR_V_THRESHOLD, lane])
+    guide = guides.friction_at(x, c, lane, nut)
     preload_share = preload.nut_share_at(c, w[W.PRELOAD, lane], lane, master)
     master_loads = master * (w[W.EXTERNAL, lane] + w[W.AXIAL_GRADIENT, lane])
     dxdt[position, lane] = x[position + 1, lane]
@@ -535,24 +547,11 @@ def _nut_at(x, c, w, dxdt, lane, nut, rotation):
 
 
 @numba.njit(**SCALAR)
-def seal_bristle(x, c, lane):
-    """The elasto-plastic seal level's friction force [N] and the seals' deflection rate [m/s]
-    (:mod:`twin.physics.bristle_friction`, sliding level Eq. 7.63 without its regularisation)."""
-    v = x[S.PISTON_SPEED, lane]
-    z = x[S.SEAL_DEFLECTION, lane]
-    level = stribeck_level(v, c[K.CYLINDER_FRICTION_STATIC, lane], c[K.CYLINDER_FRICTION_DYNAMIC, lane],
-                           c[K.CYLINDER_FRICTION_RATE, lane])
-    rate = elastoplastic_deflection_rate(v, z, level, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_ELASTIC_DEFLECTION, lane])
-    force = bristle_force(v, z, rate, c[K.SEAL_STIFFNESS, lane], c[K.SEAL_DAMPING, lane],
-                          c[K.SEAL_DAMPING_SPEED, lane], c[K.CYLINDER_FRICTION_VISCOUS, lane])
-    return force, rate
-
-
-@numba.njit(**SCALAR)
-def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
+def _pneumatics_at(x, c, u, w, dxdt, lane, seal_level):
     """Valve spool, chamber pressures and piston of the load system (Eqs. 9.9-9.11) of one lane: the one home of the
     load system's dynamics (the force-loop design linearises these same laws, twin.control.force_loop_design).
-    ``seal`` is the seal-friction level's code: the regularised Eq. 7.63 or the elasto-plastic bristle law."""
+    ``seal_level`` is the seal-friction level's code, for the seals' law
+    (:func:`twin.components.seal.friction_at`)."""
     dxdt[S.SPOOL_POSITION, lane], dxdt[S.SPOOL_SPEED, lane] = pn.spool_derivative(
         x[S.SPOOL_POSITION, lane], x[S.SPOOL_SPEED, lane], u[U.VALVE_COMMAND, lane], c[K.VALVE_MID, lane],
         c[K.VALVE_MIN, lane], c[K.VALVE_MAX, lane], c[K.VALVE_FREQUENCY, lane], c[K.VALVE_DAMPING, lane])
@@ -572,12 +571,7 @@ def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
     dxdt[S.CHAMBER2_PRESSURE, lane] = pn.chamber_pressure_derivative(
         p2, g2, v2, dv2, temperature, c[K.GAS_CONSTANT, lane], c[K.POLYTROPIC_EXPONENT, lane])
     dxdt[S.PISTON_POSITION, lane] = x[S.PISTON_SPEED, lane]
-    if seal == SEAL_FRICTION_ELASTO_PLASTIC:
-        friction, dxdt[S.SEAL_DEFLECTION, lane] = seal_bristle(x, c, lane)
-    else:
-        friction = stribeck_friction(x[S.PISTON_SPEED, lane], c[K.CYLINDER_FRICTION_STATIC, lane],
-                                     c[K.CYLINDER_FRICTION_DYNAMIC, lane], c[K.CYLINDER_FRICTION_RATE, lane],
-                                     c[K.CYLINDER_FRICTION_VISCOUS, lane], c[K.CYLINDER_V_THRESHOLD, lane])
+    friction = seal.friction_at(x, c, dxdt, lane, seal_level)
     dxdt[S.PISTON_SPEED, lane] = pn.piston_acceleration_under_friction(
         p1, p2, x[S.PISTON_POSITION, lane], x[S.PISTON_SPEED, lane], w[W.EXTERNAL, lane], c[K.AREA1, lane],
         c[K.AREA2, lane], c[K.P_ATMOSPHERE, lane], c[K.PISTON_MASS, lane], c[K.PISTON_DAMPING, lane],
@@ -586,15 +580,17 @@ def _pneumatics_at(x, c, u, w, dxdt, lane, seal):
 
 
 @numba.njit(**KERNEL)
-def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal):
+def pneumatics_rhs(x, c, u, w, dxdt, lanes, seal_level):
     """:func:`_pneumatics_at` in every lane."""
     for lane in range(lanes):
-        _pneumatics_at(x, c, u, w, dxdt, lane, seal)
+        _pneumatics_at(x, c, u, w, dxdt, lane, seal_level)
 
 
 @numba.njit(**SCALAR)
 def _derivatives_at(x, c, u, w, dxdt, lane, levels):
-    """The derivatives of one lane from its work rows (:func:`_internal_forces_at`), fused."""
+    """The derivatives of one lane from its work rows (:func:`_internal_forces_at`), fused: the components'
+    stages, then the engine's own."""
+    component_derivatives(x, c, u, w, dxdt, range(lane, lane + 1), levels)
     _drive_current_at(x, c, u, dxdt, lane, levels[CURRENT_LOOP])
     if levels[MOTOR_THERMAL] == THERMAL_DYNAMIC:
         _winding_thermal_at(x, c, dxdt, lane)
@@ -604,7 +600,7 @@ def _derivatives_at(x, c, u, w, dxdt, lane, levels):
     for nut in range(2):
         _nut_at(x, c, w, dxdt, lane, nut, levels[NUT_ROTATION])
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
-        _pneumatics_at(x, c, u, w, dxdt, lane, levels[SEAL_FRICTION])
+        _pneumatics_at(x, c, u, w, dxdt, lane, levels[seal.SEAL_FRICTION])
 
 
 @numba.njit(**KERNEL)
@@ -646,6 +642,7 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
             rhs_at(t, x, c, u, levels, force_table, dxdt, w, lane, errors)
         return
     internal_forces(t, x, c, w, lanes, levels, force_table)
+    component_derivatives(x, c, u, w, dxdt, range(lanes), levels)
     current_loop = levels[CURRENT_LOOP]
     if current_loop == CURRENT_LOOP_FULL:
         for lane in range(lanes):
@@ -666,7 +663,7 @@ def rhs(t, x, c, u, levels, force_table, dxdt, w):
         for lane in range(lanes):
             _nut_at(x, c, w, dxdt, lane, nut, rotation)
     if levels[PNEUMATICS] == PNEUMATICS_FULL:
-        pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[SEAL_FRICTION])
+        pneumatics_rhs(x, c, u, w, dxdt, lanes, levels[seal.SEAL_FRICTION])
 
 
 EFFICIENCY_POWER_FLOOR = 1.0e-3  # W: below this input power the efficiency is reported as 0 (at rest)
