@@ -92,7 +92,8 @@ def requirement_statement(
         names.setdefault(float(value), name)
 
     def fmt(value: float) -> str:  # in the display unit of the fault quantity (µm for the backlash)
-        return f"{value * scale:.3g} {unit}"
+        shown = value * scale  # three significant digits, never an exponent (1000 N, not 1e+03 N)
+        return f"{shown:.3g} {unit}" if abs(shown) < 1000 else f"{shown:.0f} {unit}"
 
     def level(value: float) -> str:  # a sweep level, named by its data set
         return f"{fmt(value)} ({names[value]})" if value in names else fmt(value)

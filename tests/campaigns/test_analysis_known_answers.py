@@ -600,3 +600,14 @@ def test_defaults_of_the_analysis_and_of_the_sentence():
     a = analysis_dataset(results, n_boot=50, sensitivity_boot=10)
     assert str(a["requirement_verdict"].sel(feature="f").item()) != "insufficient data"
     assert summary(a)[1] == []
+
+
+def test_a_sweep_level_of_a_thousand_or_more_is_written_without_an_exponent():
+    """A preload-loss sweep reaches 1000 N: its sentence says "1000 N", not "1e+03 N" (three significant digits below
+    1000, whole units from there)."""
+    statement = requirement_statement(
+        "not met", math.nan, (800.0, math.inf), {"p0": 100}, resolution="beyond_sweep", bracket=(1000.0, math.inf),
+        levels={"p0": 1000.0, "p200": 800.0}, condition="preload", requirement=200.0,
+        requirement_source="assumed target")
+    assert "above 1000 N (p0), the largest sweep level" in statement and "above 800 N (p200)" in statement
+    assert "e+0" not in statement
