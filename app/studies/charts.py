@@ -13,6 +13,7 @@ import xarray as xr  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from app.studies.work_precision import DEFAULT_POINT, quantization_floor  # noqa: E402
+from campaigns.statistics.accuracy_rule import tolerance_for  # noqa: E402
 from twin.solver import DEFAULT_DT, DEFAULT_SOLVER  # noqa: E402
 
 PANEL_TITLES = {"quantizers_off": "quantizers off (ideal instruments): convergence order",
@@ -116,10 +117,16 @@ def campaign_accuracy_chart(judged: xr.Dataset, path: str | Path | None = None) 
                              constrained_layout=True)
     width = 0.7 / len(candidates)
     x = np.arange(len(datasets))
-    rows = (("mean_shift", 1e6, "mean paired shift [um]", judged.attrs["mean_shift_tolerance"] * 1e6, 0.0),
-            ("sd_ratio", 1.0, "sd ratio candidate / reference", judged.attrs["sd_ratio_tolerance"], 1.0))
-    for row, (name, scale, label, tolerance, centre) in enumerate(rows):
+    for row, name in enumerate(("mean_shift", "sd_ratio")):
         for col, feature in enumerate(features):
+            if name == "mean_shift":  # in the display unit of the feature's own unit, against its own tolerance
+                # (the same along the candidates, which the judged file stacks)
+                shown = tolerance_for(str(judged["feature_unit"].sel(feature=feature).values.flat[0]))
+                scale, label, centre = shown.scale, f"mean paired shift [{shown.shown}]", 0.0
+                tolerance = float(judged["mean_shift_tolerance"].sel(feature=feature).values.flat[0]) * scale
+            else:
+                scale, label, centre = 1.0, "sd ratio candidate / reference", 1.0
+                tolerance = judged.attrs["sd_ratio_tolerance"]
             ax = axes[row, col]
             ax.axhspan(centre - tolerance, centre + tolerance, color="tab:green", alpha=0.15, lw=0,
                        label="tolerance")
