@@ -61,16 +61,20 @@ def _bench_catalog(data: dict) -> BenchCatalog:
         raise SpecError([f"base: {p}" for p in exc.problems] + structural) from None
 
 
-def _automatic_levels(spec: CampaignSpec, index: int) -> dict[str, str]:
-    """The levels ``twin.simulate`` chooses for data set ``index`` from the spec's fidelity request, at its scene,
-    procedure and conditions and the nominal parameters with its fixed ones (the run's scene, as
-    :func:`campaigns.bench.adapter.run_scene` builds it), for the outputs every run of the campaign produces."""
+def _nominal_run(spec: CampaignSpec, index: int):
+    """Data set ``index``'s scene (its procedure and conditions) and the nominal parameters with its fixed ones: the
+    run's scene, as :func:`campaigns.bench.adapter.run_scene` builds it."""
     dataset = spec.datasets[index]
     scene = (twin.load_scene(dataset.scene or spec.base.scene).with_procedure(dataset.procedure)
              .with_conditions(dataset.conditions))
-    params = twin.load_parameters(spec.base.parameters).with_values(dataset.parameters)
+    return scene, twin.load_parameters(spec.base.parameters).with_values(dataset.parameters)
+
+
+def _automatic_levels(spec: CampaignSpec, index: int) -> dict[str, str]:
+    """The levels ``twin.simulate`` chooses for data set ``index`` (:func:`_nominal_run`) from the spec's fidelity
+    request, for the outputs every run of the campaign produces."""
     outputs = list(spec.features) + (list(spec.traces.variables) if spec.traces.runs_per_dataset else [])
-    return dict(resolve_fidelity(scene, params, spec.solver.fidelity, outputs).levels)
+    return dict(resolve_fidelity(*_nominal_run(spec, index), spec.solver.fidelity, outputs).levels)
 
 
 def _full_levels(members: list[int], chosen: dict[int, dict[str, str]]) -> dict[str, str]:
@@ -99,10 +103,7 @@ def measured_fidelity(spec: CampaignSpec) -> CampaignSpec:
     for k, dataset in enumerate(spec.datasets):
         if dataset.fidelity is not None:
             continue
-        scene = (twin.load_scene(dataset.scene or spec.base.scene).with_procedure(dataset.procedure)
-                 .with_conditions(dataset.conditions))
-        params = twin.load_parameters(spec.base.parameters).with_values(dataset.parameters)
-        measured = dict(resolve_fidelity(scene, params, "auto").levels)  # the scene's own outputs, as speed.toml
+        measured = dict(resolve_fidelity(*_nominal_run(spec, k), "auto").levels)  # the scene's own outputs
         used = _automatic_levels(spec, k)
         full = _full_levels([k], {k: used})
         if used != measured and used != full:
